@@ -1,0 +1,196 @@
+//! Decompositions of one trilinear cell into tetrahedra over cell-local vertex ids.
+//!
+//! Local ids: `0..8` the corners (numbering of [`crate::grid`]), `8 + f` the saddle of face
+//! `f`, [`BODY0`] and [`BODY1`] the body saddles in increasing value order.
+//!
+//! Conformity between cells rests on one rule: a cell face is split into four triangles around
+//! its saddle when the face's saddle is *used* (a decision that depends only on the face and
+//! its two cells, see [`plan`]), otherwise into two triangles along the diagonal from its
+//! smallest to its largest corner ([`crate::grid::face_corners`] entries 0 and 2). Every
+//! decomposition here builds the tets touching a face from that rule.
+
+pub mod five;
+pub mod plan;
+pub mod six;
+pub mod tptd;
+
+use crate::grid::{corner_offset, face_corners};
+use crate::mesh::signed_volume;
+
+/// Local id of the lower-valued body saddle.
+pub const BODY0: u8 = 14;
+/// Local id of the higher-valued body saddle.
+pub const BODY1: u8 = 15;
+/// Number of local ids.
+pub const NUM_LOCAL: usize = 16;
+
+/// Local id of the saddle of face `f`.
+#[inline]
+pub const fn face_id(f: usize) -> u8 {
+    8 + f as u8
+}
+
+/// Which TPTD case (Table 2 of the paper) a cell was decomposed with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[repr(u8)]
+pub enum CellCase {
+    /// No saddle used: 6-fold (or 5-fold) split.
+    I = 0,
+    /// Face saddles only (1–5 used): five pyramids around one face saddle.
+    II = 1,
+    /// One body saddle: six pyramids around it.
+    III = 2,
+    /// Six face saddles, no body saddle: the diamond, 24 tets.
+    IV = 3,
+    /// Six face saddles and one or two body saddles: two pyramids and four prisms.
+    V = 4,
+    /// A configuration with no valid layout of its case; decomposed with body-saddle pyramids.
+    Fallback = 5,
+}
+
+impl CellCase {
+    /// All cases in order.
+    pub const ALL: [CellCase; 6] = [
+        CellCase::I,
+        CellCase::II,
+        CellCase::III,
+        CellCase::IV,
+        CellCase::V,
+        CellCase::Fallback,
+    ];
+
+    /// Short name used in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            CellCase::I => "i",
+            CellCase::II => "ii",
+            CellCase::III => "iii",
+            CellCase::IV => "iv",
+            CellCase::V => "v",
+            CellCase::Fallback => "fallback",
+        }
+    }
+}
+
+/// Positions (cell-local) and values of the 16 local ids of one cell.
+/// Entries of ids a decomposition does not use are unspecified.
+#[derive(Clone, Copy, Debug)]
+pub struct CellPoints {
+    /// Cell-local positions.
+    pub pos: [[f64; 3]; NUM_LOCAL],
+    /// Field values.
+    pub val: [f64; NUM_LOCAL],
+}
+
+impl CellPoints {
+    /// Corners filled in from the corner values; saddles zeroed.
+    pub fn from_corners(v: &[f64; 8]) -> Self {
+        let mut pos = [[0.0; 3]; NUM_LOCAL];
+        let mut val = [0.0; NUM_LOCAL];
+        for c in 0..8 {
+            let o = corner_offset(c);
+            pos[c] = [o[0] as f64, o[1] as f64, o[2] as f64];
+            val[c] = v[c];
+        }
+        CellPoints { pos, val }
+    }
+}
+
+/// Appends the tets of the pyramid with apex `apex` over cell face `f`: four tets around the
+/// face saddle when bit `f` of `used_faces` is set, otherwise two along the face's
+/// smallest–largest diagonal.
+#[inline]
+pub fn push_pyramid(out: &mut Vec<[u8; 4]>, apex: u8, f: usize, used_faces: u8) {
+    let fc = face_corners(f).map(|c| c as u8);
+    if used_faces & (1 << f) != 0 {
+        let s = face_id(f);
+        for t in 0..4 {
+            out.push([apex, fc[t], fc[(t + 1) % 4], s]);
+        }
+    } else {
+        out.push([apex, fc[0], fc[1], fc[2]]);
+        out.push([apex, fc[0], fc[2], fc[3]]);
+    }
+}
+
+/// Makes every tet in `tets` positively oriented with respect to `pts` and checks that the
+/// tets do not overlap: their absolute volumes must add up to `volume` (the region they are
+/// meant to tile). Returns false for a flat tet or an overlap, which callers treat as an
+/// invalid layout.
+pub fn orient_tiling(tets: &mut [[u8; 4]], pts: &CellPoints, volume: f64) -> bool {
+    let mut sum = 0.0;
+    for t in tets.iter_mut() {
+        let v = signed_volume(
+            pts.pos[t[0] as usize],
+            pts.pos[t[1] as usize],
+            pts.pos[t[2] as usize],
+            pts.pos[t[3] as usize],
+        );
+        if v < 0.0 {
+            t.swap(2, 3);
+        }
+        if v.is_nan() || v.abs() <= 1e-12 {
+            return false;
+        }
+        sum += v.abs();
+    }
+    (sum - volume).abs() <= 1e-9
+}
+
+#[cfg(test)]
+pub(crate) mod test_util {
+    use super::*;
+    use std::collections::HashMap;
+
+    /// Asserts the tets tile the unit cube: positive volumes summing to 1, every interior
+    /// triangle shared by two tets, and each cell face triangulated as `used_faces` says.
+    pub fn assert_tiles_cube(tets: &[[u8; 4]], pts: &CellPoints, used_faces: u8) {
+        let mut vol = 0.0;
+        let mut faces: HashMap<[u8; 3], usize> = HashMap::new();
+        for t in tets {
+            let v = signed_volume(
+                pts.pos[t[0] as usize],
+                pts.pos[t[1] as usize],
+                pts.pos[t[2] as usize],
+                pts.pos[t[3] as usize],
+            );
+            assert!(v > 0.0, "tet {t:?} has volume {v}");
+            vol += v;
+            for skip in 0..4 {
+                let mut f: Vec<u8> = (0..4).filter(|&i| i != skip).map(|i| t[i]).collect();
+                f.sort();
+                *faces.entry([f[0], f[1], f[2]]).or_default() += 1;
+            }
+        }
+        assert!((vol - 1.0).abs() < 1e-9, "volume {vol}");
+        let on_face = |id: u8, f: usize| -> bool {
+            let p = pts.pos[id as usize];
+            p[f / 2] == (f % 2) as f64
+        };
+        let mut per_face = [0usize; 6];
+        for (tri, n) in faces {
+            let face = (0..6).find(|&f| tri.iter().all(|&id| on_face(id, f)));
+            match face {
+                Some(f) => {
+                    assert_eq!(n, 1, "boundary triangle {tri:?} used {n} times");
+                    per_face[f] += 1;
+                    if used_faces & (1 << f) == 0 {
+                        let fc = face_corners(f);
+                        // the two-triangle split uses the smallest-largest diagonal
+                        assert!(
+                            tri.contains(&(fc[0] as u8)) && tri.contains(&(fc[2] as u8)),
+                            "face {f} triangle {tri:?}"
+                        );
+                    } else {
+                        assert!(tri.contains(&face_id(f)));
+                    }
+                }
+                None => assert_eq!(n, 2, "interior triangle {tri:?} used {n} times"),
+            }
+        }
+        for (f, &n) in per_face.iter().enumerate() {
+            let want = if used_faces & (1 << f) != 0 { 4 } else { 2 };
+            assert_eq!(n, want, "face {f}");
+        }
+    }
+}

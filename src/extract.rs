@@ -1,0 +1,465 @@
+//! The parallel cell loop and the deterministic merge of points by key.
+//!
+//! Cells are processed in z-slabs (one slab = one layer of cells) in parallel. Each slab welds
+//! its points by [`PointKey`] into slab-local numbering. A sequential pass then numbers points
+//! globally in slab order; only keys on the plane shared by two slabs are looked up across
+//! slabs. Output is therefore identical for every thread count.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex};
+use crate::decompose::plan::{face_needed, is_full, CellClasses};
+use crate::decompose::{five, six, tptd, CellCase, CellPoints, BODY0, BODY1, NUM_LOCAL};
+use crate::grid::{corner_faces, corner_offset, ScalarGrid};
+use crate::keys::{on_z_plane, vertex_key, PointKey, BODY, CORNER, FACE};
+use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::trilinear::{body_saddles, face_point, face_saddle, BodySaddle};
+
+pub use crate::decompose::plan::Method;
+
+/// Options of [`mesh_interval`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshOptions {
+    /// Lower bound (may be `-inf`).
+    pub alpha: f64,
+    /// Upper bound (may be `+inf`); must exceed `alpha`.
+    pub beta: f64,
+    /// Cell decomposition.
+    pub method: Method,
+    /// Worker threads; `None` uses rayon's global pool (all cores).
+    pub threads: Option<usize>,
+}
+
+impl MeshOptions {
+    /// Options with the default thread pool.
+    pub fn new(alpha: f64, beta: f64, method: Method) -> Self {
+        MeshOptions {
+            alpha,
+            beta,
+            method,
+            threads: None,
+        }
+    }
+}
+
+/// Why meshing failed.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// alpha >= beta, or a bound is NaN.
+    #[error(
+        "invalid interval: alpha ({alpha}) must be less than beta ({beta}) and neither may be NaN"
+    )]
+    InvalidInterval {
+        /// Lower bound given.
+        alpha: f64,
+        /// Upper bound given.
+        beta: f64,
+    },
+    /// The thread pool could not be built.
+    #[error("could not start {0} worker threads: {1}")]
+    Threads(usize, String),
+    /// More than 2^32 - 1 points or tets.
+    #[error("mesh too large: {0} exceeds the 32-bit index range")]
+    TooLarge(&'static str),
+}
+
+/// Counters of one run.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct MeshStats {
+    /// Cells not entirely outside the interval, per [`CellCase`] (index = case as usize).
+    pub cells_by_case: [u64; 6],
+    /// Cells in the grid.
+    pub cells_total: u64,
+}
+
+/// A mesh and its counters.
+#[derive(Clone, Debug)]
+pub struct MeshOutput {
+    /// The mesh, in physical coordinates.
+    pub mesh: TetMesh,
+    /// Counters.
+    pub stats: MeshStats,
+}
+
+/// Meshes `{alpha < f < beta}` (its closure) of the piecewise-trilinear field on `grid`.
+///
+/// Output invariants: see [`TetMesh`]; the mesh is conforming, every tet has positive volume,
+/// and with `tptd`/`ctd` its topology is that of the trilinear interpolant's interval volume.
+///
+/// # Errors
+/// [`MeshError::InvalidInterval`] unless `alpha < beta`; [`MeshError::TooLarge`] past 2^32
+/// points; [`MeshError::Threads`] if the pool cannot start.
+pub fn mesh_interval(grid: &ScalarGrid, opts: &MeshOptions) -> Result<MeshOutput, MeshError> {
+    mesh_interval_with_progress(grid, opts, &|_, _| {})
+}
+
+/// [`mesh_interval`] reporting `(slabs_done, slabs_total)` to `progress` (called from worker
+/// threads).
+///
+/// # Errors
+/// As [`mesh_interval`].
+pub fn mesh_interval_with_progress(
+    grid: &ScalarGrid,
+    opts: &MeshOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<MeshOutput, MeshError> {
+    if opts.alpha.is_nan() || opts.beta.is_nan() || opts.alpha >= opts.beta {
+        return Err(MeshError::InvalidInterval {
+            alpha: opts.alpha,
+            beta: opts.beta,
+        });
+    }
+    match opts.threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .map_err(|e| MeshError::Threads(n, e.to_string()))?;
+            pool.install(|| run(grid, opts, progress))
+        }
+        None => run(grid, opts, progress),
+    }
+}
+
+/// Points, tets and boundary triangles of one slab, numbered locally.
+#[derive(Default)]
+struct Slab {
+    map: FxHashMap<PointKey, u32>,
+    keys: Vec<PointKey>,
+    pos: Vec<[f64; 3]>,
+    val: Vec<f64>,
+    tets: Vec<[u32; 4]>,
+    tris: Vec<[u32; 3]>,
+    labels: Vec<BoundaryLabel>,
+    cases: [u64; 6],
+}
+
+impl Slab {
+    #[inline]
+    fn id(&mut self, p: &ClipPoint) -> u32 {
+        if let Some(&i) = self.map.get(&p.key) {
+            return i;
+        }
+        let i = self.keys.len() as u32;
+        self.map.insert(p.key, i);
+        self.keys.push(p.key);
+        self.pos.push(p.pos);
+        self.val.push(p.val);
+        i
+    }
+}
+
+impl ClipSink for Slab {
+    #[inline]
+    fn tet(&mut self, points: &[ClipPoint], t: [usize; 4]) {
+        let ids = t.map(|i| self.id(&points[i]));
+        self.tets.push(ids);
+    }
+    #[inline]
+    fn triangle(&mut self, points: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
+        let ids = t.map(|i| self.id(&points[i]));
+        self.tris.push(ids);
+        self.labels.push(label);
+    }
+}
+
+struct Ctx<'a> {
+    grid: &'a ScalarGrid,
+    alpha: f64,
+    beta: f64,
+    method: Method,
+    /// Box-plane mask of every local id (corners: their three faces; face saddles: their face).
+    local_box: [u8; NUM_LOCAL],
+}
+
+fn run(
+    grid: &ScalarGrid,
+    opts: &MeshOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<MeshOutput, MeshError> {
+    let mut local_box = [0u8; NUM_LOCAL];
+    for (c, b) in local_box.iter_mut().enumerate().take(8) {
+        *b = corner_faces(c).iter().fold(0, |m, &f| m | (1 << f));
+    }
+    for f in 0..6 {
+        local_box[8 + f] = 1 << f;
+    }
+    let ctx = Ctx {
+        grid,
+        alpha: opts.alpha,
+        beta: opts.beta,
+        method: opts.method,
+        local_box,
+    };
+    let [_, _, cz] = grid.cell_dims();
+    let done = AtomicUsize::new(0);
+    let slabs: Vec<Slab> = (0..cz)
+        .into_par_iter()
+        .map(|k| {
+            let s = process_slab(&ctx, k);
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress(d, cz);
+            s
+        })
+        .collect();
+    let mut stats = MeshStats {
+        cells_total: grid.num_cells() as u64,
+        ..Default::default()
+    };
+    for s in &slabs {
+        for (a, b) in stats.cells_by_case.iter_mut().zip(s.cases) {
+            *a += b;
+        }
+    }
+    let mesh = merge(grid, slabs)?;
+    Ok(MeshOutput { mesh, stats })
+}
+
+/// Global numbering in slab order; returns the mesh in physical coordinates.
+fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
+    let stride = grid.dims[0] * grid.dims[1];
+    let mut maps: Vec<Vec<u32>> = Vec::with_capacity(slabs.len());
+    let mut prev_top: FxHashMap<PointKey, u32> = FxHashMap::default();
+    let mut next = 0u64;
+    let mut new_from: Vec<(usize, Vec<u32>)> = Vec::with_capacity(slabs.len());
+    for (k, s) in slabs.iter().enumerate() {
+        let mut map = Vec::with_capacity(s.keys.len());
+        let mut fresh = Vec::new();
+        let mut top: FxHashMap<PointKey, u32> = FxHashMap::default();
+        for (li, &key) in s.keys.iter().enumerate() {
+            let shared = if on_z_plane(key, k, stride) {
+                prev_top.get(&key).copied()
+            } else {
+                None
+            };
+            let gid = match shared {
+                Some(g) => g,
+                None => {
+                    let g = u32::try_from(next).map_err(|_| MeshError::TooLarge("points"))?;
+                    next += 1;
+                    fresh.push(li as u32);
+                    g
+                }
+            };
+            if on_z_plane(key, k + 1, stride) {
+                top.insert(key, gid);
+            }
+            map.push(gid);
+        }
+        prev_top = top;
+        maps.push(map);
+        new_from.push((k, fresh));
+    }
+    let n = next as usize;
+    let mut points = Vec::with_capacity(n);
+    let mut values = Vec::with_capacity(n);
+    for (k, fresh) in &new_from {
+        let s = &slabs[*k];
+        for &li in fresh {
+            points.push(s.pos[li as usize]);
+            values.push(s.val[li as usize]);
+        }
+    }
+    let total_tets: usize = slabs.iter().map(|s| s.tets.len()).sum();
+    if total_tets > u32::MAX as usize {
+        return Err(MeshError::TooLarge("tets"));
+    }
+    let flip = grid.affine_determinant() < 0.0;
+    let tets: Vec<[u32; 4]> = slabs
+        .par_iter()
+        .zip(maps.par_iter())
+        .flat_map_iter(|(s, m)| {
+            s.tets.iter().map(move |t| {
+                let g = t.map(|i| m[i as usize]);
+                if flip {
+                    [g[0], g[1], g[3], g[2]]
+                } else {
+                    g
+                }
+            })
+        })
+        .collect();
+    let boundary: Vec<[u32; 3]> = slabs
+        .par_iter()
+        .zip(maps.par_iter())
+        .flat_map_iter(|(s, m)| {
+            s.tris.iter().map(move |t| {
+                let g = t.map(|i| m[i as usize]);
+                if flip {
+                    [g[0], g[2], g[1]]
+                } else {
+                    g
+                }
+            })
+        })
+        .collect();
+    let boundary_labels: Vec<BoundaryLabel> = slabs
+        .iter()
+        .flat_map(|s| s.labels.iter().copied())
+        .collect();
+    drop(slabs);
+    let lin = grid.linear_map();
+    let origin = grid.origin;
+    points.par_iter_mut().for_each(|p| {
+        let q = *p;
+        for r in 0..3 {
+            p[r] = origin[r] + lin[r][0] * q[0] + lin[r][1] * q[1] + lin[r][2] * q[2];
+        }
+    });
+    Ok(TetMesh {
+        points,
+        values,
+        tets,
+        boundary,
+        boundary_labels,
+    })
+}
+
+fn process_slab(ctx: &Ctx, k: usize) -> Slab {
+    let [cx, cy, _] = ctx.grid.cell_dims();
+    let mut slab = Slab::default();
+    let mut tets: Vec<[u8; 4]> = Vec::with_capacity(64);
+    for j in 0..cy {
+        for i in 0..cx {
+            process_cell(ctx, [i, j, k], &mut tets, &mut slab);
+        }
+    }
+    slab.map = FxHashMap::default();
+    slab
+}
+
+/// Whether the (existing) cell at `c` uses all its saddles.
+fn neighbour_full(ctx: &Ctx, c: [usize; 3]) -> bool {
+    let v = ctx.grid.cell_values(c[0], c[1], c[2]);
+    let cls = CellClasses::new(&v, ctx.alpha, ctx.beta);
+    let nb = if cls.crosses_alpha() != cls.crosses_beta() {
+        body_saddles(&v).1
+    } else {
+        0
+    };
+    is_full(ctx.method, cls, nb)
+}
+
+fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Slab) {
+    let grid = ctx.grid;
+    let [i, j, k] = c;
+    let v = grid.cell_values(i, j, k);
+    let cls = CellClasses::new(&v, ctx.alpha, ctx.beta);
+    if cls.all_outside() {
+        return;
+    }
+    let mut pts = CellPoints::from_corners(&v);
+    tets.clear();
+    let case = match ctx.method {
+        Method::Six => {
+            six::decompose_six(tets);
+            CellCase::I
+        }
+        Method::Five => {
+            five::decompose_five((i + j + k) % 2 == 1, tets);
+            CellCase::I
+        }
+        method => {
+            let crosses = cls.crosses_alpha() || cls.crosses_beta();
+            let (bodies, nb): ([BodySaddle; 2], usize) = if method == Method::Tptd || crosses {
+                body_saddles(&v)
+            } else {
+                (bs_none(), 0)
+            };
+            let full = is_full(method, cls, nb);
+            let mut used = 0u8;
+            let mut fv = [0.0; 6];
+            let cd = grid.cell_dims();
+            for f in 0..6 {
+                let Some(s) = face_saddle(&v, f) else {
+                    continue;
+                };
+                let axis = f / 2;
+                let need = full || face_needed(cls, f) || {
+                    let mut n = c;
+                    if f % 2 == 0 {
+                        if n[axis] == 0 {
+                            false
+                        } else {
+                            n[axis] -= 1;
+                            neighbour_full(ctx, n)
+                        }
+                    } else if n[axis] + 1 >= cd[axis] {
+                        false
+                    } else {
+                        n[axis] += 1;
+                        neighbour_full(ctx, n)
+                    }
+                };
+                if need {
+                    used |= 1 << f;
+                    fv[f] = s.value;
+                    pts.pos[8 + f] = face_point(f, s.uv.map(|x| x.clamp(0.3, 0.7)));
+                    pts.val[8 + f] = s.value;
+                }
+            }
+            let nbu = if full || crosses { nb } else { 0 };
+            tptd::decompose_tptd(used, &fv, &bodies[..nbu], &mut pts, tets)
+        }
+    };
+    slab.cases[case as usize] += 1;
+
+    // Keys and clip vertices of the local ids.
+    let base = grid.index(i, j, k);
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let key_of = |id: usize| -> u64 {
+        match id {
+            0..=7 => {
+                let o = corner_offset(id);
+                vertex_key(
+                    base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2],
+                    CORNER,
+                )
+            }
+            8..=13 => {
+                let f = id - 8;
+                let axis = f / 2;
+                vertex_key(base + (f % 2) * stride[axis], FACE + axis as u64)
+            }
+            _ => vertex_key(base, BODY + (id as u64 - BODY0 as u64)),
+        }
+    };
+    let cd = grid.cell_dims();
+    let mut box_planes = 0u8;
+    for axis in 0..3 {
+        if c[axis] == 0 {
+            box_planes |= 1 << (2 * axis);
+        }
+        if c[axis] + 1 == cd[axis] {
+            box_planes |= 1 << (2 * axis + 1);
+        }
+    }
+    let mut cv: [Option<ClipVertex>; NUM_LOCAL] = [None; NUM_LOCAL];
+    let base_f = [i as f64, j as f64, k as f64];
+    for t in tets.iter() {
+        let tv = t.map(|id| {
+            let id = id as usize;
+            *cv[id].get_or_insert_with(|| {
+                let p = pts.pos[id];
+                ClipVertex {
+                    key: key_of(id),
+                    pos: [base_f[0] + p[0], base_f[1] + p[1], base_f[2] + p[2]],
+                    val: pts.val[id],
+                    box_mask: ctx.local_box[id],
+                }
+            })
+        });
+        clip_tet(&tv, ctx.alpha, ctx.beta, box_planes, slab);
+    }
+    let _ = BODY1;
+}
+
+fn bs_none() -> [BodySaddle; 2] {
+    [BodySaddle {
+        pos: [0.0; 3],
+        value: 0.0,
+    }; 2]
+}

@@ -1,0 +1,293 @@
+//! The scalar grid and THE numbering conventions every table in the crate uses.
+//!
+//! # Conventions
+//! * Grid vertex `(i, j, k)` has linear index `i + nx * (j + ny * k)` (x fastest).
+//! * Cell `(i, j, k)` spans grid vertices `(i..=i+1, j..=j+1, k..=k+1)`.
+//! * Cell corner `c` in `0..8` is the vertex at offset `(c & 1, (c >> 1) & 1, (c >> 2) & 1)`.
+//! * Cell face `f` in `0..6` has normal axis `f / 2` and side `f % 2`
+//!   (0 = `-x`, 1 = `+x`, 2 = `-y`, 3 = `+y`, 4 = `-z`, 5 = `+z`).
+//! * Index coordinates `(i + u, j + v, k + w)` map to physical coordinates by
+//!   `origin + direction * (spacing ⊙ index)` (see [`ScalarGrid::to_physical`]).
+
+/// A scalar field sampled at the vertices of a regular (possibly oriented) grid.
+///
+/// Invariants: `values.len() == dims[0] * dims[1] * dims[2]`, every value finite,
+/// every dimension at least 2 (checked by [`ScalarGrid::new`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScalarGrid {
+    /// Number of grid vertices along x, y, z.
+    pub dims: [usize; 3],
+    /// Distance between neighbouring vertices along each index axis (physical units).
+    pub spacing: [f64; 3],
+    /// Physical position of vertex (0, 0, 0).
+    pub origin: [f64; 3],
+    /// Row-major 3×3 matrix whose columns are the unit directions of the index axes.
+    pub direction: [[f64; 3]; 3],
+    /// Values at the grid vertices, x fastest.
+    pub values: Vec<f64>,
+}
+
+/// Why a grid could not be built.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum GridError {
+    #[error("grid dimensions {0:?} must each be at least 2")]
+    TooSmall([usize; 3]),
+    #[error("grid has {got} values but dimensions {dims:?} need {want}")]
+    WrongLength {
+        dims: [usize; 3],
+        want: usize,
+        got: usize,
+    },
+    #[error("value at grid vertex ({0}, {1}, {2}) is not finite ({3})")]
+    NotFinite(usize, usize, usize, f64),
+    #[error("spacing {0:?} must be finite and non-zero")]
+    BadSpacing([f64; 3]),
+    #[error("direction matrix is singular or not finite")]
+    BadDirection,
+}
+
+/// Identity direction matrix.
+pub const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// Offset of cell corner `c` along each axis.
+#[inline]
+pub const fn corner_offset(c: usize) -> [usize; 3] {
+    [c & 1, (c >> 1) & 1, (c >> 2) & 1]
+}
+
+/// The four corners of cell face `f`, in the cyclic order
+/// `(lo, lo) → (hi, lo) → (hi, hi) → (lo, hi)` over the face's two in-plane axes
+/// (the lower-numbered in-plane axis first). Entry 0 is the face's smallest corner and
+/// entry 2 its largest, so the diagonal `0–2` is the one the conforming 2-triangle split uses.
+pub const fn face_corners(f: usize) -> [usize; 4] {
+    let axis = f / 2;
+    let side = f % 2;
+    let (a, b) = match axis {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    };
+    let base = side << axis;
+    let ea = 1 << a;
+    let eb = 1 << b;
+    [base, base | ea, base | ea | eb, base | eb]
+}
+
+/// The three faces that meet at corner `c`.
+pub const fn corner_faces(c: usize) -> [usize; 3] {
+    let o = corner_offset(c);
+    [o[0], 2 + o[1], 4 + o[2]]
+}
+
+impl ScalarGrid {
+    /// Builds a grid with unit spacing, zero origin and identity direction.
+    ///
+    /// # Errors
+    /// See [`GridError`].
+    pub fn new(dims: [usize; 3], values: Vec<f64>) -> Result<Self, GridError> {
+        Self::with_geometry(dims, [1.0; 3], [0.0; 3], IDENTITY, values)
+    }
+
+    /// Builds a grid with the given geometry and checks all invariants.
+    ///
+    /// # Errors
+    /// See [`GridError`].
+    pub fn with_geometry(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        origin: [f64; 3],
+        direction: [[f64; 3]; 3],
+        values: Vec<f64>,
+    ) -> Result<Self, GridError> {
+        if dims.iter().any(|&d| d < 2) {
+            return Err(GridError::TooSmall(dims));
+        }
+        let want = dims[0]
+            .checked_mul(dims[1])
+            .and_then(|v| v.checked_mul(dims[2]))
+            .unwrap_or(usize::MAX);
+        if values.len() != want {
+            return Err(GridError::WrongLength {
+                dims,
+                want,
+                got: values.len(),
+            });
+        }
+        if spacing.iter().any(|s| !s.is_finite() || *s == 0.0) {
+            return Err(GridError::BadSpacing(spacing));
+        }
+        let g = ScalarGrid {
+            dims,
+            spacing,
+            origin,
+            direction,
+            values,
+        };
+        let det = g.affine_determinant();
+        if !det.is_finite() || det == 0.0 || origin.iter().any(|o| !o.is_finite()) {
+            return Err(GridError::BadDirection);
+        }
+        if let Some(p) = g.values.iter().position(|v| !v.is_finite()) {
+            let [i, j, k] = g.vertex_ijk(p);
+            return Err(GridError::NotFinite(i, j, k, g.values[p]));
+        }
+        Ok(g)
+    }
+
+    /// Number of grid vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Number of cells along each axis.
+    pub fn cell_dims(&self) -> [usize; 3] {
+        [self.dims[0] - 1, self.dims[1] - 1, self.dims[2] - 1]
+    }
+
+    /// Number of cells.
+    pub fn num_cells(&self) -> usize {
+        let c = self.cell_dims();
+        c[0] * c[1] * c[2]
+    }
+
+    /// Linear index of grid vertex (i, j, k).
+    #[inline]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        i + self.dims[0] * (j + self.dims[1] * k)
+    }
+
+    /// (i, j, k) of a linear vertex index.
+    #[inline]
+    pub fn vertex_ijk(&self, idx: usize) -> [usize; 3] {
+        let i = idx % self.dims[0];
+        let r = idx / self.dims[0];
+        [i, r % self.dims[1], r / self.dims[1]]
+    }
+
+    /// Value at grid vertex (i, j, k).
+    #[inline]
+    pub fn value(&self, i: usize, j: usize, k: usize) -> f64 {
+        self.values[self.index(i, j, k)]
+    }
+
+    /// The eight corner values of cell (i, j, k), in corner order.
+    #[inline]
+    pub fn cell_values(&self, i: usize, j: usize, k: usize) -> [f64; 8] {
+        let base = self.index(i, j, k);
+        let sx = 1;
+        let sy = self.dims[0];
+        let sz = self.dims[0] * self.dims[1];
+        let v = &self.values;
+        [
+            v[base],
+            v[base + sx],
+            v[base + sy],
+            v[base + sx + sy],
+            v[base + sz],
+            v[base + sx + sz],
+            v[base + sy + sz],
+            v[base + sx + sy + sz],
+        ]
+    }
+
+    /// Linear map from index space to physical space: `direction * diag(spacing)`.
+    pub fn linear_map(&self) -> [[f64; 3]; 3] {
+        let mut m = [[0.0; 3]; 3];
+        for (r, row) in m.iter_mut().enumerate() {
+            for (c, x) in row.iter_mut().enumerate() {
+                *x = self.direction[r][c] * self.spacing[c];
+            }
+        }
+        m
+    }
+
+    /// Determinant of the index-to-physical map; negative means left-handed placement.
+    pub fn affine_determinant(&self) -> f64 {
+        det3(&self.linear_map())
+    }
+
+    /// Physical position of index-space point `p`.
+    #[inline]
+    pub fn to_physical(&self, p: [f64; 3]) -> [f64; 3] {
+        let m = self.linear_map();
+        let mut out = self.origin;
+        for (r, o) in out.iter_mut().enumerate() {
+            *o += m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2];
+        }
+        out
+    }
+
+    /// Smallest and largest value.
+    pub fn value_range(&self) -> (f64, f64) {
+        self.values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            })
+    }
+}
+
+/// Determinant of a row-major 3×3 matrix.
+pub fn det3(m: &[[f64; 3]; 3]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn face_corners_lie_on_their_face_and_cycle() {
+        for f in 0..6 {
+            let fc = face_corners(f);
+            let axis = f / 2;
+            for &c in &fc {
+                assert_eq!(corner_offset(c)[axis], f % 2);
+            }
+            // consecutive corners differ in exactly one bit (cyclic order)
+            for t in 0..4 {
+                let d = fc[t] ^ fc[(t + 1) % 4];
+                assert_eq!(d.count_ones(), 1);
+            }
+            assert_eq!(fc[0], *fc.iter().min().unwrap());
+            assert_eq!(fc[2], *fc.iter().max().unwrap());
+        }
+        for c in 0..8 {
+            for f in corner_faces(c) {
+                assert!(face_corners(f).contains(&c));
+            }
+        }
+    }
+
+    #[test]
+    fn cell_values_follow_corner_order() {
+        let dims = [3, 4, 5];
+        let vals: Vec<f64> = (0..60).map(|x| x as f64).collect();
+        let g = ScalarGrid::new(dims, vals).unwrap();
+        let cv = g.cell_values(1, 2, 3);
+        for (c, v) in cv.iter().enumerate() {
+            let o = corner_offset(c);
+            assert_eq!(*v, g.value(1 + o[0], 2 + o[1], 3 + o[2]));
+        }
+    }
+
+    #[test]
+    fn rejects_bad_grids() {
+        assert!(matches!(
+            ScalarGrid::new([1, 2, 2], vec![0.0; 4]),
+            Err(GridError::TooSmall(_))
+        ));
+        assert!(matches!(
+            ScalarGrid::new([2, 2, 2], vec![0.0; 7]),
+            Err(GridError::WrongLength { .. })
+        ));
+        let mut v = vec![0.0; 8];
+        v[5] = f64::NAN;
+        assert!(matches!(
+            ScalarGrid::new([2, 2, 2], v),
+            Err(GridError::NotFinite(1, 0, 1, _))
+        ));
+    }
+}

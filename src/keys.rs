@@ -1,0 +1,109 @@
+//! Global identities of mesh points. Points are welded by these keys, never by distance.
+//!
+//! * A [`VertexKey`] names a decomposition vertex: `(grid_index << 3) | kind` where `kind` is
+//!   [`CORNER`] (the grid vertex itself), [`FACE`]` + axis` (the saddle of the cell face normal
+//!   to `axis` whose smallest corner is the grid vertex), or [`BODY`]` + n` (body saddle `n` of
+//!   the cell whose smallest corner is the grid vertex).
+//! * A [`PointKey`] names an output point: a decomposition vertex, or the cut of a
+//!   decomposition edge by level alpha (0) or beta (1). Its order (used to pick fan apexes)
+//!   is a function of the identity only, so every cell and thread agrees on it.
+
+/// Identity of a decomposition vertex.
+pub type VertexKey = u64;
+/// Identity of an output point.
+pub type PointKey = u128;
+
+/// Kind tag of a grid vertex.
+pub const CORNER: u64 = 0;
+/// Kind tag of a face saddle (add the face normal axis 0..3).
+pub const FACE: u64 = 1;
+/// Kind tag of a body saddle (add the saddle number 0..2).
+pub const BODY: u64 = 4;
+
+/// Key of a decomposition vertex.
+#[inline]
+pub const fn vertex_key(grid_index: usize, kind: u64) -> VertexKey {
+    ((grid_index as u64) << 3) | kind
+}
+
+/// Output-point key of a decomposition vertex.
+#[inline]
+pub const fn vertex_point(k: VertexKey) -> PointKey {
+    (k as u128) << 64
+}
+
+/// Output-point key of the cut of edge `{a, b}` by level `level` (0 = alpha, 1 = beta).
+#[inline]
+pub fn cut_point(a: VertexKey, b: VertexKey, level: u8) -> PointKey {
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    ((lo as u128) << 64) | (((hi as u128) + 1) << 1) | level as u128
+}
+
+/// The decomposition vertices a point key is made of: `(a, None)` for a vertex,
+/// `(a, Some((b, level)))` for a cut of edge `{a, b}`.
+#[inline]
+pub fn split(p: PointKey) -> (VertexKey, Option<(VertexKey, u8)>) {
+    let a = (p >> 64) as u64;
+    let low = p as u64;
+    if low == 0 {
+        (a, None)
+    } else {
+        (a, Some(((low >> 1) - 1, (low & 1) as u8)))
+    }
+}
+
+/// z index of the grid vertex a vertex key is attached to, and whether the vertex lies
+/// in the plane z = that index (grid vertices and saddles of faces normal to z do).
+#[inline]
+fn vertex_plane(k: VertexKey, plane_stride: usize) -> (usize, bool) {
+    let kind = k & 7;
+    let z = ((k >> 3) as usize) / plane_stride;
+    (z, kind == CORNER || kind == FACE + 2)
+}
+
+/// Whether output point `p` lies in the grid plane z = `z` (`plane_stride` = nx·ny).
+#[inline]
+pub fn on_z_plane(p: PointKey, z: usize, plane_stride: usize) -> bool {
+    let (a, rest) = split(p);
+    let in_plane = |k: VertexKey| {
+        let (kz, flat) = vertex_plane(k, plane_stride);
+        flat && kz == z
+    };
+    match rest {
+        None => in_plane(a),
+        Some((b, _)) => in_plane(a) && in_plane(b),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_round_trip_and_order() {
+        let a = vertex_key(12345, FACE + 1);
+        let b = vertex_key(99, BODY + 1);
+        assert_eq!(split(vertex_point(a)), (a, None));
+        assert_eq!(split(cut_point(a, b, 1)), (b, Some((a, 1))));
+        assert_eq!(cut_point(a, b, 0), cut_point(b, a, 0));
+        assert_ne!(cut_point(a, b, 0), cut_point(a, b, 1));
+        assert!(vertex_point(b) < cut_point(a, b, 0));
+    }
+
+    #[test]
+    fn plane_membership() {
+        let stride = 10 * 10;
+        let v = |i: usize, j: usize, k: usize| i + 10 * (j + 10 * k);
+        let c0 = vertex_key(v(1, 2, 3), CORNER);
+        let c1 = vertex_key(v(2, 2, 3), CORNER);
+        let c2 = vertex_key(v(2, 2, 4), CORNER);
+        let fz = vertex_key(v(1, 2, 3), FACE + 2);
+        let fx = vertex_key(v(1, 2, 3), FACE);
+        assert!(on_z_plane(vertex_point(c0), 3, stride));
+        assert!(on_z_plane(vertex_point(fz), 3, stride));
+        assert!(!on_z_plane(vertex_point(fx), 3, stride));
+        assert!(on_z_plane(cut_point(c0, c1, 0), 3, stride));
+        assert!(!on_z_plane(cut_point(c0, c2, 0), 3, stride));
+        assert!(!on_z_plane(cut_point(c0, fx, 0), 3, stride));
+    }
+}

@@ -1,0 +1,95 @@
+//! The output mesh: plain data shared by the mesher, the writers and the analyses.
+
+use serde::Serialize;
+
+/// Which surface a boundary triangle lies on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[repr(u8)]
+pub enum BoundaryLabel {
+    /// On the level set f = alpha (the lower bound).
+    Alpha = 0,
+    /// On the level set f = beta (the upper bound).
+    Beta = 1,
+    /// On the outer boundary of the grid box.
+    Box = 2,
+}
+
+impl BoundaryLabel {
+    /// All labels, in tag order.
+    pub const ALL: [BoundaryLabel; 3] = [
+        BoundaryLabel::Alpha,
+        BoundaryLabel::Beta,
+        BoundaryLabel::Box,
+    ];
+
+    /// Lower-case name used by every writer (`alpha`, `beta`, `box`).
+    pub fn name(self) -> &'static str {
+        match self {
+            BoundaryLabel::Alpha => "alpha",
+            BoundaryLabel::Beta => "beta",
+            BoundaryLabel::Box => "box",
+        }
+    }
+}
+
+/// A conforming tetrahedral mesh with labelled boundary.
+///
+/// Invariants (established by the mesher, relied on by writers and analyses):
+/// * every tet `[a, b, c, d]` is positively oriented: `(b-a)·((c-a)×(d-a)) > 0`;
+/// * `boundary` lists exactly the triangles that belong to one tet only, each oriented with
+///   its normal pointing out of the domain, and `boundary_labels[t]` labels `boundary[t]`;
+/// * every point is used by at least one tet; `values[p]` is the field at `points[p]`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TetMesh {
+    /// #P physical positions.
+    pub points: Vec<[f64; 3]>,
+    /// #P field values (the piecewise-linear interpolant at each node).
+    pub values: Vec<f64>,
+    /// #T tetrahedra, as indices into `points`.
+    pub tets: Vec<[u32; 4]>,
+    /// #B boundary triangles, outward-oriented.
+    pub boundary: Vec<[u32; 3]>,
+    /// #B labels, one per boundary triangle.
+    pub boundary_labels: Vec<BoundaryLabel>,
+}
+
+impl TetMesh {
+    /// Signed volume of tet `t` (positive for the mesher's output).
+    pub fn tet_volume(&self, t: usize) -> f64 {
+        let [a, b, c, d] = self.tets[t].map(|i| self.points[i as usize]);
+        signed_volume(a, b, c, d)
+    }
+
+    /// Sum of the tet volumes.
+    pub fn volume(&self) -> f64 {
+        (0..self.tets.len()).map(|t| self.tet_volume(t)).sum()
+    }
+}
+
+/// Signed volume of the tetrahedron (a, b, c, d): positive when (b-a, c-a, d-a) is right-handed.
+#[inline]
+pub fn signed_volume(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> f64 {
+    let u = sub(b, a);
+    let v = sub(c, a);
+    let w = sub(d, a);
+    dot(u, cross(v, w)) / 6.0
+}
+
+#[inline]
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline]
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline]
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}

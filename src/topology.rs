@@ -1,0 +1,81 @@
+//! Betti numbers of a tetrahedral mesh of a domain in R³.
+//!
+//! For a compact 3-manifold with boundary embedded in R³: b0 = connected components,
+//! b2 = boundary-surface components − b0 (cavities), and χ(M) = χ(∂M)/2, so
+//! b1 = b0 + b2 − χ. Requires the mesher's invariants (closed manifold boundary).
+
+use crate::mesh::TetMesh;
+
+/// Union–find over `n` elements.
+struct Dsu(Vec<u32>);
+
+impl Dsu {
+    fn new(n: usize) -> Self {
+        Dsu((0..n as u32).collect())
+    }
+    fn find(&mut self, mut x: u32) -> u32 {
+        while self.0[x as usize] != x {
+            let p = self.0[self.0[x as usize] as usize];
+            self.0[x as usize] = p;
+            x = p;
+        }
+        x
+    }
+    fn union(&mut self, a: u32, b: u32) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            self.0[ra.max(rb) as usize] = ra.min(rb);
+        }
+    }
+}
+
+fn count_components(n: usize, used: &[bool], links: impl Iterator<Item = (u32, u32)>) -> usize {
+    let mut d = Dsu::new(n);
+    for (a, b) in links {
+        d.union(a, b);
+    }
+    (0..n as u32)
+        .filter(|&i| used[i as usize] && d.find(i) == i)
+        .count()
+}
+
+/// Betti numbers `[b0, b1, b2]` of the meshed domain.
+pub fn betti(mesh: &TetMesh) -> [usize; 3] {
+    let n = mesh.points.len();
+    if mesh.tets.is_empty() {
+        return [0, 0, 0];
+    }
+    let mut used = vec![false; n];
+    for t in &mesh.tets {
+        for &i in t {
+            used[i as usize] = true;
+        }
+    }
+    let b0 = count_components(
+        n,
+        &used,
+        mesh.tets
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[0], t[2]), (t[0], t[3])]),
+    );
+    let mut on_b = vec![false; n];
+    for t in &mesh.boundary {
+        for &i in t {
+            on_b[i as usize] = true;
+        }
+    }
+    let surfaces = count_components(
+        n,
+        &on_b,
+        mesh.boundary
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[0], t[2])]),
+    );
+    let vb = on_b.iter().filter(|&&x| x).count() as i64;
+    let fb = mesh.boundary.len() as i64;
+    // χ(∂M) = V − E + F with E = 3F/2; χ(M) = χ(∂M)/2
+    let chi = (2 * vb - fb) / 4;
+    let b2 = surfaces.saturating_sub(b0);
+    let b1 = (b0 as i64 + b2 as i64 - chi).max(0) as usize;
+    [b0, b1, b2]
+}
