@@ -335,7 +335,7 @@ fn process_slab(ctx: &Ctx, k: usize) -> Slab {
 fn neighbour_full(ctx: &Ctx, c: [usize; 3]) -> bool {
     let v = ctx.grid.cell_values(c[0], c[1], c[2]);
     let cls = CellClasses::new(&v, ctx.alpha, ctx.beta);
-    let nb = if cls.crosses_alpha() != cls.crosses_beta() {
+    let nb = if cls.crosses_alpha() || cls.crosses_beta() {
         body_saddles(&v).1
     } else {
         0

@@ -1,1 +1,197 @@
-//! placeholder, being written
+//! Atomic file output (write to a temporary in the same directory, then rename) and the
+//! small buffered text formatter shared by the mesh writers.
+
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Capacity of the [`BufWriter`] between a writer closure and the temporary file.
+const FILE_BUFFER: usize = 1 << 20;
+
+/// Why [`write_atomically`] failed. Every variant displays as one line naming the target path.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// The target exists and is a directory.
+    #[error("cannot write '{}': it is a directory", .path.display())]
+    IsDirectory {
+        /// The requested output path.
+        path: PathBuf,
+    },
+    /// The target exists and is neither a regular file nor a directory (FIFO, socket, device…).
+    #[error("cannot write '{}': it exists and is not a regular file", .path.display())]
+    NotRegularFile {
+        /// The requested output path.
+        path: PathBuf,
+    },
+    /// The path has no file-name component (e.g. it ends in `..`).
+    #[error("cannot write '{}': the path does not name a file", .path.display())]
+    NoFileName {
+        /// The requested output path.
+        path: PathBuf,
+    },
+    /// An I/O error while creating, writing, flushing or renaming the temporary file.
+    #[error("cannot write '{}': {source}", .path.display())]
+    Io {
+        /// The requested output path.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: io::Error,
+    },
+}
+
+/// Distinguishes temporaries of concurrent calls within one process.
+static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Writes a file atomically: `write` receives a buffered writer (1 MiB buffer) on a temporary
+/// file `.{name}.tmp-{pid}-{n}` in the directory of `path`; after `write` returns `Ok`, the data
+/// are flushed and synced and the temporary is renamed onto `path`, replacing an existing
+/// regular file. Readers therefore see either the old file or the complete new one.
+///
+/// If `path` is a symbolic link, the link itself is replaced by the new file.
+///
+/// # Errors
+/// Returns [`WriteError`] (whose `Display` is a single line naming `path`) and leaves neither
+/// the temporary nor a partial `path` behind when
+/// * `path` is an existing directory ([`WriteError::IsDirectory`]) or another non-regular file
+///   such as a FIFO ([`WriteError::NotRegularFile`]); nothing is created in that case;
+/// * `path` has no file name ([`WriteError::NoFileName`]);
+/// * creating the temporary, the closure `write`, flushing, syncing or renaming fails
+///   ([`WriteError::Io`]); an existing file at `path` is then left untouched.
+pub fn write_atomically<F>(path: &Path, write: F) -> Result<(), WriteError>
+where
+    F: FnOnce(&mut dyn Write) -> io::Result<()>,
+{
+    let io_err = |source: io::Error| WriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    match fs::metadata(path) {
+        Ok(meta) if meta.is_dir() => {
+            return Err(WriteError::IsDirectory {
+                path: path.to_path_buf(),
+            })
+        }
+        Ok(meta) if !meta.is_file() => {
+            return Err(WriteError::NotRegularFile {
+                path: path.to_path_buf(),
+            })
+        }
+        Ok(_) => {}
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+        Err(e) => return Err(io_err(e)),
+    }
+    let name = path.file_name().ok_or_else(|| WriteError::NoFileName {
+        path: path.to_path_buf(),
+    })?;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".tmp-{}-{n}", std::process::id()));
+    let tmp = dir.join(tmp_name);
+
+    let file = OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .map_err(io_err)?;
+    let result = write_and_sync(file, write).and_then(|()| fs::rename(&tmp, path));
+    if let Err(e) = result {
+        let _ = fs::remove_file(&tmp);
+        return Err(io_err(e));
+    }
+    Ok(())
+}
+
+fn write_and_sync<F>(file: File, write: F) -> io::Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> io::Result<()>,
+{
+    let mut buf = BufWriter::with_capacity(FILE_BUFFER, file);
+    write(&mut buf)?;
+    let file = buf.into_inner().map_err(|e| e.into_error())?;
+    file.sync_all()
+}
+
+/// Threshold at which [`TextOut`] hands its buffer to the underlying writer.
+const CHUNK: usize = 1 << 16;
+
+/// Fast formatter for the text writers: integers via `itoa`, floats via `ryu` (shortest
+/// representation that round-trips), collected in a local buffer that is passed to the
+/// (possibly dynamically dispatched) writer in 64 KiB chunks.
+pub(crate) struct TextOut<'a> {
+    w: &'a mut dyn Write,
+    buf: Vec<u8>,
+    int: itoa::Buffer,
+    float: ryu::Buffer,
+}
+
+impl<'a> TextOut<'a> {
+    pub(crate) fn new(w: &'a mut dyn Write) -> Self {
+        TextOut {
+            w,
+            buf: Vec::with_capacity(CHUNK + 4096),
+            int: itoa::Buffer::new(),
+            float: ryu::Buffer::new(),
+        }
+    }
+
+    /// Appends a string.
+    #[inline]
+    pub(crate) fn s(&mut self, s: &str) -> &mut Self {
+        self.buf.extend_from_slice(s.as_bytes());
+        self
+    }
+
+    /// Appends an integer in decimal.
+    #[inline]
+    pub(crate) fn int<I: itoa::Integer>(&mut self, v: I) -> &mut Self {
+        self.buf.extend_from_slice(self.int.format(v).as_bytes());
+        self
+    }
+
+    /// Appends a float in the shortest form that parses back to the same `f64`
+    /// (`NaN`/`inf`/`-inf` for non-finite values).
+    #[inline]
+    pub(crate) fn float(&mut self, v: f64) -> &mut Self {
+        self.buf.extend_from_slice(self.float.format(v).as_bytes());
+        self
+    }
+
+    /// Appends a float in at most `width` (>= 16) characters: the shortest round-trip form when
+    /// it fits, otherwise scientific notation with `width - 8` fractional digits.
+    #[inline]
+    pub(crate) fn float_width(&mut self, v: f64, width: usize) -> &mut Self {
+        let short = self.float.format(v);
+        if short.len() <= width {
+            self.buf.extend_from_slice(short.as_bytes());
+        } else {
+            use std::io::Write as _;
+            let _ = write!(self.buf, "{:.*e}", width - 8, v);
+        }
+        self
+    }
+
+    /// Ends a line and passes the buffer on when it is full.
+    #[inline]
+    pub(crate) fn nl(&mut self) -> io::Result<()> {
+        self.buf.push(b'\n');
+        if self.buf.len() >= CHUNK {
+            self.w.write_all(&self.buf)?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+
+    /// Writes whatever is buffered and flushes the underlying writer.
+    pub(crate) fn finish(mut self) -> io::Result<()> {
+        self.w.write_all(&self.buf)?;
+        self.buf.clear();
+        self.w.flush()
+    }
+}
