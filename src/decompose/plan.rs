@@ -9,8 +9,9 @@
 //! * `std`/`ctd`: a face saddle is used when the face is *ambiguous* for alpha or for beta
 //!   (diagonal corners on the same side, the two diagonals on opposite sides), or when a
 //!   *full* cell touches the face. A full cell is, for `ctd`, a two-level cell, and for both, a
-//!   one-level cell with two body saddles; full cells use every saddle (TPTD). Other cells
-//!   crossing a level use their body saddle; cells crossing no level use none.
+//!   cell crossing a level that has a body saddle (STD case iii is never used on its own: a
+//!   body saddle with masked faces can join what case v keeps apart). Full cells use every
+//!   saddle (TPTD); other cells use no body saddle (STD cases i, ii, iv over the used faces).
 //!   Both cells of a face evaluate the same rule on the same data, so they agree.
 
 /// Decomposition method.
@@ -108,9 +109,9 @@ pub fn is_full(method: Method, cls: CellClasses, num_body: usize) -> bool {
         Method::Five | Method::Six => false,
         Method::Ctd => {
             (cls.crosses_alpha() && cls.crosses_beta())
-                || ((cls.crosses_alpha() || cls.crosses_beta()) && num_body == 2)
+                || ((cls.crosses_alpha() || cls.crosses_beta()) && num_body > 0)
         }
-        Method::Std => (cls.crosses_alpha() || cls.crosses_beta()) && num_body == 2,
+        Method::Std => (cls.crosses_alpha() || cls.crosses_beta()) && num_body > 0,
     }
 }
 

@@ -180,27 +180,35 @@ fn prisms(
         }
         (axis, BODY0, BODY1)
     } else {
-        // One body saddle: the pyramid on the face of the third-smallest saddle collapses onto it.
-        let fc = order[2];
+        // One body saddle: it plays the small role when its value is nearer the small face
+        // saddles, the big one otherwise; the other pyramid collapses onto the face saddle
+        // nearest in rank (the third-smallest or third-biggest: never the smallest nor the
+        // biggest).
         pts.val[BODY0 as usize] = bodies[0].value;
-        (fc / 2, face_id(fc), BODY0)
+        let mid = 0.5 * (face_value[order[2]] + face_value[order[3]]);
+        if bodies[0].value < mid {
+            let fc = order[3];
+            (fc / 2, BODY0, face_id(fc))
+        } else {
+            let fc = order[2];
+            (fc / 2, face_id(fc), BODY0)
+        }
     };
     let small_face = 2 * axis + side[axis];
     let big_face = 2 * axis + 1 - side[axis];
     let small_coord = if side[axis] == 0 { 0.3 } else { 0.7 };
-    let mut centre = [0.5; 3];
-    if b_small != face_id(small_face) {
-        centre[axis] = small_coord;
-        pts.pos[b_small as usize] = centre;
-    }
-    centre[axis] = 1.0 - small_coord;
-    pts.pos[b_big as usize] = centre;
-
     let all = 0b11_1111u8;
-    if b_small != face_id(small_face) {
-        push_pyramid(out, b_small, small_face, all);
+    for (apex, face, coord) in [
+        (b_small, small_face, small_coord),
+        (b_big, big_face, 1.0 - small_coord),
+    ] {
+        if apex != face_id(face) {
+            let mut centre = [0.5; 3];
+            centre[axis] = coord;
+            pts.pos[apex as usize] = centre;
+            push_pyramid(out, apex, face, all);
+        }
     }
-    push_pyramid(out, b_big, big_face, all);
     // The four edges parallel to `axis`: c_lo on the small face, c_hi on the big face.
     // Each is shared by two side regions, which must split the quad (b_small, c_lo, c_hi,
     // b_big) the same way.

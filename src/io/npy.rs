@@ -1,1 +1,365 @@
-//! placeholder, being written
+//! NumPy `.npy` reader (format versions 1.0, 2.0 and 3.0).
+//!
+//! Only 3-D arrays of plain numbers are accepted: dtypes `b1`, `u1`, `i1`, `u2`, `i2`, `u4`,
+//! `i4`, `u8`, `i8`, `f4`, `f8` in either byte order, C or Fortran order. Array element
+//! `[i, j, k]` becomes grid vertex `(x = i, y = j, z = k)`; the grid has unit spacing, zero
+//! origin and identity direction.
+
+use std::path::Path;
+
+use super::volume::{
+    build_grid, data_size, decode_samples, read_all, take_exact, Endian, ReadError, SampleType,
+};
+use crate::grid::{ScalarGrid, IDENTITY};
+
+const MAGIC: &[u8] = b"\x93NUMPY";
+
+/// Reads a NumPy `.npy` file holding a 3-D numeric array.
+///
+/// # Errors
+/// [`ReadError::Io`] if the file cannot be read; [`ReadError::Invalid`] for a bad magic,
+/// a malformed header, an array that is not 3-D or a data block whose size does not match
+/// the shape; [`ReadError::Unsupported`] for other dtypes (structured, complex, half, ...);
+/// [`ReadError::Grid`] for a dimension below 2 or a non-finite value.
+pub fn read_npy(path: &Path) -> Result<ScalarGrid, ReadError> {
+    let bytes = read_all(path)?;
+    let header = parse_npy(path, &bytes)?;
+    let (count, nbytes) = data_size(path, header.shape, header.ty)?;
+    let data = take_exact(path, &bytes[header.data_start..], nbytes, true, "the file")?;
+    let raw = decode_samples(data, header.ty, header.endian);
+    let [n0, n1, n2] = header.shape;
+    let values = if header.fortran_order {
+        raw
+    } else {
+        // C order: element [i, j, k] at ((i * n1) + j) * n2 + k; store x (= i) fastest.
+        let mut v = Vec::with_capacity(count);
+        for k in 0..n2 {
+            for j in 0..n1 {
+                for i in 0..n0 {
+                    v.push(raw[(i * n1 + j) * n2 + k]);
+                }
+            }
+        }
+        v
+    };
+    build_grid(path, header.shape, [1.0; 3], [0.0; 3], IDENTITY, values)
+}
+
+/// The parsed `.npy` header.
+#[derive(Debug, PartialEq)]
+struct NpyHeader {
+    ty: SampleType,
+    endian: Endian,
+    fortran_order: bool,
+    shape: [usize; 3],
+    data_start: usize,
+}
+
+fn parse_npy(path: &Path, bytes: &[u8]) -> Result<NpyHeader, ReadError> {
+    if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
+        return Err(ReadError::invalid(
+            path,
+            "not a NumPy .npy file (bad magic)",
+        ));
+    }
+    let too_short = || ReadError::invalid(path, "file ends inside the .npy header");
+    let major = *bytes.get(6).ok_or_else(too_short)?;
+    let (len, start) = match major {
+        1 => {
+            let b = bytes.get(8..10).ok_or_else(too_short)?;
+            (usize::from(u16::from_le_bytes([b[0], b[1]])), 10usize)
+        }
+        2 | 3 => {
+            let b = bytes.get(8..12).ok_or_else(too_short)?;
+            let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            (usize::try_from(n).map_err(|_| too_short())?, 12usize)
+        }
+        v => {
+            return Err(ReadError::unsupported(
+                path,
+                format!(".npy format version {v}"),
+            ))
+        }
+    };
+    let end = start.checked_add(len).ok_or_else(too_short)?;
+    let text = bytes.get(start..end).ok_or_else(too_short)?;
+    let text = std::str::from_utf8(text)
+        .map_err(|_| ReadError::invalid(path, ".npy header is not text"))?;
+    let dict = parse_dict(text)
+        .map_err(|m| ReadError::invalid(path, format!("malformed .npy header: {m}")))?;
+
+    let mut descr = None;
+    let mut fortran = None;
+    let mut shape = None;
+    for (k, v) in dict {
+        match (k.as_str(), v) {
+            ("descr", PyValue::Str(s)) => descr = Some(s),
+            ("descr", PyValue::Other) => {
+                return Err(ReadError::unsupported(
+                    path,
+                    "structured dtype (only plain numbers are read)",
+                ))
+            }
+            ("fortran_order", PyValue::Bool(b)) => fortran = Some(b),
+            ("shape", PyValue::Tuple(t)) => shape = Some(t),
+            (key, _) => {
+                return Err(ReadError::invalid(
+                    path,
+                    format!(
+                        "malformed .npy header: bad entry {}",
+                        super::volume::quote(key)
+                    ),
+                ))
+            }
+        }
+    }
+    let descr = descr.ok_or_else(|| ReadError::invalid(path, ".npy header has no 'descr'"))?;
+    let fortran_order =
+        fortran.ok_or_else(|| ReadError::invalid(path, ".npy header has no 'fortran_order'"))?;
+    let shape = shape.ok_or_else(|| ReadError::invalid(path, ".npy header has no 'shape'"))?;
+    let (ty, endian) = parse_descr(&descr).ok_or_else(|| {
+        ReadError::unsupported(
+            path,
+            format!(
+                "dtype {} (supported: u1 i1 u2 i2 u4 i4 u8 i8 f4 f8 b1)",
+                super::volume::quote(&descr)
+            ),
+        )
+    })?;
+    let shape: [usize; 3] = shape.as_slice().try_into().map_err(|_| {
+        ReadError::invalid(
+            path,
+            format!(
+                "array is {}-D, a volume must be 3-D (shape {shape:?})",
+                shape.len()
+            ),
+        )
+    })?;
+    Ok(NpyHeader {
+        ty,
+        endian,
+        fortran_order,
+        shape,
+        data_start: end,
+    })
+}
+
+fn parse_descr(d: &str) -> Option<(SampleType, Endian)> {
+    let mut chars = d.chars();
+    let first = chars.next()?;
+    let (endian, rest) = match first {
+        '<' => (Endian::Little, chars.as_str()),
+        '>' => (Endian::Big, chars.as_str()),
+        '|' | '=' => (Endian::native(), chars.as_str()),
+        _ => (Endian::native(), d),
+    };
+    let ty = match rest {
+        "u1" | "b1" => SampleType::U8,
+        "i1" => SampleType::I8,
+        "u2" => SampleType::U16,
+        "i2" => SampleType::I16,
+        "u4" => SampleType::U32,
+        "i4" => SampleType::I32,
+        "u8" => SampleType::U64,
+        "i8" => SampleType::I64,
+        "f4" => SampleType::F32,
+        "f8" => SampleType::F64,
+        _ => return None,
+    };
+    // single-byte types are written with '|'; multi-byte ones must name a byte order
+    if ty.size() > 1 && matches!(first, '|') {
+        return None;
+    }
+    Some((ty, endian))
+}
+
+/// A value in the header dictionary.
+#[derive(Debug, PartialEq)]
+enum PyValue {
+    Str(String),
+    Bool(bool),
+    Tuple(Vec<usize>),
+    /// Anything else (a list, a nested dict, ...).
+    Other,
+}
+
+/// Parses the Python dict literal of a `.npy` header: string keys; values that are strings,
+/// booleans, tuples of non-negative integers, or (reported as `Other`) lists.
+fn parse_dict(text: &str) -> Result<Vec<(String, PyValue)>, String> {
+    let mut p = Parser {
+        s: text.as_bytes(),
+        pos: 0,
+    };
+    p.expect(b'{')?;
+    let mut out = Vec::new();
+    loop {
+        p.ws();
+        if p.eat(b'}') {
+            break;
+        }
+        let key = p.string()?;
+        p.ws();
+        p.expect(b':')?;
+        p.ws();
+        let value = p.value()?;
+        out.push((key, value));
+        p.ws();
+        if p.eat(b',') {
+            continue;
+        }
+        p.ws();
+        p.expect(b'}')?;
+        break;
+    }
+    p.ws();
+    if p.pos != p.s.len() {
+        return Err("text after the dictionary".into());
+    }
+    Ok(out)
+}
+
+struct Parser<'a> {
+    s: &'a [u8],
+    pos: usize,
+}
+
+impl Parser<'_> {
+    fn ws(&mut self) {
+        while self.pos < self.s.len() && self.s[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+    }
+
+    fn eat(&mut self, c: u8) -> bool {
+        if self.s.get(self.pos) == Some(&c) {
+            self.pos += 1;
+            true
+        } else {
+            false
+        }
+    }
+
+    fn expect(&mut self, c: u8) -> Result<(), String> {
+        self.ws();
+        if self.eat(c) {
+            Ok(())
+        } else {
+            Err(format!("expected '{}' at byte {}", c as char, self.pos))
+        }
+    }
+
+    fn string(&mut self) -> Result<String, String> {
+        let q = match self.s.get(self.pos) {
+            Some(&q @ (b'\'' | b'"')) => q,
+            _ => return Err(format!("expected a quoted string at byte {}", self.pos)),
+        };
+        let start = self.pos + 1;
+        let len = self.s[start..]
+            .iter()
+            .position(|&c| c == q)
+            .ok_or_else(|| "unterminated string".to_string())?;
+        self.pos = start + len + 1;
+        Ok(String::from_utf8_lossy(&self.s[start..start + len]).into_owned())
+    }
+
+    fn value(&mut self) -> Result<PyValue, String> {
+        match self.s.get(self.pos) {
+            Some(b'\'' | b'"') => Ok(PyValue::Str(self.string()?)),
+            Some(b'(') => {
+                self.pos += 1;
+                let mut items = Vec::new();
+                loop {
+                    self.ws();
+                    if self.eat(b')') {
+                        break;
+                    }
+                    items.push(self.integer()?);
+                    self.ws();
+                    if self.eat(b',') {
+                        continue;
+                    }
+                    self.expect(b')')?;
+                    break;
+                }
+                Ok(PyValue::Tuple(items))
+            }
+            Some(b'[') => {
+                // structured dtype: skip to the matching bracket
+                let mut depth = 0usize;
+                while let Some(&c) = self.s.get(self.pos) {
+                    self.pos += 1;
+                    match c {
+                        b'[' => depth += 1,
+                        b']' => {
+                            depth -= 1;
+                            if depth == 0 {
+                                return Ok(PyValue::Other);
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                Err("unterminated list".into())
+            }
+            _ => {
+                let rest = &self.s[self.pos..];
+                if rest.starts_with(b"True") {
+                    self.pos += 4;
+                    Ok(PyValue::Bool(true))
+                } else if rest.starts_with(b"False") {
+                    self.pos += 5;
+                    Ok(PyValue::Bool(false))
+                } else {
+                    Err(format!("unexpected value at byte {}", self.pos))
+                }
+            }
+        }
+    }
+
+    fn integer(&mut self) -> Result<usize, String> {
+        let start = self.pos;
+        while self.pos < self.s.len() && self.s[self.pos].is_ascii_digit() {
+            self.pos += 1;
+        }
+        let digits =
+            std::str::from_utf8(&self.s[start..self.pos]).map_err(|_| "bad integer".to_string())?;
+        let n = digits
+            .parse::<usize>()
+            .map_err(|_| format!("expected a non-negative integer at byte {start}"))?;
+        // Python 2 long suffix
+        if matches!(self.s.get(self.pos), Some(b'L' | b'l')) {
+            self.pos += 1;
+        }
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_typical_headers() {
+        let d = parse_dict("{'descr': '<f4', 'fortran_order': False, 'shape': (4, 5, 6), }    \n")
+            .unwrap();
+        assert_eq!(d[0], ("descr".into(), PyValue::Str("<f4".into())));
+        assert_eq!(d[1], ("fortran_order".into(), PyValue::Bool(false)));
+        assert_eq!(d[2], ("shape".into(), PyValue::Tuple(vec![4, 5, 6])));
+        let d = parse_dict("{\"shape\": (3L,), \"descr\": [('a', '<i4')]}").unwrap();
+        assert_eq!(d[0].1, PyValue::Tuple(vec![3]));
+        assert_eq!(d[1].1, PyValue::Other);
+        assert!(parse_dict("{'shape': (-1, 2, 3)}").is_err());
+        assert!(parse_dict("{'shape': (1, 2, 3)").is_err());
+        assert!(parse_dict("").is_err());
+    }
+
+    #[test]
+    fn descr_table() {
+        assert_eq!(parse_descr("<u2"), Some((SampleType::U16, Endian::Little)));
+        assert_eq!(parse_descr(">f8"), Some((SampleType::F64, Endian::Big)));
+        assert_eq!(parse_descr("|u1").map(|d| d.0), Some(SampleType::U8));
+        assert_eq!(parse_descr("<c8"), None);
+        assert_eq!(parse_descr("<f2"), None);
+        assert_eq!(parse_descr("|f4"), None);
+    }
+}
