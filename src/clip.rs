@@ -151,38 +151,46 @@ pub fn clip_tet(
     if cls.iter().all(|&c| c == BELOW) || cls.iter().all(|&c| c == ABOVE) {
         return;
     }
-    let mut pts: [ClipPoint; 16] = [ClipPoint {
-        key: 0,
-        pos: [0.0; 3],
-        val: 0.0,
-    }; 16];
-    let mut np = 0;
-    let mut vid = [usize::MAX; 4];
-    for i in 0..4 {
-        if cls[i] == INSIDE {
-            pts[np] = ClipPoint {
-                key: vertex_point(tv[i].key),
-                pos: tv[i].pos,
-                val: tv[i].val,
-            };
-            vid[i] = np;
-            np += 1;
-        }
-    }
     // Face planes on the grid box.
     let box_face: [bool; 4] = std::array::from_fn(|f| {
         let [a, b, c] = TET_FACES[f];
         tv[a].box_mask & tv[b].box_mask & tv[c].box_mask & box_planes != 0
     });
-    if np == 4 {
-        sink.tet(&pts[..4], [0, 1, 2, 3]);
+    let as_point = |v: &ClipVertex| ClipPoint {
+        key: vertex_point(v.key),
+        pos: v.pos,
+        val: v.val,
+    };
+    if cls == [INSIDE; 4] {
+        let pts = [
+            as_point(&tv[0]),
+            as_point(&tv[1]),
+            as_point(&tv[2]),
+            as_point(&tv[3]),
+        ];
+        sink.tet(&pts, [0, 1, 2, 3]);
         for f in 0..4 {
             if box_face[f] {
                 let [a, b, c] = TET_FACES[f];
-                sink.triangle(&pts[..4], [a, b, c], BoundaryLabel::Box);
+                sink.triangle(&pts, [a, b, c], BoundaryLabel::Box);
             }
         }
         return;
+    }
+    // At most 4 vertices + 8 cuts (two levels on the four edges of a 2–2 split).
+    let mut pts: [ClipPoint; 12] = [ClipPoint {
+        key: 0,
+        pos: [0.0; 3],
+        val: 0.0,
+    }; 12];
+    let mut np = 0;
+    let mut vid = [usize::MAX; 4];
+    for i in 0..4 {
+        if cls[i] == INSIDE {
+            pts[np] = as_point(&tv[i]);
+            vid[i] = np;
+            np += 1;
+        }
     }
     // cut ids per edge: [alpha, beta]
     let mut cid = [[usize::MAX; 2]; 6];
@@ -241,20 +249,30 @@ pub fn clip_tet(
         (0usize, BELOW, BoundaryLabel::Alpha),
         (1, ABOVE, BoundaryLabel::Beta),
     ] {
-        let ins: Vec<usize> = (0..4).filter(|&i| cls[i] == side).collect();
-        if ins.is_empty() || ins.len() == 4 {
+        let mut ins = [0usize; 4];
+        let mut outs = [0usize; 4];
+        let (mut ni, mut no) = (0, 0);
+        for i in 0..4 {
+            if cls[i] == side {
+                ins[ni] = i;
+                ni += 1;
+            } else {
+                outs[no] = i;
+                no += 1;
+            }
+        }
+        if ni == 0 || ni == 4 {
             continue;
         }
-        let outs: Vec<usize> = (0..4).filter(|&i| cls[i] != side).collect();
         let mut poly = Poly::new(Some(label));
-        if ins.len() == 2 {
+        if ni == 2 {
             let (b1, b2, r1, r2) = (ins[0], ins[1], outs[0], outs[1]);
             for (x, y) in [(b1, r1), (b1, r2), (b2, r2), (b2, r1)] {
                 poly.push(cid[edge_index(x, y)][which]);
             }
         } else {
-            for &x in &ins {
-                for &y in &outs {
+            for &x in &ins[..ni] {
+                for &y in &outs[..no] {
                     poly.push(cid[edge_index(x, y)][which]);
                 }
             }

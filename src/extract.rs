@@ -125,8 +125,9 @@ pub fn mesh_interval_with_progress(
 }
 
 /// Points, tets and boundary triangles of one slab, numbered locally.
-#[derive(Default)]
 struct Slab {
+    /// Direct-mapped cache in front of `map` (points recur within and across nearby cells).
+    recent: Box<[(PointKey, u32); RECENT]>,
     map: FxHashMap<PointKey, u32>,
     keys: Vec<PointKey>,
     pos: Vec<[f64; 3]>,
@@ -137,13 +138,36 @@ struct Slab {
     cases: [u64; 6],
 }
 
+const RECENT: usize = 256;
+
 impl Slab {
+    fn with_capacity(points: usize) -> Self {
+        Slab {
+            recent: Box::new([(PointKey::MAX, 0); RECENT]),
+            map: FxHashMap::with_capacity_and_hasher(points, Default::default()),
+            keys: Vec::with_capacity(points),
+            pos: Vec::with_capacity(points),
+            val: Vec::with_capacity(points),
+            tets: Vec::new(),
+            tris: Vec::new(),
+            labels: Vec::new(),
+            cases: [0; 6],
+        }
+    }
+
     #[inline]
     fn id(&mut self, p: &ClipPoint) -> u32 {
+        let h = ((p.key as u64) ^ ((p.key >> 64) as u64)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56;
+        let slot = &mut self.recent[h as usize % RECENT];
+        if slot.0 == p.key {
+            return slot.1;
+        }
         if let Some(&i) = self.map.get(&p.key) {
+            *slot = (p.key, i);
             return i;
         }
         let i = self.keys.len() as u32;
+        *slot = (p.key, i);
         self.map.insert(p.key, i);
         self.keys.push(p.key);
         self.pos.push(p.pos);
@@ -320,7 +344,7 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
 
 fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     let [cx, cy, _] = ctx.grid.cell_dims();
-    let mut slab = Slab::default();
+    let mut slab = Slab::with_capacity(2 * (cx + 1) * (cy + 1));
     let mut tets: Vec<[u8; 4]> = Vec::with_capacity(64);
     for j in 0..cy {
         for i in 0..cx {
@@ -328,6 +352,7 @@ fn process_slab(ctx: &Ctx, k: usize) -> Slab {
         }
     }
     slab.map = FxHashMap::default();
+    slab.recent = Box::new([(PointKey::MAX, 0); RECENT]);
     slab
 }
 

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# The full test suite. Installs what the tests need when it is missing:
+# gmsh and CalculiX (Debian packages), numpy, meshio and VTK (PyPI).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+missing=()
+command -v gmsh >/dev/null 2>&1 || missing+=(gmsh)
+command -v ccx >/dev/null 2>&1 || missing+=(calculix-ccx)
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "installing ${missing[*]} (apt)"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+if ! python3 -c "import numpy, meshio, vtk" >/dev/null 2>&1; then
+  echo "installing numpy meshio vtk (pip)"
+  python3 -m pip install -q numpy meshio vtk
+fi
+
+cargo test --all-targets "$@"
