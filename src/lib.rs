@@ -7,6 +7,9 @@
 //! identity and returns a [`mesh::TetMesh`]; [`topology`] and [`quality`] analyse it and the
 //! writers in [`io`] export it.
 
+// Index loops over small fixed arrays (corners, faces, axes) read better than iterator chains.
+#![allow(clippy::needless_range_loop)]
+
 pub mod clip;
 pub mod decompose;
 pub mod demo;

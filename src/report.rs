@@ -1,1 +1,233 @@
-//! placeholder
+//! The machine-readable run report (`--report FILE.json`) of `tptd-mesh`.
+//!
+//! [`build_report`] only assembles data; it does no I/O and prints nothing.
+
+use std::collections::BTreeMap;
+
+use serde::{Serialize, Serializer};
+
+use crate::decompose::CellCase;
+use crate::extract::{MeshStats, Method};
+use crate::mesh::{BoundaryLabel, TetMesh};
+
+/// A bound of the interval: finite values serialize as JSON numbers, infinities as the strings
+/// `"-inf"` / `"inf"` (JSON has no infinity), so the report is always valid JSON.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bound(pub f64);
+
+impl Serialize for Bound {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        if self.0.is_finite() {
+            s.serialize_f64(self.0)
+        } else if self.0 > 0.0 {
+            s.serialize_str("inf")
+        } else if self.0 < 0.0 {
+            s.serialize_str("-inf")
+        } else {
+            s.serialize_none()
+        }
+    }
+}
+
+/// Cell count of one decomposition case.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CaseCount {
+    /// Number of cells decomposed with this case.
+    pub count: u64,
+    /// `count` divided by the number of cells meshed (cells not entirely outside the interval);
+    /// 0 when no cell was meshed.
+    pub ratio: f64,
+}
+
+/// Wall-clock time of each stage, in seconds.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Timings {
+    /// Reading (or generating) the input volume.
+    pub read: f64,
+    /// Meshing.
+    pub mesh: f64,
+    /// Betti numbers and dihedral angles (0 when skipped).
+    pub analysis: f64,
+    /// Writing the output mesh.
+    pub write: f64,
+    /// Whole run.
+    pub total: f64,
+}
+
+/// Smallest and largest dihedral angle, in degrees.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Dihedral {
+    /// Smallest dihedral angle.
+    pub min: f64,
+    /// Largest dihedral angle.
+    pub max: f64,
+}
+
+/// Everything `tptd-mesh` reports about one run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// Input path, or `"demo"` for the generated volume.
+    pub input: String,
+    /// Output path.
+    pub output: String,
+    /// Grid vertices along x, y, z.
+    pub dims: [usize; 3],
+    /// Grid spacing along x, y, z.
+    pub spacing: [f64; 3],
+    /// Decomposition method name.
+    pub method: &'static str,
+    /// Lower bound of the interval.
+    pub alpha: Bound,
+    /// Upper bound of the interval.
+    pub beta: Bound,
+    /// Number of mesh nodes.
+    pub nodes: usize,
+    /// Number of tetrahedra.
+    pub tets: usize,
+    /// Boundary triangles per label (`alpha`, `beta`, `box`).
+    pub boundary_triangles: BTreeMap<&'static str, usize>,
+    /// Cells in the grid.
+    pub cells_total: u64,
+    /// Cells not entirely outside the interval (the sum over `cells_by_case`).
+    pub cells_meshed: u64,
+    /// Meshed cells per decomposition case (`i`, `ii`, `iii`, `iv`, `v`, `fallback`).
+    pub cells_by_case: BTreeMap<&'static str, CaseCount>,
+    /// Total volume of the mesh (physical units).
+    pub volume: f64,
+    /// Betti numbers `[b0, b1, b2]`; `null` when the analysis was skipped.
+    pub betti: Option<[usize; 3]>,
+    /// Dihedral angle range in degrees; `null` when the analysis was skipped.
+    pub dihedral_degrees: Option<Dihedral>,
+    /// Worker threads used.
+    pub threads: usize,
+    /// Stage timings.
+    pub timings_seconds: Timings,
+}
+
+/// Everything about a run that is not derived from the mesh itself.
+#[derive(Clone, Debug)]
+pub struct RunInfo<'a> {
+    /// Input path, or `"demo"`.
+    pub input: &'a str,
+    /// Output path.
+    pub output: &'a str,
+    /// Grid vertices along x, y, z.
+    pub dims: [usize; 3],
+    /// Grid spacing.
+    pub spacing: [f64; 3],
+    /// Method used.
+    pub method: Method,
+    /// Lower bound.
+    pub alpha: f64,
+    /// Upper bound.
+    pub beta: f64,
+    /// Worker threads used.
+    pub threads: usize,
+}
+
+/// Assembles the report of a run from its inputs, mesh, counters and (optional) analysis.
+/// Pure: no I/O.
+pub fn build_report(
+    run: &RunInfo<'_>,
+    mesh: &TetMesh,
+    stats: &MeshStats,
+    betti: Option<[usize; 3]>,
+    dihedral: Option<(f64, f64)>,
+    timings: Timings,
+) -> Report {
+    let mut boundary_triangles: BTreeMap<&'static str, usize> =
+        BoundaryLabel::ALL.iter().map(|l| (l.name(), 0)).collect();
+    for l in &mesh.boundary_labels {
+        *boundary_triangles.entry(l.name()).or_default() += 1;
+    }
+    let cells_meshed: u64 = stats.cells_by_case.iter().sum();
+    let cells_by_case = CellCase::ALL
+        .iter()
+        .map(|&c| {
+            let count = stats.cells_by_case[c as usize];
+            let ratio = if cells_meshed == 0 {
+                0.0
+            } else {
+                count as f64 / cells_meshed as f64
+            };
+            (c.name(), CaseCount { count, ratio })
+        })
+        .collect();
+    Report {
+        input: run.input.to_string(),
+        output: run.output.to_string(),
+        dims: run.dims,
+        spacing: run.spacing,
+        method: run.method.name(),
+        alpha: Bound(run.alpha),
+        beta: Bound(run.beta),
+        nodes: mesh.points.len(),
+        tets: mesh.tets.len(),
+        boundary_triangles,
+        cells_total: stats.cells_total,
+        cells_meshed,
+        cells_by_case,
+        volume: mesh.volume(),
+        betti,
+        dihedral_degrees: dihedral.map(|(min, max)| Dihedral { min, max }),
+        threads: run.threads,
+        timings_seconds: timings,
+    }
+}
+
+impl Report {
+    /// The report as pretty-printed JSON (always valid JSON: non-finite numbers never occur
+    /// unquoted).
+    pub fn to_json_pretty(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report always serializes")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn infinite_bounds_serialize_as_strings() {
+        let mesh = TetMesh {
+            points: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            values: vec![0.0; 4],
+            tets: vec![[0, 1, 2, 3]],
+            boundary: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+            boundary_labels: vec![
+                BoundaryLabel::Box,
+                BoundaryLabel::Box,
+                BoundaryLabel::Alpha,
+                BoundaryLabel::Alpha,
+            ],
+        };
+        let stats = MeshStats {
+            cells_by_case: [1, 0, 0, 0, 0, 0],
+            cells_total: 8,
+        };
+        let run = RunInfo {
+            input: "demo",
+            output: "x.vtu",
+            dims: [3, 3, 3],
+            spacing: [1.0; 3],
+            method: Method::Ctd,
+            alpha: f64::NEG_INFINITY,
+            beta: f64::INFINITY,
+            threads: 1,
+        };
+        let r = build_report(&run, &mesh, &stats, None, None, Timings::default());
+        let v: serde_json::Value = serde_json::from_str(&r.to_json_pretty()).unwrap();
+        assert_eq!(v["alpha"], "-inf");
+        assert_eq!(v["beta"], "inf");
+        assert_eq!(v["boundary_triangles"]["box"], 2);
+        assert_eq!(v["boundary_triangles"]["beta"], 0);
+        assert_eq!(v["cells_by_case"]["i"]["ratio"], 1.0);
+        assert!((r.volume - 1.0 / 6.0).abs() < 1e-12);
+        assert!(v["betti"].is_null());
+    }
+}

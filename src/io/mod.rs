@@ -12,4 +12,4 @@ pub mod nrrd;
 mod volume;
 pub mod vtu;
 
-// pub use volume::{read_volume, ReadError};
+pub use volume::{read_volume, ReadError};
