@@ -140,7 +140,9 @@ fn parse_bound(s: &str) -> Result<f64, String> {
 fn parse_spacing(s: &str) -> Result<Spacing, String> {
     let parts: Vec<&str> = s.split(',').collect();
     if parts.len() != 3 {
-        return Err(format!("'{s}' must be three comma-separated numbers sx,sy,sz"));
+        return Err(format!(
+            "'{s}' must be three comma-separated numbers sx,sy,sz"
+        ));
     }
     let mut out = [0.0; 3];
     for (o, p) in out.iter_mut().zip(&parts) {
@@ -149,7 +151,10 @@ fn parse_spacing(s: &str) -> Result<Spacing, String> {
             .parse()
             .map_err(|_| format!("'{}' is not a number", p.trim()))?;
         if !v.is_finite() || v <= 0.0 {
-            return Err(format!("spacing '{}' must be finite and positive", p.trim()));
+            return Err(format!(
+                "spacing '{}' must be finite and positive",
+                p.trim()
+            ));
         }
         *o = v;
     }
@@ -351,10 +356,7 @@ fn run(cli: Cli) -> Result<()> {
                 "no interval given: use --alpha A and/or --beta B (meshes alpha <= f <= beta)",
             ))
         }
-        (a, b) => (
-            a.unwrap_or(f64::NEG_INFINITY),
-            b.unwrap_or(f64::INFINITY),
-        ),
+        (a, b) => (a.unwrap_or(f64::NEG_INFINITY), b.unwrap_or(f64::INFINITY)),
     };
     if alpha >= beta {
         return Err(file_error(
@@ -415,7 +417,9 @@ fn run(cli: Cli) -> Result<()> {
     let high = AtomicU64::new(0);
     let result = mesh_interval_with_progress(&grid, &opts, &|done, total| {
         pb.set_length(total as u64);
-        let d = high.fetch_max(done as u64, Ordering::Relaxed).max(done as u64);
+        let d = high
+            .fetch_max(done as u64, Ordering::Relaxed)
+            .max(done as u64);
         pb.set_position(d);
     });
     pb.finish_and_clear();
@@ -449,8 +453,14 @@ fn run(cli: Cli) -> Result<()> {
             Method::Six | Method::Five => Method::Ctd,
             _ => Method::Six,
         };
-        let o = mesh_interval(&grid, &MeshOptions { method: other, ..opts.clone() })
-            .map_err(|e| file_error(&input_name, e))?;
+        let o = mesh_interval(
+            &grid,
+            &MeshOptions {
+                method: other,
+                ..opts.clone()
+            },
+        )
+        .map_err(|e| file_error(&input_name, e))?;
         Some(DemoComparison {
             other,
             other_b0: tptd::topology::betti(&o.mesh)[0],
@@ -549,11 +559,7 @@ fn summary(r: &Report, cmp: Option<&DemoComparison>, report_path: Option<&Path>)
         }
     }
     if let Some(d) = r.dihedral_degrees {
-        let _ = writeln!(
-            s,
-            "  dihedral  min {:.3} deg, max {:.3} deg",
-            d.min, d.max
-        );
+        let _ = writeln!(s, "  dihedral  min {:.3} deg, max {:.3} deg", d.min, d.max);
     }
     let cases: Vec<String> = CellCase::ALL
         .iter()

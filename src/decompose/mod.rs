@@ -99,17 +99,32 @@ impl CellPoints {
 /// Appends the tets of the pyramid with apex `apex` over cell face `f`: four tets around the
 /// face saddle when bit `f` of `used_faces` is set, otherwise two along the face's
 /// smallest–largest diagonal.
+///
+/// The tets are positively oriented whenever the apex lies strictly on the inner side of face
+/// `f` (inside the cell, or on another face): the base triangles run counter-clockwise in the
+/// face's (lower axis, higher axis) frame, whose normal is `+x`, `-y`, `+z` for the three axes,
+/// so they are reversed where that normal points into the cell.
 #[inline]
 pub fn push_pyramid(out: &mut Vec<[u8; 4]>, apex: u8, f: usize, used_faces: u8) {
     let fc = face_corners(f).map(|c| c as u8);
+    let normal_positive = f / 2 != 1;
+    let outward_positive = f % 2 == 1;
+    let flip = normal_positive != outward_positive;
+    let mut push = |a: u8, b: u8, c: u8| {
+        if flip {
+            out.push([apex, a, c, b]);
+        } else {
+            out.push([apex, a, b, c]);
+        }
+    };
     if used_faces & (1 << f) != 0 {
         let s = face_id(f);
         for t in 0..4 {
-            out.push([apex, fc[t], fc[(t + 1) % 4], s]);
+            push(fc[t], fc[(t + 1) % 4], s);
         }
     } else {
-        out.push([apex, fc[0], fc[1], fc[2]]);
-        out.push([apex, fc[0], fc[2], fc[3]]);
+        push(fc[0], fc[1], fc[2]);
+        push(fc[0], fc[2], fc[3]);
     }
 }
 

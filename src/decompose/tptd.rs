@@ -56,10 +56,8 @@ pub fn decompose_tptd(
                     push_pyramid(out, apex, f, used_faces);
                 }
             }
-            if orient_tiling(&mut out[start..], pts, 1.0) {
-                return CellCase::II;
-            }
-            CellCase::Fallback
+            // push_pyramid orients every tet (apex on another face); tests check it
+            return CellCase::II;
         }
         (1, 6) | (2, 6) => {
             if prisms(face_value, bodies, pts, out) {
@@ -87,8 +85,7 @@ pub fn decompose_tptd(
     for f in 0..6 {
         push_pyramid(out, BODY0, f, used_faces);
     }
-    let ok = orient_tiling(&mut out[start..], pts, 1.0);
-    debug_assert!(ok, "pyramids around an interior point are always valid");
+    // pyramids around an interior point: valid and positively oriented by construction
     case
 }
 
@@ -99,9 +96,17 @@ fn corner_values(pts: &CellPoints) -> [f64; 8] {
 /// The used face whose saddle is the second biggest (the only one when one is used).
 /// Ties are broken by face number so the choice is a function of the values only.
 fn second_biggest(used_faces: u8, face_value: &[f64; 6]) -> usize {
-    let mut faces: Vec<usize> = (0..6).filter(|f| used_faces & (1 << f) != 0).collect();
-    faces.sort_by(|&a, &b| face_value[a].total_cmp(&face_value[b]).then(a.cmp(&b)));
-    faces[faces.len().saturating_sub(2)]
+    let mut faces = [0usize; 6];
+    let mut n = 0;
+    for f in 0..6 {
+        if used_faces & (1 << f) != 0 {
+            faces[n] = f;
+            n += 1;
+        }
+    }
+    let faces = &mut faces[..n];
+    faces.sort_unstable_by(|&a, &b| face_value[a].total_cmp(&face_value[b]).then(a.cmp(&b)));
+    faces[n.saturating_sub(2)]
 }
 
 /// Case (iv): 24 tets. Returns false if no octahedron split is positive.
