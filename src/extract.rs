@@ -292,34 +292,32 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
         return Err(MeshError::TooLarge("tets"));
     }
     let flip = grid.affine_determinant() < 0.0;
-    let tets: Vec<[u32; 4]> = slabs
-        .par_iter()
-        .zip(maps.par_iter())
-        .flat_map_iter(|(s, m)| {
-            s.tets.iter().map(move |t| {
-                let g = t.map(|i| m[i as usize]);
-                if flip {
-                    [g[0], g[1], g[3], g[2]]
-                } else {
-                    g
-                }
-            })
-        })
-        .collect();
-    let boundary: Vec<[u32; 3]> = slabs
-        .par_iter()
-        .zip(maps.par_iter())
-        .flat_map_iter(|(s, m)| {
-            s.tris.iter().map(move |t| {
-                let g = t.map(|i| m[i as usize]);
-                if flip {
-                    [g[0], g[2], g[1]]
-                } else {
-                    g
-                }
-            })
-        })
-        .collect();
+    let tets = remap(
+        &slabs,
+        &maps,
+        |s| &s.tets,
+        |t, m| {
+            let g = t.map(|i| m[i as usize]);
+            if flip {
+                [g[0], g[1], g[3], g[2]]
+            } else {
+                g
+            }
+        },
+    );
+    let boundary = remap(
+        &slabs,
+        &maps,
+        |s| &s.tris,
+        |t, m| {
+            let g = t.map(|i| m[i as usize]);
+            if flip {
+                [g[0], g[2], g[1]]
+            } else {
+                g
+            }
+        },
+    );
     let boundary_labels: Vec<BoundaryLabel> = slabs
         .iter()
         .flat_map(|s| s.labels.iter().copied())
@@ -340,6 +338,35 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
         boundary,
         boundary_labels,
     })
+}
+
+/// Concatenates one per-slab list in slab order, renumbering each element through its slab's
+/// local-to-global map, in parallel into an exactly sized vector.
+fn remap<T: Copy + Default + Send + Sync>(
+    slabs: &[Slab],
+    maps: &[Vec<u32>],
+    list: impl Fn(&Slab) -> &Vec<T> + Sync,
+    f: impl Fn(&T, &[u32]) -> T + Sync,
+) -> Vec<T> {
+    let total = slabs.iter().map(|s| list(s).len()).sum();
+    let mut out = vec![T::default(); total];
+    let mut chunks = Vec::with_capacity(slabs.len());
+    let mut rest = &mut out[..];
+    for s in slabs {
+        let (a, b) = rest.split_at_mut(list(s).len());
+        chunks.push(a);
+        rest = b;
+    }
+    chunks
+        .into_par_iter()
+        .zip(slabs.par_iter())
+        .zip(maps.par_iter())
+        .for_each(|((dst, s), m)| {
+            for (d, t) in dst.iter_mut().zip(list(s)) {
+                *d = f(t, m);
+            }
+        });
+    out
 }
 
 fn process_slab(ctx: &Ctx, k: usize) -> Slab {

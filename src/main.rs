@@ -222,16 +222,30 @@ fn output_format(path: &Path) -> Result<Format> {
 }
 
 /// Fails early (before reading and meshing) when an output path is an existing directory or
-/// other non-regular file.
+/// other non-regular file, or its directory does not exist.
 fn check_writable(path: &Path) -> Result<()> {
     match std::fs::metadata(path) {
-        Ok(m) if m.is_dir() => Err(file_error(path.display(), "is a directory")),
-        Ok(m) if !m.is_file() => Err(file_error(
-            path.display(),
-            "exists and is not a regular file",
-        )),
-        _ => Ok(()),
+        Ok(m) if m.is_dir() => return Err(file_error(path.display(), "is a directory")),
+        Ok(m) if !m.is_file() => {
+            return Err(file_error(
+                path.display(),
+                "exists and is not a regular file",
+            ))
+        }
+        _ => {}
     }
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        if !parent.is_dir() {
+            return Err(file_error(
+                path.display(),
+                format_args!(
+                    "cannot write: directory '{}' does not exist",
+                    parent.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Formats a bound for messages (`inf`, `-inf` or the shortest round-trip form).
@@ -609,7 +623,27 @@ fn summary(r: &Report, cmp: Option<&DemoComparison>, report_path: Option<&Path>)
 }
 
 fn main() {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                // --help / --version: print as clap does (stdout, exit 0).
+                e.exit();
+            }
+            // Usage errors: one line, exit status 2.
+            let text = e.render().to_string();
+            let msg: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .take_while(|l| !l.is_empty())
+                .collect();
+            let msg = msg.join(" ");
+            let msg = msg.strip_prefix("error: ").unwrap_or(&msg);
+            eprintln!("tptd-mesh: error: {msg} (see tptd-mesh --help)");
+            std::process::exit(2);
+        }
+    };
     if let Err(e) = run(cli) {
         let msg = e.to_string().replace(['\n', '\r'], " ");
         eprintln!("tptd-mesh: error: {msg}");
