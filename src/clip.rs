@@ -7,15 +7,70 @@
 //! both sides, so both sides triangulate it the same way: the mesh conforms.
 //!
 //! **Ties.** A value equal to alpha counts as below and one equal to beta as above (the mesh
-//! is the closure of the open interval). The cut of an edge from a tied end is placed as if
-//! that end's value were moved outward by [`TIE_FRACTION`] of the edge's value difference, so
-//! no point of the output coincides with another and no tet is flat.
+//! is the closure of the open interval). For placing cuts, a tied vertex's value is moved
+//! outward by a per-run constant ([`Interval`]): the field stays linear on every tet, so each
+//! clipped piece stays convex, no output point coincides with another and no tet is flat.
 
 use crate::keys::{cut_point, vertex_point, PointKey, VertexKey};
 use crate::mesh::{signed_volume, BoundaryLabel};
 
-/// Relative offset used for the cut of an edge whose end value equals a level.
+/// Fraction of the smallest gap between a level and the data values by which tied values are
+/// moved outward when cuts are placed.
 pub const TIE_FRACTION: f64 = 1e-3;
+
+/// The clipping interval and the values tied vertices are moved to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interval {
+    /// Lower bound (may be `-inf`).
+    pub alpha: f64,
+    /// Upper bound (may be `+inf`).
+    pub beta: f64,
+    /// Value used for cut placement at vertices whose value equals alpha (below alpha).
+    pub alpha_tie: f64,
+    /// Value used for cut placement at vertices whose value equals beta (above beta).
+    pub beta_tie: f64,
+}
+
+impl Interval {
+    /// The interval `(alpha, beta)` for data `values`: a tied value is moved outward by
+    /// [`TIE_FRACTION`] of the smallest non-zero distance between the level and a data value
+    /// (so, with integer data, by 10⁻³).
+    pub fn new(alpha: f64, beta: f64, values: &[f64]) -> Self {
+        let gap = |level: f64| -> f64 {
+            if !level.is_finite() {
+                return 0.0;
+            }
+            let g = values
+                .iter()
+                .map(|&v| (v - level).abs())
+                .filter(|&d| d > 0.0)
+                .fold(f64::INFINITY, f64::min);
+            if g.is_finite() {
+                g
+            } else {
+                1.0
+            }
+        };
+        let (ga, gb) = (gap(alpha), gap(beta));
+        let width = if alpha.is_finite() && beta.is_finite() {
+            beta - alpha
+        } else {
+            f64::INFINITY
+        };
+        let da = (TIE_FRACTION * ga)
+            .min(0.25 * width)
+            .max(alpha.abs() * 4.0 * f64::EPSILON);
+        let db = (TIE_FRACTION * gb)
+            .min(0.25 * width)
+            .max(beta.abs() * 4.0 * f64::EPSILON);
+        Interval {
+            alpha,
+            beta,
+            alpha_tie: alpha - da,
+            beta_tie: beta + db,
+        }
+    }
+}
 
 /// A tet vertex handed to the clipper.
 #[derive(Clone, Copy, Debug)]
@@ -65,14 +120,13 @@ fn classify(v: f64, alpha: f64, beta: f64) -> u8 {
     }
 }
 
-/// Effective value of an edge end for cut placement (moves tied ends outward).
+/// Value of a vertex for cut placement (moves tied values outward).
 #[inline]
-fn effective(v: f64, other: f64, alpha: f64, beta: f64) -> f64 {
-    let eta = TIE_FRACTION * (other - v).abs();
-    if v == alpha {
-        v - eta
-    } else if v == beta {
-        v + eta
+fn effective(v: f64, iv: &Interval) -> f64 {
+    if v == iv.alpha {
+        iv.alpha_tie
+    } else if v == iv.beta {
+        iv.beta_tie
     } else {
         v
     }
@@ -81,10 +135,10 @@ fn effective(v: f64, other: f64, alpha: f64, beta: f64) -> f64 {
 /// Cut of edge (a, b) by `level`, computed from the key-ordered ends so that every tet
 /// sharing the edge gets the bit-identical point.
 #[inline]
-fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, alpha: f64, beta: f64) -> ClipPoint {
+fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, iv: &Interval) -> ClipPoint {
     let (p, q) = if a.key < b.key { (a, b) } else { (b, a) };
-    let fp = effective(p.val, q.val, alpha, beta);
-    let fq = effective(q.val, p.val, alpha, beta);
+    let fp = effective(p.val, iv);
+    let fq = effective(q.val, iv);
     let t = (level - fp) / (fq - fp);
     ClipPoint {
         key: cut_point(p.key, q.key, which),
@@ -139,14 +193,9 @@ impl Poly {
 
 /// Clips tet `tv` (positively oriented) to `alpha < f < beta` and sends the pieces to `sink`.
 /// `box_planes` selects which bits of [`ClipVertex::box_mask`] are grid-box planes.
-/// `alpha` may be `-inf` and `beta` `+inf`; `alpha < beta`.
-pub fn clip_tet(
-    tv: &[ClipVertex; 4],
-    alpha: f64,
-    beta: f64,
-    box_planes: u8,
-    sink: &mut impl ClipSink,
-) {
+/// `iv.alpha` may be `-inf` and `iv.beta` `+inf`; `alpha < beta`.
+pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut impl ClipSink) {
+    let (alpha, beta) = (iv.alpha, iv.beta);
     let cls: [u8; 4] = std::array::from_fn(|i| classify(tv[i].val, alpha, beta));
     if cls.iter().all(|&c| c == BELOW) || cls.iter().all(|&c| c == ABOVE) {
         return;
@@ -200,12 +249,12 @@ pub fn clip_tet(
             continue;
         }
         if ci == BELOW || cj == BELOW {
-            pts[np] = cut(&tv[i], &tv[j], alpha, 0, alpha, beta);
+            pts[np] = cut(&tv[i], &tv[j], alpha, 0, iv);
             cid[e][0] = np;
             np += 1;
         }
         if ci == ABOVE || cj == ABOVE {
-            pts[np] = cut(&tv[i], &tv[j], beta, 1, alpha, beta);
+            pts[np] = cut(&tv[i], &tv[j], beta, 1, iv);
             cid[e][1] = np;
             np += 1;
         }
@@ -282,16 +331,23 @@ pub fn clip_tet(
     }
     // Cone from the smallest-key vertex.
     let v0 = (0..np).min_by_key(|&i| pts[i].key).unwrap_or(0);
-    let mut centroid = [0.0; 3];
-    for p in pts {
-        for a in 0..3 {
-            centroid[a] += p.pos[a] / np as f64;
-        }
-    }
     for poly in &faces[..nfaces] {
         let verts = &poly.v[..poly.n];
         let r = (0..poly.n).min_by_key(|&i| pts[verts[i]].key).unwrap_or(0);
         let has_v0 = verts.contains(&v0);
+        // For a boundary face: the polytope vertex farthest from the face's plane says which
+        // side is inside (robust even for very thin pieces).
+        let inside_sign = poly.label.map(|_| {
+            let (a, b, c) = (pts[verts[0]].pos, pts[verts[1]].pos, pts[verts[2]].pos);
+            let mut best = 0.0f64;
+            for p in pts {
+                let v = signed_volume(a, b, c, p.pos);
+                if v.abs() > best.abs() {
+                    best = v;
+                }
+            }
+            best
+        });
         for s in 1..poly.n - 1 {
             let a = verts[r];
             let b = verts[(r + s) % poly.n];
@@ -304,9 +360,10 @@ pub fn clip_tet(
                     sink.tet(pts, [v0, a, c, b]);
                 }
             }
-            if let Some(label) = poly.label {
-                // outward: the centroid is behind the triangle
-                if signed_volume(pts[a].pos, pts[b].pos, pts[c].pos, centroid) > 0.0 {
+            if let (Some(label), Some(sign)) = (poly.label, inside_sign) {
+                // The fan triangles keep the polygon's winding; outward means the inside is
+                // on the negative side.
+                if sign > 0.0 {
                     sink.triangle(pts, [a, c, b], label);
                 } else {
                     sink.triangle(pts, [a, b, c], label);
@@ -384,7 +441,7 @@ mod tests {
                 tets: 0,
                 area_alpha: 0.0,
             };
-            clip_tet(&tv, a, b, 0, &mut c);
+            clip_tet(&tv, &Interval::new(a, b, &[0.0, 1.0]), 0, &mut c);
             let cube = |s: f64| s.clamp(0.0, 1.0).powi(3) / 6.0;
             let want = cube(b) - cube(a);
             assert!((c.vol - want).abs() < 1e-14, "{a} {b}: {} vs {want}", c.vol);

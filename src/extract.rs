@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex};
+use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex, Interval};
 use crate::decompose::plan::{face_needed, is_full, CellClasses};
 use crate::decompose::{five, six, tptd, CellCase, CellPoints, BODY0, BODY1, NUM_LOCAL};
 use crate::grid::{corner_faces, corner_offset, ScalarGrid};
@@ -192,6 +192,7 @@ impl ClipSink for Slab {
 
 struct Ctx<'a> {
     grid: &'a ScalarGrid,
+    interval: Interval,
     alpha: f64,
     beta: f64,
     method: Method,
@@ -213,6 +214,7 @@ fn run(
     }
     let ctx = Ctx {
         grid,
+        interval: Interval::new(opts.alpha, opts.beta, &grid.values),
         alpha: opts.alpha,
         beta: opts.beta,
         method: opts.method,
@@ -423,6 +425,7 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
             };
             let full = is_full(method, cls, nb);
             let mut used = 0u8;
+            let mut own = 0u8;
             let mut fv = [0.0; 6];
             let cd = grid.cell_dims();
             for f in 0..6 {
@@ -430,7 +433,10 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
                     continue;
                 };
                 let axis = f / 2;
-                let need = full || face_needed(cls, f) || {
+                if full || face_needed(cls, f) {
+                    own |= 1 << f;
+                }
+                let need = own & (1 << f) != 0 || {
                     let mut n = c;
                     if f % 2 == 0 {
                         if n[axis] == 0 {
@@ -454,7 +460,7 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
                 }
             }
             let nbu = if full || crosses { nb } else { 0 };
-            tptd::decompose_tptd(used, &fv, &bodies[..nbu], &mut pts, tets)
+            tptd::decompose_tptd(used, own, &fv, &bodies[..nbu], &mut pts, tets)
         }
     };
     slab.cases[case as usize] += 1;
@@ -504,7 +510,7 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
                 }
             })
         });
-        clip_tet(&tv, ctx.alpha, ctx.beta, box_planes, slab);
+        clip_tet(&tv, &ctx.interval, box_planes, slab);
     }
     let _ = BODY1;
 }

@@ -526,6 +526,15 @@ fn run(cli: Cli) -> Result<()> {
     Ok(())
 }
 
+/// An angle in degrees with three decimals, or three significant digits when tiny.
+fn fmt_angle(a: f64) -> String {
+    if a != 0.0 && a.abs() < 0.01 {
+        format!("{a:.2e}")
+    } else {
+        format!("{a:.3}")
+    }
+}
+
 /// The human-readable summary printed on stdout.
 fn summary(r: &Report, cmp: Option<&DemoComparison>, report_path: Option<&Path>) -> String {
     use std::fmt::Write as _;
@@ -573,7 +582,12 @@ fn summary(r: &Report, cmp: Option<&DemoComparison>, report_path: Option<&Path>)
         }
     }
     if let Some(d) = r.dihedral_degrees {
-        let _ = writeln!(s, "  dihedral  min {:.3} deg, max {:.3} deg", d.min, d.max);
+        let _ = writeln!(
+            s,
+            "  dihedral  min {} deg, max {} deg",
+            fmt_angle(d.min),
+            fmt_angle(d.max)
+        );
     }
     let cases: Vec<String> = CellCase::ALL
         .iter()

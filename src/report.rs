@@ -4,6 +4,7 @@
 
 use std::collections::BTreeMap;
 
+use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
 use crate::decompose::CellCase;
@@ -37,6 +38,28 @@ pub struct CaseCount {
     /// `count` divided by the number of cells meshed (cells not entirely outside the interval);
     /// 0 when no cell was meshed.
     pub ratio: f64,
+}
+
+/// Cell counts per decomposition case, in case order (`i`, `ii`, `iii`, `iv`, `v`,
+/// `fallback`); serializes as a JSON object with the keys in that order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CaseCounts(pub Vec<(&'static str, CaseCount)>);
+
+impl CaseCounts {
+    /// The entry of case `name`, if present.
+    pub fn get(&self, name: &str) -> Option<&CaseCount> {
+        self.0.iter().find(|(n, _)| *n == name).map(|(_, c)| c)
+    }
+}
+
+impl Serialize for CaseCounts {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (name, count) in &self.0 {
+            m.serialize_entry(name, count)?;
+        }
+        m.end()
+    }
 }
 
 /// Wall-clock time of each stage, in seconds.
@@ -91,7 +114,7 @@ pub struct Report {
     /// Cells not entirely outside the interval (the sum over `cells_by_case`).
     pub cells_meshed: u64,
     /// Meshed cells per decomposition case (`i`, `ii`, `iii`, `iv`, `v`, `fallback`).
-    pub cells_by_case: BTreeMap<&'static str, CaseCount>,
+    pub cells_by_case: CaseCounts,
     /// Total volume of the mesh (physical units).
     pub volume: f64,
     /// Betti numbers `[b0, b1, b2]`; `null` when the analysis was skipped.
@@ -141,18 +164,20 @@ pub fn build_report(
         *boundary_triangles.entry(l.name()).or_default() += 1;
     }
     let cells_meshed: u64 = stats.cells_by_case.iter().sum();
-    let cells_by_case = CellCase::ALL
-        .iter()
-        .map(|&c| {
-            let count = stats.cells_by_case[c as usize];
-            let ratio = if cells_meshed == 0 {
-                0.0
-            } else {
-                count as f64 / cells_meshed as f64
-            };
-            (c.name(), CaseCount { count, ratio })
-        })
-        .collect();
+    let cells_by_case = CaseCounts(
+        CellCase::ALL
+            .iter()
+            .map(|&c| {
+                let count = stats.cells_by_case[c as usize];
+                let ratio = if cells_meshed == 0 {
+                    0.0
+                } else {
+                    count as f64 / cells_meshed as f64
+                };
+                (c.name(), CaseCount { count, ratio })
+            })
+            .collect(),
+    );
     Report {
         input: run.input.to_string(),
         output: run.output.to_string(),

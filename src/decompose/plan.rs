@@ -10,7 +10,8 @@
 //!   (diagonal corners on the same side, the two diagonals on opposite sides), or when a
 //!   *full* cell touches the face. A full cell is, for `ctd`, a two-level cell, and for both, a
 //!   cell crossing a level that has a body saddle (STD case iii is never used on its own: a
-//!   body saddle with masked faces can join what case v keeps apart). Full cells use every
+//!   body saddle with masked faces can join what case v keeps apart) or whose corners 0 and 7
+//!   are alone on one side of a level (the 6-fold diagonal would join them). Full cells use every
 //!   saddle (TPTD); other cells use no body saddle (STD cases i, ii, iv over the used faces).
 //!   Both cells of a face evaluate the same rule on the same data, so they agree.
 
@@ -101,17 +102,27 @@ pub fn face_ambiguous(m: u8, f: usize) -> bool {
     s(0) == s(2) && s(1) == s(3) && s(0) != s(1)
 }
 
+/// Whether corners 0 and 7 are alone on one side of a level (MC configuration 4 along the
+/// 6-fold diagonal): the 6-fold split would join them through the 0–7 edge whether or not
+/// the trilinear field does (4.1.1 versus 4.1.2), so such cells need TPTD.
+#[inline]
+pub fn diagonal_pair(cls: CellClasses) -> bool {
+    const PAIR: u8 = 0b1000_0001;
+    cls.below == PAIR || cls.below == !PAIR || cls.above == PAIR || cls.above == !PAIR
+}
+
 /// Whether a cell must use every saddle (TPTD), given its classes and body-saddle count.
 #[inline]
 pub fn is_full(method: Method, cls: CellClasses, num_body: usize) -> bool {
+    let one_level = cls.crosses_alpha() || cls.crosses_beta();
     match method {
         Method::Tptd => true,
         Method::Five | Method::Six => false,
         Method::Ctd => {
             (cls.crosses_alpha() && cls.crosses_beta())
-                || ((cls.crosses_alpha() || cls.crosses_beta()) && num_body > 0)
+                || (one_level && (num_body > 0 || diagonal_pair(cls)))
         }
-        Method::Std => (cls.crosses_alpha() || cls.crosses_beta()) && num_body > 0,
+        Method::Std => one_level && (num_body > 0 || diagonal_pair(cls)),
     }
 }
 

@@ -27,10 +27,14 @@ use crate::trilinear::BodySaddle;
 
 /// Decomposes one cell. `face_value[f]` is the saddle value of face `f` (read for used faces
 /// only); `pts` holds the corners and the used face saddles and receives the body points.
-/// `bodies` are the used body saddles sorted by value (0, 1 or 2).
+/// `bodies` are the used body saddles sorted by value (0, 1 or 2). `apex_faces` are the used
+/// faces whose saddle may be the case-(ii) apex: all used faces for TPTD, only the faces a
+/// STD cell needs for its own level otherwise (a saddle used only because a TPTD neighbour
+/// needs it may sit on either side of the level and would join what the cell keeps apart).
 /// Appends positively oriented tets to `out` and returns the case used.
 pub fn decompose_tptd(
     used_faces: u8,
+    apex_faces: u8,
     face_value: &[f64; 6],
     bodies: &[BodySaddle],
     pts: &mut CellPoints,
@@ -50,14 +54,36 @@ pub fn decompose_tptd(
             CellCase::Fallback
         }
         (0, _) => {
-            let apex = face_id(second_biggest(used_faces, face_value));
+            let eligible = apex_faces & used_faces;
+            const ODD: u8 = 0b10_1010;
+            const EVEN: u8 = 0b01_0101;
+            if eligible == 0 && used_faces & EVEN == 0 {
+                // Only faces away from corner 0 are split: the 6-fold split seen as three
+                // pyramids from corner 0, with the split faces in four.
+                for f in [1, 3, 5] {
+                    push_pyramid(out, 0, f, used_faces);
+                }
+                return CellCase::I;
+            }
+            if eligible == 0 && used_faces & ODD == 0 {
+                for f in [0, 2, 4] {
+                    push_pyramid(out, 7, f, used_faces);
+                }
+                return CellCase::I;
+            }
+            let from = if eligible != 0 { eligible } else { used_faces };
+            let apex = face_id(second_biggest(from, face_value));
             for f in 0..6 {
                 if face_id(f) != apex {
                     push_pyramid(out, apex, f, used_faces);
                 }
             }
             // push_pyramid orients every tet (apex on another face); tests check it
-            return CellCase::II;
+            return if eligible != 0 {
+                CellCase::II
+            } else {
+                CellCase::Fallback
+            };
         }
         (1, 6) | (2, 6) => {
             if prisms(face_value, bodies, pts, out) {
@@ -291,11 +317,24 @@ mod tests {
                 }
             }
             let (bs, nb) = body_saddles(&v);
+            // which used faces may be the apex (all, for full cells; some or none for STD)
+            let apex_mask = if rng(&mut seed) < 0.5 {
+                0
+            } else {
+                (rng(&mut seed) * 64.0) as u8
+            };
             let mut mask = exists;
             loop {
                 for nbu in 0..=nb {
                     out.clear();
-                    let case = decompose_tptd(mask, &fv, &bs[..nbu], &mut pts, &mut out);
+                    let case = decompose_tptd(
+                        mask,
+                        if nbu == 0 { mask & apex_mask } else { mask },
+                        &fv,
+                        &bs[..nbu],
+                        &mut pts,
+                        &mut out,
+                    );
                     seen[case as usize] += 1;
                     if case == CellCase::Fallback {
                         *fb.entry((nbu, mask.count_ones())).or_insert(0usize) += 1;

@@ -1,0 +1,400 @@
+//! End-to-end tests of the `tptd-mesh` binary: the demo, meshing a small `.npy` to every
+//! output format, the JSON report, determinism across thread counts, and the one-line errors
+//! that leave no output behind.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
+
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn assert_ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
+        o.status,
+        stdout(o),
+        stderr(o)
+    );
+}
+
+/// Writes a C-order `<f8` `.npy` (format 1.0) of shape `(nx, ny, nz)`; element `[i, j, k]`
+/// (grid vertex x = i, y = j, z = k) is `f(i, j, k)`.
+fn write_npy(path: &Path, dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f64) {
+    let [nx, ny, nz] = dims;
+    let mut header =
+        format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({nx}, {ny}, {nz}), }}");
+    // magic (6) + version (2) + length (2) + header + '\n' must be a multiple of 64.
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for i in 0..nx {
+        for j in 0..ny {
+            for k in 0..nz {
+                bytes.extend_from_slice(&f(i, j, k).to_le_bytes());
+            }
+        }
+    }
+    fs::write(path, bytes).unwrap();
+}
+
+/// A smooth blob: distance from an off-centre point plus a wobble, so generic values (no grid
+/// value equals the bounds used below) and some ambiguous faces.
+fn blob(i: usize, j: usize, k: usize) -> f64 {
+    let (x, y, z) = (i as f64, j as f64, k as f64);
+    let r = ((x - 4.3).powi(2) + (y - 3.7).powi(2) + (z - 3.1).powi(2)).sqrt();
+    r + 0.7 * (1.3 * x).sin() * (0.9 * y).cos() + 0.4 * (1.7 * z).sin()
+}
+
+/// A temp dir holding `vol.npy` (9 × 8 × 7 blob).
+fn dir_with_volume() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("vol.npy");
+    write_npy(&p, [9, 8, 7], blob);
+    (dir, p)
+}
+
+/// Names of the entries of `dir`, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn demo_keeps_the_two_vessels_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = run_in(dir.path(), &["--demo"]);
+    assert_ok(&o);
+    let out = stdout(&o);
+    assert!(out.contains("b0 = 2"), "{out}");
+    assert!(out.contains("six would give b0 = 1"), "{out}");
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+    assert_eq!(listing(dir.path()), ["tptd-demo.vtu"]);
+    let vtu = fs::read(dir.path().join("tptd-demo.vtu")).unwrap();
+    assert!(vtu.starts_with(b"<?xml") || vtu.starts_with(b"<VTKFile"));
+}
+
+#[test]
+fn demo_with_six_reports_the_merge() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = run_in(
+        dir.path(),
+        &["--demo", "--method", "six", "-o", "six.msh", "-q"],
+    );
+    assert_ok(&o);
+    assert!(stdout(&o).is_empty());
+    assert_eq!(listing(dir.path()), ["six.msh"]);
+    let o = run_in(dir.path(), &["--demo", "--method", "six", "-o", "six.msh"]);
+    assert_ok(&o);
+    assert!(stdout(&o).contains("b0 = 1"), "{}", stdout(&o));
+    assert!(
+        stdout(&o).contains("ctd would give b0 = 2"),
+        "{}",
+        stdout(&o)
+    );
+}
+
+#[test]
+fn meshes_npy_to_every_format_with_a_consistent_report() {
+    let (dir, vol) = dir_with_volume();
+    let vol = vol.to_str().unwrap();
+    for (out, extra) in [
+        ("m.msh", &[][..]),
+        ("m22.msh", &["--msh-version", "2.2"][..]),
+        ("m.inp", &[][..]),
+        ("m.vtu", &[][..]),
+    ] {
+        let report = format!("{out}.json");
+        let mut args = vec![
+            vol, "-o", out, "--alpha", "2.05", "--beta", "4.45", "--report", &report,
+        ];
+        args.extend_from_slice(extra);
+        let o = run_in(dir.path(), &args);
+        assert_ok(&o);
+        assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+        let s = stdout(&o);
+        assert!(s.contains("b0 = "), "{s}");
+        assert!(s.contains(out), "{s}");
+        let text = fs::read_to_string(dir.path().join(out)).unwrap_or_else(|_| {
+            // .vtu may hold binary data; only check it exists and is non-empty.
+            assert!(fs::metadata(dir.path().join(out)).unwrap().len() > 0);
+            String::new()
+        });
+        match out {
+            "m.msh" => assert!(text.contains("$MeshFormat\n4.1"), "{}", &text[..50]),
+            "m22.msh" => assert!(text.contains("$MeshFormat\n2.2"), "{}", &text[..50]),
+            "m.inp" => assert!(text.to_ascii_lowercase().contains("*node")),
+            _ => {}
+        }
+
+        let r: Value =
+            serde_json::from_str(&fs::read_to_string(dir.path().join(&report)).unwrap()).unwrap();
+        assert_eq!(r["input"], vol);
+        assert_eq!(r["output"], out);
+        assert_eq!(r["method"], "ctd");
+        assert_eq!(r["alpha"], 2.05);
+        assert_eq!(r["beta"], 4.45);
+        assert_eq!(r["dims"], serde_json::json!([9, 8, 7]));
+        assert_eq!(r["spacing"], serde_json::json!([1.0, 1.0, 1.0]));
+        assert_eq!(r["cells_total"], 8 * 7 * 6);
+        let nodes = r["nodes"].as_u64().unwrap();
+        let tets = r["tets"].as_u64().unwrap();
+        assert!(nodes >= 4 && tets >= 1);
+        assert!(s.contains(&format!("{nodes} nodes, {tets} tets")), "{s}");
+        let bt = &r["boundary_triangles"];
+        let (a, b, x) = (
+            bt["alpha"].as_u64().unwrap(),
+            bt["beta"].as_u64().unwrap(),
+            bt["box"].as_u64().unwrap(),
+        );
+        assert!(a > 0 && b > 0, "{bt}");
+        // A closed surface: every boundary edge is shared by two triangles, so 3B is even.
+        assert_eq!((3 * (a + b + x)) % 2, 0);
+        let meshed = r["cells_meshed"].as_u64().unwrap();
+        assert!(meshed > 0 && meshed <= 8 * 7 * 6);
+        let cases = r["cells_by_case"].as_object().unwrap();
+        assert_eq!(cases.len(), 6);
+        let sum: u64 = cases.values().map(|c| c["count"].as_u64().unwrap()).sum();
+        assert_eq!(sum, meshed);
+        let ratio: f64 = cases.values().map(|c| c["ratio"].as_f64().unwrap()).sum();
+        assert!((ratio - 1.0).abs() < 1e-9);
+        assert!(r["volume"].as_f64().unwrap() > 0.0);
+        let betti = r["betti"].as_array().unwrap();
+        assert_eq!(betti.len(), 3);
+        assert!(betti[0].as_u64().unwrap() >= 1);
+        let d = &r["dihedral_degrees"];
+        let (lo, hi) = (d["min"].as_f64().unwrap(), d["max"].as_f64().unwrap());
+        assert!(0.0 < lo && lo <= hi && hi < 180.0);
+        assert!(r["threads"].as_u64().unwrap() >= 1);
+        let t = &r["timings_seconds"];
+        for k in ["read", "mesh", "analysis", "write", "total"] {
+            assert!(t[k].as_f64().unwrap() >= 0.0, "{k}");
+        }
+    }
+}
+
+#[test]
+fn report_spells_infinite_bounds_and_skipped_analysis() {
+    let (dir, vol) = dir_with_volume();
+    let o = run_in(
+        dir.path(),
+        &[
+            vol.to_str().unwrap(),
+            "-o",
+            "m.vtu",
+            "--beta",
+            "3.05",
+            "--no-analysis",
+            "--spacing",
+            "0.5,1,2",
+            "--method",
+            "tptd",
+            "-j",
+            "1",
+            "--report",
+            "r.json",
+        ],
+    );
+    assert_ok(&o);
+    let r: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    assert_eq!(r["alpha"], "-inf");
+    assert_eq!(r["beta"], 3.05);
+    assert_eq!(r["method"], "tptd");
+    assert_eq!(r["threads"], 1);
+    assert_eq!(r["spacing"], serde_json::json!([0.5, 1.0, 2.0]));
+    assert!(r["betti"].is_null());
+    assert!(r["dihedral_degrees"].is_null());
+    assert!(stdout(&o).contains("skipped"));
+}
+
+#[test]
+fn output_is_identical_for_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let vol = dir.path().join("big.npy");
+    write_npy(&vol, [17, 15, 13], |i, j, k| blob(i, j, k) * 0.6);
+    let vol = vol.to_str().unwrap();
+    for ext in ["msh", "inp", "vtu"] {
+        for method in ["ctd", "six"] {
+            let mut outs = Vec::new();
+            for j in ["1", "2"] {
+                let out = format!("o{j}.{ext}");
+                let o = run_in(
+                    dir.path(),
+                    &[
+                        vol, "-o", &out, "--alpha", "1.55", "--beta", "3.9", "-j", j, "-q",
+                        "--method", method,
+                    ],
+                );
+                assert_ok(&o);
+                outs.push(fs::read(dir.path().join(&out)).unwrap());
+            }
+            assert!(!outs[0].is_empty());
+            assert!(outs[0] == outs[1], "{ext}/{method}: -j 1 and -j 2 differ");
+        }
+    }
+}
+
+#[test]
+fn warns_when_a_bound_equals_a_data_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let vol = dir.path().join("labels.npy");
+    write_npy(&vol, [6, 6, 6], |i, j, k| {
+        if (1..5).contains(&i) && (1..5).contains(&j) && (1..4).contains(&k) {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let o = run_in(
+        dir.path(),
+        &[vol.to_str().unwrap(), "-o", "m.inp", "--alpha", "0", "-q"],
+    );
+    assert_ok(&o);
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("tptd-mesh: warning: "), "{err}");
+    assert!(
+        err.contains("labels.npy") && err.contains("--alpha 0"),
+        "{err}"
+    );
+    assert!(err.contains("count as outside"), "{err}");
+}
+
+/// Runs a failing command in `dir` and checks: non-zero exit, exactly one stderr line of the
+/// form `tptd-mesh: error: ...` that mentions `names`, nothing on stdout, and `dir` unchanged.
+fn assert_clean_failure(dir: &Path, args: &[&str], names: &str) -> String {
+    let before = listing(dir);
+    let o = run_in(dir, args);
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    assert!(err.starts_with("tptd-mesh: error: "), "{err}");
+    assert!(err.contains(names), "{args:?}: {err} does not name {names}");
+    assert!(stdout(&o).is_empty(), "{}", stdout(&o));
+    assert_eq!(listing(dir), before, "{args:?} left files behind");
+    err
+}
+
+#[test]
+fn errors_are_one_line_and_leave_nothing_behind() {
+    let (dir, vol) = dir_with_volume();
+    let d = dir.path();
+    let vol = vol.to_str().unwrap();
+
+    assert_clean_failure(
+        d,
+        &["missing.npy", "-o", "m.vtu", "--alpha", "1"],
+        "missing.npy",
+    );
+    assert_clean_failure(d, &[vol, "-o", "m.obj", "--alpha", "1"], "m.obj");
+    assert_clean_failure(d, &[vol, "-o", "m", "--alpha", "1"], "m");
+    let e = assert_clean_failure(
+        d,
+        &[vol, "-o", "m.vtu", "--alpha", "3", "--beta", "2"],
+        "vol.npy",
+    );
+    assert!(e.contains("less than"), "{e}");
+    assert_clean_failure(
+        d,
+        &[vol, "-o", "m.vtu", "--alpha", "2", "--beta", "2"],
+        "vol.npy",
+    );
+    let e = assert_clean_failure(d, &[vol, "-o", "m.msh", "--alpha", "1000"], "vol.npy");
+    assert!(e.contains("contains no part of the volume"), "{e}");
+    assert!(e.contains("data range is ["), "{e}");
+    assert_clean_failure(d, &[vol, "-o", "m.msh", "--beta", "-1000"], "vol.npy");
+    assert_clean_failure(d, &[vol, "-o", "m.msh"], "vol.npy");
+
+    fs::create_dir(d.join("outdir.vtu")).unwrap();
+    let e = assert_clean_failure(d, &[vol, "-o", "outdir.vtu", "--alpha", "2"], "outdir.vtu");
+    assert!(e.contains("directory"), "{e}");
+    assert!(listing(&d.join("outdir.vtu")).is_empty());
+    assert_clean_failure(
+        d,
+        &[vol, "-o", "m.vtu", "--alpha", "2", "--report", "outdir.vtu"],
+        "outdir.vtu",
+    );
+    let e = assert_clean_failure(
+        d,
+        &[vol, "-o", "no/such/dir/m.vtu", "--alpha", "2"],
+        "no/such/dir/m.vtu",
+    );
+    assert!(e.contains("does not exist"), "{e}");
+    assert_clean_failure(
+        d,
+        &[vol, "-o", "m.vtu", "--alpha", "2", "--report", "m.vtu"],
+        "m.vtu",
+    );
+
+    let bytes = fs::read(vol).unwrap();
+    let cut = d.join("cut.npy");
+    fs::write(&cut, &bytes[..bytes.len() - 13]).unwrap();
+    assert_clean_failure(
+        d,
+        &[cut.to_str().unwrap(), "-o", "m.vtu", "--alpha", "2"],
+        "cut.npy",
+    );
+    fs::write(&cut, &bytes[..40]).unwrap();
+    assert_clean_failure(
+        d,
+        &[cut.to_str().unwrap(), "-o", "m.vtu", "--alpha", "2"],
+        "cut.npy",
+    );
+}
+
+#[test]
+fn rejects_nan_and_bad_arguments_without_output() {
+    let (dir, vol) = dir_with_volume();
+    let d = dir.path();
+    let vol = vol.to_str().unwrap();
+    for args in [
+        &[vol, "-o", "m.vtu", "--alpha", "nan"][..],
+        &[vol, "-o", "m.vtu", "--beta", "NaN"][..],
+        &[vol, "-o", "m.vtu", "--alpha", "x"][..],
+        &[vol, "-o", "m.vtu", "--alpha", "1", "--spacing", "1,0,1"][..],
+        &[vol, "-o", "m.vtu", "--alpha", "1", "-j", "0"][..],
+        &[vol, "--alpha", "1"][..],
+        &[vol, "-o", "m.vtu", "--alpha", "1", "--demo"][..],
+    ] {
+        let before = listing(d);
+        let o = run_in(d, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("tptd-mesh: error: "), "{err}");
+        assert_eq!(listing(d), before, "{args:?} left files behind");
+    }
+    // Infinite bounds are accepted.
+    let o = run_in(
+        d,
+        &[vol, "-o", "m.vtu", "--alpha", "-inf", "--beta", "2.5", "-q"],
+    );
+    assert_ok(&o);
+}
