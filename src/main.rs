@@ -54,8 +54,8 @@ struct Cli {
     #[arg(long, value_name = "B", allow_hyphen_values = true, value_parser = parse_bound)]
     beta: Option<f64>,
 
-    /// Cell decomposition: ctd, tptd and std keep the topology of the trilinear interpolant;
-    /// six and five do not
+    /// Cell decomposition: ctd and tptd keep the topology of the trilinear interpolant (ctd with
+    /// fewer tets); std keeps it except in cells both bounds cross; six and five do not
     #[arg(long, value_enum, default_value_t = MethodArg::Ctd)]
     method: MethodArg,
 
