@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex, Interval};
-use crate::decompose::plan::{face_needed, is_full, CellClasses};
+use crate::decompose::plan::{corners_connected, face_needed, is_full, CellClasses};
 use crate::decompose::{five, six, tptd, CellCase, CellPoints, BODY0, BODY1, NUM_LOCAL};
 use crate::grid::{corner_faces, corner_offset, ScalarGrid};
 use crate::keys::{on_z_plane, vertex_key, PointKey, BODY, CORNER, FACE};
@@ -459,6 +459,16 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
                     pts.val[8 + f] = s.value;
                 }
             }
+            if !full && own == 0 && used & EVEN_FACES != 0 && used & !EVEN_FACES != 0 {
+                // Saddles used only for full neighbours, on faces of both parities: no corner
+                // apex fits, so one of them must be the apex. Safe are those on the side of
+                // the level whose corners are edge-connected (the apex joins all of them).
+                own = if crosses {
+                    safe_apexes(ctx, cls, used, &fv)
+                } else {
+                    used
+                };
+            }
             let nbu = if full || crosses { nb } else { 0 };
             tptd::decompose_tptd(used, own, &fv, &bodies[..nbu], &mut pts, tets)
         }
@@ -513,6 +523,35 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
         clip_tet(&tv, &ctx.interval, box_planes, slab);
     }
     let _ = BODY1;
+}
+
+/// Faces 0, 2, 4 (the `-x`, `-y`, `-z` faces).
+const EVEN_FACES: u8 = 0b01_0101;
+
+/// The used faces whose saddle lies on a side of the (single) level crossing the cell whose
+/// corners are edge-connected.
+fn safe_apexes(ctx: &Ctx, cls: CellClasses, used: u8, fv: &[f64; 6]) -> u8 {
+    let mut safe = 0u8;
+    for f in 0..6 {
+        if used & (1 << f) == 0 {
+            continue;
+        }
+        let m = if cls.crosses_alpha() {
+            if fv[f] <= ctx.alpha {
+                cls.below
+            } else {
+                !cls.below
+            }
+        } else if fv[f] >= ctx.beta {
+            cls.above
+        } else {
+            !cls.above
+        };
+        if corners_connected(m) {
+            safe |= 1 << f;
+        }
+    }
+    safe
 }
 
 fn bs_none() -> [BodySaddle; 2] {

@@ -131,3 +131,45 @@ pub fn is_full(method: Method, cls: CellClasses, num_body: usize) -> bool {
 pub fn face_needed(cls: CellClasses, f: usize) -> bool {
     face_ambiguous(cls.below, f) || face_ambiguous(cls.above, f)
 }
+
+/// Whether the corners in `mask` form one connected set along cell edges (an empty set counts
+/// as connected).
+pub fn corners_connected(mask: u8) -> bool {
+    if mask == 0 {
+        return true;
+    }
+    let start = mask.trailing_zeros() as u8;
+    let mut seen = 1u8 << start;
+    let mut stack = [0u8; 8];
+    let mut n = 1;
+    stack[0] = start;
+    while n > 0 {
+        n -= 1;
+        let c = stack[n];
+        for bit in [1u8, 2, 4] {
+            let d = c ^ bit;
+            if mask & (1 << d) != 0 && seen & (1 << d) == 0 {
+                seen |= 1 << d;
+                stack[n] = d;
+                n += 1;
+            }
+        }
+    }
+    seen == mask
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn corner_connectivity() {
+        assert!(corners_connected(0));
+        assert!(corners_connected(0b0000_0011));
+        assert!(!corners_connected(0b1000_0001));
+        assert!(!corners_connected(0b0000_0110));
+        assert!(corners_connected(0b0000_0111));
+        assert!(corners_connected(!0b1000_0001));
+        assert!(corners_connected(0xff));
+    }
+}
