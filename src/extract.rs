@@ -14,7 +14,7 @@ use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex, Interval};
 use crate::decompose::plan::{corners_connected, face_needed, is_full, CellClasses};
 use crate::decompose::{five, six, tptd, CellCase, CellPoints, BODY0, BODY1, NUM_LOCAL};
 use crate::grid::{corner_faces, corner_offset, ScalarGrid};
-use crate::keys::{on_z_plane, vertex_key, PointKey, BODY, CORNER, FACE};
+use crate::keys::{on_z_plane, split, vertex_key, vertex_point, PointKey, BODY, CORNER, FACE};
 use crate::mesh::{BoundaryLabel, TetMesh};
 use crate::trilinear::{body_saddles, face_point, face_saddle, BodySaddle};
 
@@ -126,6 +126,10 @@ pub fn mesh_interval_with_progress(
 
 /// Points, tets and boundary triangles of one slab, numbered locally.
 struct Slab {
+    /// Slab-local id of each grid vertex on the slab's two planes (`u32::MAX`: none yet).
+    corner_ids: Vec<u32>,
+    /// Grid index of the first vertex of the slab's lower plane.
+    plane_base: usize,
     /// Direct-mapped cache in front of `map` (points recur within and across nearby cells).
     recent: Box<[(PointKey, u32); RECENT]>,
     map: FxHashMap<PointKey, u32>,
@@ -141,8 +145,11 @@ struct Slab {
 const RECENT: usize = 256;
 
 impl Slab {
-    fn with_capacity(points: usize) -> Self {
+    fn new(plane: usize, k: usize) -> Self {
+        let points = 2 * plane;
         Slab {
+            corner_ids: vec![u32::MAX; 2 * plane],
+            plane_base: k * plane,
             recent: Box::new([(PointKey::MAX, 0); RECENT]),
             map: FxHashMap::with_capacity_and_hasher(points, Default::default()),
             keys: Vec::with_capacity(points),
@@ -156,7 +163,33 @@ impl Slab {
     }
 
     #[inline]
+    fn push_point(&mut self, key: PointKey, pos: [f64; 3], val: f64) -> u32 {
+        let i = self.keys.len() as u32;
+        self.keys.push(key);
+        self.pos.push(pos);
+        self.val.push(val);
+        i
+    }
+
+    /// Slab-local id of grid vertex `grid_index` (on one of the slab's two planes).
+    #[inline]
+    fn corner_id(&mut self, grid_index: usize, pos: [f64; 3], val: f64) -> u32 {
+        let slot = grid_index - self.plane_base;
+        let id = self.corner_ids[slot];
+        if id != u32::MAX {
+            return id;
+        }
+        let id = self.push_point(vertex_point(vertex_key(grid_index, CORNER)), pos, val);
+        self.corner_ids[slot] = id;
+        id
+    }
+
+    #[inline]
     fn id(&mut self, p: &ClipPoint) -> u32 {
+        let (vk, rest) = split(p.key);
+        if rest.is_none() && vk & 7 == CORNER {
+            return self.corner_id((vk >> 3) as usize, p.pos, p.val);
+        }
         let h = ((p.key as u64) ^ ((p.key >> 64) as u64)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56;
         let slot = &mut self.recent[h as usize % RECENT];
         if slot.0 == p.key {
@@ -166,12 +199,9 @@ impl Slab {
             *slot = (p.key, i);
             return i;
         }
-        let i = self.keys.len() as u32;
-        *slot = (p.key, i);
+        let i = self.push_point(p.key, p.pos, p.val);
+        self.recent[h as usize % RECENT] = (p.key, i);
         self.map.insert(p.key, i);
-        self.keys.push(p.key);
-        self.pos.push(p.pos);
-        self.val.push(p.val);
         i
     }
 }
@@ -198,6 +228,31 @@ struct Ctx<'a> {
     method: Method,
     /// Box-plane mask of every local id (corners: their three faces; face saddles: their face).
     local_box: [u8; NUM_LOCAL],
+    /// For `ctd`/`std`: one byte per cell, 1 when the cell is full (uses every saddle).
+    full: Vec<u8>,
+}
+
+impl Ctx<'_> {
+    /// Whether cell `c` (linear cell index) is full.
+    #[inline]
+    fn cell_full(&self, c: usize) -> bool {
+        match self.method {
+            Method::Tptd => true,
+            Method::Ctd | Method::Std => self.full[c] != 0,
+            Method::Five | Method::Six => false,
+        }
+    }
+}
+
+/// Whether the cell at `c` uses all its saddles (computed from its values).
+fn compute_full(grid: &ScalarGrid, method: Method, alpha: f64, beta: f64, c: [usize; 3]) -> bool {
+    let v = grid.cell_values(c[0], c[1], c[2]);
+    let cls = CellClasses::new(&v, alpha, beta);
+    if !(cls.crosses_alpha() || cls.crosses_beta()) {
+        return false;
+    }
+    let nb = body_saddles(&v).1;
+    is_full(method, cls, nb)
 }
 
 fn run(
@@ -212,6 +267,23 @@ fn run(
     for f in 0..6 {
         local_box[8 + f] = 1 << f;
     }
+    let [cx, cy, cz] = grid.cell_dims();
+    let full = if matches!(opts.method, Method::Ctd | Method::Std) {
+        let mut full = vec![0u8; grid.num_cells()];
+        full.par_chunks_mut(cx * cy)
+            .enumerate()
+            .for_each(|(k, plane)| {
+                for j in 0..cy {
+                    for i in 0..cx {
+                        plane[i + cx * j] =
+                            compute_full(grid, opts.method, opts.alpha, opts.beta, [i, j, k]) as u8;
+                    }
+                }
+            });
+        full
+    } else {
+        Vec::new()
+    };
     let ctx = Ctx {
         grid,
         interval: Interval::new(opts.alpha, opts.beta, &grid.values),
@@ -219,8 +291,8 @@ fn run(
         beta: opts.beta,
         method: opts.method,
         local_box,
+        full,
     };
-    let [_, _, cz] = grid.cell_dims();
     let done = AtomicUsize::new(0);
     let slabs: Vec<Slab> = (0..cz)
         .into_par_iter()
@@ -373,7 +445,7 @@ fn remap<T: Copy + Default + Send + Sync>(
 
 fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     let [cx, cy, _] = ctx.grid.cell_dims();
-    let mut slab = Slab::with_capacity(2 * (cx + 1) * (cy + 1));
+    let mut slab = Slab::new(ctx.grid.dims[0] * ctx.grid.dims[1], k);
     let mut tets: Vec<[u8; 4]> = Vec::with_capacity(64);
     for j in 0..cy {
         for i in 0..cx {
@@ -382,19 +454,8 @@ fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     }
     slab.map = FxHashMap::default();
     slab.recent = Box::new([(PointKey::MAX, 0); RECENT]);
+    slab.corner_ids = Vec::new();
     slab
-}
-
-/// Whether the (existing) cell at `c` uses all its saddles.
-fn neighbour_full(ctx: &Ctx, c: [usize; 3]) -> bool {
-    let v = ctx.grid.cell_values(c[0], c[1], c[2]);
-    let cls = CellClasses::new(&v, ctx.alpha, ctx.beta);
-    let nb = if cls.crosses_alpha() || cls.crosses_beta() {
-        body_saddles(&v).1
-    } else {
-        0
-    };
-    is_full(ctx.method, cls, nb)
 }
 
 fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Slab) {
@@ -409,6 +470,11 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
     tets.clear();
     let case = match ctx.method {
         Method::Six => {
+            if cls.all_inside() && !on_box(c, grid.cell_dims()) {
+                emit_six_inside(grid, c, &v, slab);
+                slab.cases[CellCase::I as usize] += 1;
+                return;
+            }
             six::decompose_six(tets);
             CellCase::I
         }
@@ -418,46 +484,49 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
         }
         method => {
             let crosses = cls.crosses_alpha() || cls.crosses_beta();
-            let (bodies, nb): ([BodySaddle; 2], usize) = if method == Method::Tptd || crosses {
-                body_saddles(&v)
-            } else {
-                (bs_none(), 0)
-            };
-            let full = is_full(method, cls, nb);
+            let cd = grid.cell_dims();
+            let cell = i + cd[0] * (j + cd[1] * k);
+            let full = ctx.cell_full(cell);
+            // Non-full cells crossing a level have no body saddle (else they would be full).
+            let (bodies, nb): ([BodySaddle; 2], usize) =
+                if full && (crosses || method == Method::Tptd) {
+                    body_saddles(&v)
+                } else {
+                    (bs_none(), 0)
+                };
             let mut used = 0u8;
             let mut own = 0u8;
             let mut fv = [0.0; 6];
-            let cd = grid.cell_dims();
+            let cell_stride = [1, cd[0], cd[0] * cd[1]];
             for f in 0..6 {
+                let axis = f / 2;
+                let mine = full || face_needed(cls, f);
+                let need = mine || {
+                    if f % 2 == 0 {
+                        c[axis] > 0 && ctx.cell_full(cell - cell_stride[axis])
+                    } else {
+                        c[axis] + 1 < cd[axis] && ctx.cell_full(cell + cell_stride[axis])
+                    }
+                };
+                if !need {
+                    continue;
+                }
                 let Some(s) = face_saddle(&v, f) else {
                     continue;
                 };
-                let axis = f / 2;
-                if full || face_needed(cls, f) {
+                if mine {
                     own |= 1 << f;
                 }
-                let need = own & (1 << f) != 0 || {
-                    let mut n = c;
-                    if f % 2 == 0 {
-                        if n[axis] == 0 {
-                            false
-                        } else {
-                            n[axis] -= 1;
-                            neighbour_full(ctx, n)
-                        }
-                    } else if n[axis] + 1 >= cd[axis] {
-                        false
-                    } else {
-                        n[axis] += 1;
-                        neighbour_full(ctx, n)
-                    }
-                };
-                if need {
-                    used |= 1 << f;
-                    fv[f] = s.value;
-                    pts.pos[8 + f] = face_point(f, s.uv.map(|x| x.clamp(0.3, 0.7)));
-                    pts.val[8 + f] = s.value;
-                }
+                used |= 1 << f;
+                fv[f] = s.value;
+                pts.pos[8 + f] = face_point(f, s.uv.map(|x| x.clamp(0.3, 0.7)));
+                pts.val[8 + f] = s.value;
+            }
+            if used == 0 && nb == 0 && cls.all_inside() && !on_box(c, cd) {
+                // By far the most common cell: six whole tets over the eight corners.
+                emit_six_inside(grid, c, &v, slab);
+                slab.cases[CellCase::I as usize] += 1;
+                return;
             }
             if !full && own == 0 && used & EVEN_FACES != 0 && used & !EVEN_FACES != 0 {
                 // Saddles used only for full neighbours, on faces of both parities: no corner
@@ -469,8 +538,7 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
                     used
                 };
             }
-            let nbu = if full || crosses { nb } else { 0 };
-            tptd::decompose_tptd(used, own, &fv, &bodies[..nbu], &mut pts, tets)
+            tptd::decompose_tptd(used, own, &fv, &bodies[..nb], &mut pts, tets)
         }
     };
     slab.cases[case as usize] += 1;
@@ -523,6 +591,33 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
         clip_tet(&tv, &ctx.interval, box_planes, slab);
     }
     let _ = BODY1;
+}
+
+/// Whether cell `c` touches the grid box (its faces may carry `box` triangles).
+#[inline]
+fn on_box(c: [usize; 3], cd: [usize; 3]) -> bool {
+    (0..3).any(|a| c[a] == 0 || c[a] + 1 == cd[a])
+}
+
+/// Emits the 6-fold split of a cell whose corners are all inside, straight from the corner
+/// ids (what clipping would produce, without clipping).
+#[inline]
+fn emit_six_inside(grid: &ScalarGrid, c: [usize; 3], v: &[f64; 8], slab: &mut Slab) {
+    let base = grid.index(c[0], c[1], c[2]);
+    let (sy, sz) = (grid.dims[0], grid.dims[0] * grid.dims[1]);
+    let mut ids = [0u32; 8];
+    for (corner, id) in ids.iter_mut().enumerate() {
+        let o = corner_offset(corner);
+        let pos = [
+            (c[0] + o[0]) as f64,
+            (c[1] + o[1]) as f64,
+            (c[2] + o[2]) as f64,
+        ];
+        *id = slab.corner_id(base + o[0] + o[1] * sy + o[2] * sz, pos, v[corner]);
+    }
+    for t in six::SIX {
+        slab.tets.push(t.map(|l| ids[l as usize]));
+    }
 }
 
 /// Faces 0, 2, 4 (the `-x`, `-y`, `-z` faces).
