@@ -228,17 +228,19 @@ struct Ctx<'a> {
     method: Method,
     /// Box-plane mask of every local id (corners: their three faces; face saddles: their face).
     local_box: [u8; NUM_LOCAL],
-    /// For `ctd`/`std`: one byte per cell, 1 when the cell is full (uses every saddle).
-    full: Vec<u8>,
 }
 
 impl Ctx<'_> {
-    /// Whether cell `c` (linear cell index) is full.
+    /// Whether the cell at `c` is full (uses every saddle), computed from its values when
+    /// asked: only cells with a face saddle ask about the neighbour across it, which is far
+    /// cheaper than a pass over all cells.
     #[inline]
-    fn cell_full(&self, c: usize) -> bool {
+    fn cell_full(&self, c: [usize; 3]) -> bool {
         match self.method {
             Method::Tptd => true,
-            Method::Ctd | Method::Std => self.full[c] != 0,
+            Method::Ctd | Method::Std => {
+                compute_full(self.grid, self.method, self.alpha, self.beta, c)
+            }
             Method::Five | Method::Six => false,
         }
     }
@@ -267,23 +269,7 @@ fn run(
     for f in 0..6 {
         local_box[8 + f] = 1 << f;
     }
-    let [cx, cy, cz] = grid.cell_dims();
-    let full = if matches!(opts.method, Method::Ctd | Method::Std) {
-        let mut full = vec![0u8; grid.num_cells()];
-        full.par_chunks_mut(cx * cy)
-            .enumerate()
-            .for_each(|(k, plane)| {
-                for j in 0..cy {
-                    for i in 0..cx {
-                        plane[i + cx * j] =
-                            compute_full(grid, opts.method, opts.alpha, opts.beta, [i, j, k]) as u8;
-                    }
-                }
-            });
-        full
-    } else {
-        Vec::new()
-    };
+    let [_, _, cz] = grid.cell_dims();
     let ctx = Ctx {
         grid,
         interval: Interval::new(opts.alpha, opts.beta, &grid.values),
@@ -291,7 +277,6 @@ fn run(
         beta: opts.beta,
         method: opts.method,
         local_box,
-        full,
     };
     let done = AtomicUsize::new(0);
     let slabs: Vec<Slab> = (0..cz)
@@ -485,35 +470,34 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
         method => {
             let crosses = cls.crosses_alpha() || cls.crosses_beta();
             let cd = grid.cell_dims();
-            let cell = i + cd[0] * (j + cd[1] * k);
-            let full = ctx.cell_full(cell);
-            // Non-full cells crossing a level have no body saddle (else they would be full).
-            let (bodies, nb): ([BodySaddle; 2], usize) =
-                if full && (crosses || method == Method::Tptd) {
-                    body_saddles(&v)
-                } else {
-                    (bs_none(), 0)
-                };
+            let (bodies, nb): ([BodySaddle; 2], usize) = if crosses || method == Method::Tptd {
+                body_saddles(&v)
+            } else {
+                (bs_none(), 0)
+            };
+            // A cell crossing a level with a body saddle is full (so non-full cells use none).
+            let full = method == Method::Tptd || (crosses && is_full(method, cls, nb));
             let mut used = 0u8;
             let mut own = 0u8;
             let mut fv = [0.0; 6];
-            let cell_stride = [1, cd[0], cd[0] * cd[1]];
             for f in 0..6 {
                 let axis = f / 2;
+                let Some(s) = face_saddle(&v, f) else {
+                    continue;
+                };
                 let mine = full || face_needed(cls, f);
                 let need = mine || {
+                    let mut n = c;
                     if f % 2 == 0 {
-                        c[axis] > 0 && ctx.cell_full(cell - cell_stride[axis])
+                        n[axis] = n[axis].wrapping_sub(1);
                     } else {
-                        c[axis] + 1 < cd[axis] && ctx.cell_full(cell + cell_stride[axis])
+                        n[axis] += 1;
                     }
+                    n[axis] < cd[axis] && ctx.cell_full(n)
                 };
                 if !need {
                     continue;
                 }
-                let Some(s) = face_saddle(&v, f) else {
-                    continue;
-                };
                 if mine {
                     own |= 1 << f;
                 }
