@@ -40,11 +40,12 @@ impl Interval {
             if !level.is_finite() {
                 return 0.0;
             }
+            use rayon::prelude::*;
             let g = values
-                .iter()
+                .par_iter()
                 .map(|&v| (v - level).abs())
                 .filter(|&d| d > 0.0)
-                .fold(f64::INFINITY, f64::min);
+                .reduce(|| f64::INFINITY, f64::min);
             if g.is_finite() {
                 g
             } else {

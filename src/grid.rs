@@ -127,7 +127,8 @@ impl ScalarGrid {
         if !det.is_finite() || det == 0.0 || origin.iter().any(|o| !o.is_finite()) {
             return Err(GridError::BadDirection);
         }
-        if let Some(p) = g.values.iter().position(|v| !v.is_finite()) {
+        use rayon::prelude::*;
+        if let Some(p) = g.values.par_iter().position_first(|v| !v.is_finite()) {
             let [i, j, k] = g.vertex_ijk(p);
             return Err(GridError::NotFinite(i, j, k, g.values[p]));
         }

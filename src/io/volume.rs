@@ -224,35 +224,49 @@ fn array<const N: usize>(c: &[u8], endian: Endian) -> [u8; N] {
 /// Decodes `bytes` (a whole number of samples; any trailing partial sample is ignored) into
 /// `f64` values. 64-bit integers beyond 2^53 are rounded.
 pub(crate) fn decode_samples(bytes: &[u8], ty: SampleType, endian: Endian) -> Vec<f64> {
+    use rayon::prelude::*;
+    const BLOCK: usize = 1 << 16;
     let size = ty.size();
-    let chunks = bytes.chunks_exact(size);
+    let mut out = vec![0.0; bytes.len() / size];
+    out.par_chunks_mut(BLOCK)
+        .zip(bytes.par_chunks(BLOCK * size))
+        .for_each(|(o, b)| decode_into(b, ty, endian, o));
+    out
+}
+
+/// Decodes `out.len()` samples from the start of `bytes` into `out`.
+fn decode_into(bytes: &[u8], ty: SampleType, endian: Endian, out: &mut [f64]) {
+    fn each(bytes: &[u8], size: usize, out: &mut [f64], f: impl Fn(&[u8]) -> f64) {
+        for (o, c) in out.iter_mut().zip(bytes.chunks_exact(size)) {
+            *o = f(c);
+        }
+    }
+    let size = ty.size();
     match ty {
-        SampleType::U8 => bytes.iter().map(|&b| f64::from(b)).collect(),
-        SampleType::I8 => bytes.iter().map(|&b| f64::from(b as i8)).collect(),
-        SampleType::U16 => chunks
-            .map(|c| f64::from(u16::from_le_bytes(array(c, endian))))
-            .collect(),
-        SampleType::I16 => chunks
-            .map(|c| f64::from(i16::from_le_bytes(array(c, endian))))
-            .collect(),
-        SampleType::U32 => chunks
-            .map(|c| f64::from(u32::from_le_bytes(array(c, endian))))
-            .collect(),
-        SampleType::I32 => chunks
-            .map(|c| f64::from(i32::from_le_bytes(array(c, endian))))
-            .collect(),
-        SampleType::U64 => chunks
-            .map(|c| u64::from_le_bytes(array(c, endian)) as f64)
-            .collect(),
-        SampleType::I64 => chunks
-            .map(|c| i64::from_le_bytes(array(c, endian)) as f64)
-            .collect(),
-        SampleType::F32 => chunks
-            .map(|c| f64::from(f32::from_le_bytes(array(c, endian))))
-            .collect(),
-        SampleType::F64 => chunks
-            .map(|c| f64::from_le_bytes(array(c, endian)))
-            .collect(),
+        SampleType::U8 => each(bytes, size, out, |c| f64::from(c[0])),
+        SampleType::I8 => each(bytes, size, out, |c| f64::from(c[0] as i8)),
+        SampleType::U16 => each(bytes, size, out, |c| {
+            f64::from(u16::from_le_bytes(array(c, endian)))
+        }),
+        SampleType::I16 => each(bytes, size, out, |c| {
+            f64::from(i16::from_le_bytes(array(c, endian)))
+        }),
+        SampleType::U32 => each(bytes, size, out, |c| {
+            f64::from(u32::from_le_bytes(array(c, endian)))
+        }),
+        SampleType::I32 => each(bytes, size, out, |c| {
+            f64::from(i32::from_le_bytes(array(c, endian)))
+        }),
+        SampleType::U64 => each(bytes, size, out, |c| {
+            u64::from_le_bytes(array(c, endian)) as f64
+        }),
+        SampleType::I64 => each(bytes, size, out, |c| {
+            i64::from_le_bytes(array(c, endian)) as f64
+        }),
+        SampleType::F32 => each(bytes, size, out, |c| {
+            f64::from(f32::from_le_bytes(array(c, endian)))
+        }),
+        SampleType::F64 => each(bytes, size, out, |c| f64::from_le_bytes(array(c, endian))),
     }
 }
 
