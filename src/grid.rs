@@ -128,7 +128,14 @@ impl ScalarGrid {
             return Err(GridError::BadDirection);
         }
         use rayon::prelude::*;
-        if let Some(p) = g.values.par_iter().position_first(|v| !v.is_finite()) {
+        let bad = g
+            .values
+            .par_chunks(1 << 16)
+            .any(|c| c.iter().any(|v| !v.is_finite()));
+        if let Some(p) = bad
+            .then(|| g.values.iter().position(|v| !v.is_finite()))
+            .flatten()
+        {
             let [i, j, k] = g.vertex_ijk(p);
             return Err(GridError::NotFinite(i, j, k, g.values[p]));
         }

@@ -6,6 +6,9 @@ usage: check_mesh.py READER FORMAT FILE EXPECTED_JSON
   FORMAT  msh41 | msh22 | inp | vtu
 EXPECTED_JSON holds {"points": [[x,y,z],...], "values": [...], "tets": [[a,b,c,d],...],
 "boundary": {"alpha": [[a,b,c],...], ...}} with 0-based indices (only labels that occur).
+Optional keys (meshio reader): "coord_rtol" (relative tolerance of the .inp coordinates,
+default 1e-11) and "positive_volumes" (true: every tet, as read, must have a positive volume
+computed by numpy from the points and connectivity meshio returned).
 Prints "OK ..." and exits 0 on success; prints the failures and exits 1 otherwise.
 """
 import json
@@ -21,14 +24,14 @@ def check(cond, msg):
         errors.append(msg)
 
 
-def same_floats(a, b, exact):
+def same_floats(a, b, exact, rtol=1e-11):
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     if a.shape != b.shape:
         return False
     if exact:
         return bool(np.array_equal(a, b))
-    return bool(np.allclose(a, b, rtol=1e-11, atol=1e-300))
+    return bool(np.allclose(a, b, rtol=rtol, atol=1e-300))
 
 
 def check_meshio(fmt, path, exp):
@@ -39,13 +42,21 @@ def check_meshio(fmt, path, exp):
     pts = np.asarray(exp["points"], dtype=float)
     tets = np.asarray(exp["tets"], dtype=np.int64).reshape(-1, 4)
     check(m.points.shape == pts.shape, f"points shape {m.points.shape} != {pts.shape}")
-    check(same_floats(m.points, pts, exact=(fmt != "inp")), "coordinates differ")
+    check(
+        same_floats(m.points, pts, exact=(fmt != "inp"), rtol=exp.get("coord_rtol", 1e-11)),
+        "coordinates differ",
+    )
     tet_blocks = [c.data for c in m.cells if c.type == "tetra"]
     got_tets = np.concatenate(tet_blocks) if tet_blocks else np.zeros((0, 4), np.int64)
     check(got_tets.shape == tets.shape, f"tet count {got_tets.shape} != {tets.shape}")
     check(np.array_equal(got_tets, tets), "tet connectivity differs")
     other = sorted({c.type for c in m.cells} - {"tetra", "triangle"})
     check(not other, f"unexpected cell types {other}")
+    if exp.get("positive_volumes") and len(got_tets) and got_tets.max() < len(m.points):
+        p = np.asarray(m.points, dtype=float)[got_tets]
+        vol = np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0])) / 6
+        bad = np.flatnonzero(~(vol > 0))
+        check(len(bad) == 0, f"{len(bad)} tets with non-positive volume, first {bad[:5].tolist()}: {vol[bad[:5]].tolist()}")
 
     if fmt != "inp":
         check("f" in m.point_data, f"no point data 'f' (have {list(m.point_data)})")
