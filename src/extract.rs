@@ -305,6 +305,10 @@ fn run(
 fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
     let stride = grid.dims[0] * grid.dims[1];
     let mut maps: Vec<Vec<u32>> = Vec::with_capacity(slabs.len());
+    // Points of the plane shared with the slab below: grid vertices in a dense array (indexed
+    // by position in the plane), every other point (cuts, saddles of z-faces) in a hash map.
+    let mut prev_corners: Vec<u32> = vec![u32::MAX; stride];
+    let mut top_corners: Vec<u32> = vec![u32::MAX; stride];
     let mut prev_top: FxHashMap<PointKey, u32> = FxHashMap::default();
     let mut next = 0u64;
     let mut new_from: Vec<(usize, Vec<u32>)> = Vec::with_capacity(slabs.len());
@@ -312,8 +316,19 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
         let mut map = Vec::with_capacity(s.keys.len());
         let mut fresh = Vec::new();
         let mut top: FxHashMap<PointKey, u32> = FxHashMap::default();
+        top_corners.fill(u32::MAX);
         for (li, &key) in s.keys.iter().enumerate() {
-            let shared = if on_z_plane(key, k, stride) {
+            let (vk, rest) = split(key);
+            let corner = rest.is_none() && vk & 7 == CORNER;
+            let gi = (vk >> 3) as usize;
+            let shared = if corner {
+                let g = if gi / stride == k {
+                    prev_corners[gi % stride]
+                } else {
+                    u32::MAX
+                };
+                (g != u32::MAX).then_some(g)
+            } else if on_z_plane(key, k, stride) {
                 prev_top.get(&key).copied()
             } else {
                 None
@@ -327,12 +342,17 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
                     g
                 }
             };
-            if on_z_plane(key, k + 1, stride) {
+            if corner {
+                if gi / stride == k + 1 {
+                    top_corners[gi % stride] = gid;
+                }
+            } else if on_z_plane(key, k + 1, stride) {
                 top.insert(key, gid);
             }
             map.push(gid);
         }
         prev_top = top;
+        std::mem::swap(&mut prev_corners, &mut top_corners);
         maps.push(map);
         new_from.push((k, fresh));
     }
