@@ -2,10 +2,13 @@
 //! output format, the JSON report, determinism across thread counts, and the one-line errors
 //! that leave no output behind.
 
+mod common;
+
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use common::files::{listing, npy_bytes};
 use serde_json::Value;
 
 const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
@@ -40,24 +43,16 @@ fn assert_ok(o: &Output) {
 /// (grid vertex x = i, y = j, z = k) is `f(i, j, k)`.
 fn write_npy(path: &Path, dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f64) {
     let [nx, ny, nz] = dims;
-    let mut header =
-        format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({nx}, {ny}, {nz}), }}");
-    // magic (6) + version (2) + length (2) + header + '\n' must be a multiple of 64.
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
+    let mut data = Vec::with_capacity(nx * ny * nz * 8);
     for i in 0..nx {
         for j in 0..ny {
             for k in 0..nz {
-                bytes.extend_from_slice(&f(i, j, k).to_le_bytes());
+                data.extend_from_slice(&f(i, j, k).to_le_bytes());
             }
         }
     }
-    fs::write(path, bytes).unwrap();
+    let shape = format!("({nx}, {ny}, {nz})");
+    fs::write(path, npy_bytes("<f8", &shape, &data)).unwrap();
 }
 
 /// A smooth blob: distance from an off-centre point plus a wobble, so generic values (no grid
@@ -74,16 +69,6 @@ fn dir_with_volume() -> (tempfile::TempDir, PathBuf) {
     let p = dir.path().join("vol.npy");
     write_npy(&p, [9, 8, 7], blob);
     (dir, p)
-}
-
-/// Names of the entries of `dir`, sorted.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 #[test]

@@ -2,9 +2,12 @@
 //! (numpy, pynrrd, nibabel, SimpleITK; see `tests/fixtures/make_volume_fixtures.py`), plus
 //! broken inputs derived from those fixtures in a temporary directory.
 
+mod common;
+
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use common::files::npy_bytes;
 use serde_json::Value;
 use tptd::io::read_volume;
 use tptd::ScalarGrid;
@@ -603,20 +606,6 @@ fn wrong_magic_is_an_error() {
     expect_err_containing(&p, &["sizeof_hdr"]);
     let p = s.derive("npy_cube_f4_c.npy", "npy.mha", |b| b);
     expect_err(&p);
-}
-
-/// Writes a `.npy` file by hand.
-fn npy_bytes(descr: &str, shape: &str, data: &[u8]) -> Vec<u8> {
-    let mut dict = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
-    while (10 + dict.len() + 1) % 64 != 0 {
-        dict.push(' ');
-    }
-    dict.push('\n');
-    let mut out = b"\x93NUMPY\x01\x00".to_vec();
-    out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
-    out.extend_from_slice(dict.as_bytes());
-    out.extend_from_slice(data);
-    out
 }
 
 #[test]

@@ -11,15 +11,18 @@
 //! (`ccx`). A missing tool makes the test fail, unless `TPTD_SKIP_EXTERNAL=1`, which turns
 //! those tests into no-ops (the same convention as `tests/write_formats.rs`).
 
+mod common;
+
 use std::collections::{BTreeSet, HashMap};
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
+use common::external::{
+    check_mesh_py, dat_temperatures, gmsh_check, heat_deck, require_ccx, require_gmsh,
+    require_python_with, run_ccx_job, write_file, Format, DECK_TAIL,
+};
 use tptd::io::atomic::write_atomically;
 use tptd::io::inp::write_inp;
-use tptd::io::msh::{write_msh, MshVersion};
-use tptd::io::vtu::write_vtu;
 use tptd::{mesh_interval, BoundaryLabel, MeshOptions, Method, ScalarGrid, TetMesh};
 
 // ---------------------------------------------------------------------------------------
@@ -131,156 +134,25 @@ fn label_nodes(mesh: &TetMesh, label: BoundaryLabel) -> BTreeSet<usize> {
 }
 
 // ---------------------------------------------------------------------------------------
-// Helpers (same conventions as tests/write_formats.rs)
-// ---------------------------------------------------------------------------------------
-
-#[derive(Clone, Copy, Debug)]
-enum Format {
-    Msh41,
-    Msh22,
-    Inp,
-    Vtu,
-}
-
-impl Format {
-    fn key(self) -> &'static str {
-        match self {
-            Format::Msh41 => "msh41",
-            Format::Msh22 => "msh22",
-            Format::Inp => "inp",
-            Format::Vtu => "vtu",
-        }
-    }
-
-    fn file_name(self, stem: &str) -> String {
-        match self {
-            Format::Msh41 => format!("{stem}.v41.msh"),
-            Format::Msh22 => format!("{stem}.v22.msh"),
-            Format::Inp => format!("{stem}.inp"),
-            Format::Vtu => format!("{stem}.vtu"),
-        }
-    }
-}
-
-/// Writes `mesh` in `format` into `dir` through [`write_atomically`]; returns the path.
-fn write_file(mesh: &TetMesh, format: Format, dir: &Path, stem: &str) -> PathBuf {
-    let path = dir.join(format.file_name(stem));
-    write_atomically(&path, |w| match format {
-        Format::Msh41 => write_msh(mesh, w, MshVersion::V41),
-        Format::Msh22 => write_msh(mesh, w, MshVersion::V22),
-        Format::Inp => write_inp(mesh, w),
-        Format::Vtu => write_vtu(mesh, w),
-    })
-    .unwrap();
-    path
-}
-
-fn skip_external() -> bool {
-    std::env::var("TPTD_SKIP_EXTERNAL").is_ok_and(|v| v == "1")
-}
-
-/// Returns false (after a note) when external tools are to be skipped; panics with a clear
-/// message when `cmd args` cannot be run successfully.
-fn require_tool(what: &str, cmd: &str, args: &[&str]) -> bool {
-    if skip_external() {
-        eprintln!("note: TPTD_SKIP_EXTERNAL=1, skipping the {what} round trip");
-        return false;
-    }
-    match Command::new(cmd).args(args).output() {
-        Ok(o) if o.status.success() => true,
-        Ok(o) => panic!(
-            "{what} is required for this test but `{cmd} {}` failed ({}): {}{}\n\
-             install it (see the repo's test script) or set TPTD_SKIP_EXTERNAL=1",
-            args.join(" "),
-            o.status,
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-        Err(e) => panic!(
-            "{what} is required for this test but `{cmd}` could not be run: {e}\n\
-             install it (see the repo's test script) or set TPTD_SKIP_EXTERNAL=1"
-        ),
-    }
-}
-
-fn python() -> String {
-    std::env::var("PYTHON").unwrap_or_else(|_| "python3".to_string())
-}
-
-fn run(cmd: &mut Command) -> (bool, String) {
-    let o = cmd
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    (o.status.success(), text)
-}
-
-/// The expectation file of `check_mesh.py`, asking for `.inp` coordinates to 1e-12
-/// (relative) and for a positive numpy volume of every tet as read.
-fn expected_json(mesh: &TetMesh) -> String {
-    let mut boundary = serde_json::Map::new();
-    for label in BoundaryLabel::ALL {
-        let tris: Vec<_> = mesh
-            .boundary
-            .iter()
-            .zip(&mesh.boundary_labels)
-            .filter(|&(_, &l)| l == label)
-            .map(|(t, _)| t.to_vec())
-            .collect();
-        if !tris.is_empty() {
-            boundary.insert(label.name().to_string(), serde_json::json!(tris));
-        }
-    }
-    serde_json::json!({
-        "points": mesh.points,
-        "values": mesh.values,
-        "tets": mesh.tets,
-        "boundary": boundary,
-        "coord_rtol": 1e-12,
-        "positive_volumes": true,
-    })
-    .to_string()
-}
-
-// ---------------------------------------------------------------------------------------
 // meshio and VTK
 // ---------------------------------------------------------------------------------------
-
-fn check_script() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/check_mesh.py")
-}
 
 /// Writes the shell mesh in `format` and runs `check_mesh.py reader format` on it: point and
 /// tet counts, coordinates, connectivity, `f`, physical groups / node and element sets, and
 /// (meshio) positive volumes computed by numpy from what was read.
 fn python_check(reader: &str, format: Format) {
-    let imports = if reader == "vtk" {
-        "import numpy, vtk"
-    } else {
-        "import numpy, meshio"
-    };
-    if !require_tool(
-        &format!("python3 with {reader}"),
-        &python(),
-        &["-c", imports],
-    ) {
+    if !require_python_with(reader) {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let mesh = shell_mesh();
-    let path = write_file(&mesh, format, dir.path(), "shell");
-    let exp = dir.path().join("shell.json");
-    fs::write(&exp, expected_json(&mesh)).unwrap();
-    let (ok, out) = run(Command::new(python())
-        .arg(check_script())
-        .args([reader, format.key()])
-        .arg(&path)
-        .arg(&exp));
-    assert!(ok, "{reader} failed on {}:\n{out}", path.display());
+    // ask for `.inp` coordinates to 1e-12 (relative) and for a positive numpy volume of every
+    // tet as read
+    let extra = [
+        ("coord_rtol", serde_json::json!(1e-12)),
+        ("positive_volumes", serde_json::json!(true)),
+    ];
+    let out = check_mesh_py(reader, format, &mesh, dir.path(), "shell", &extra);
     let want = format!("{} points", mesh.points.len());
     assert!(out.contains(&want), "{out}");
     eprint!("{out}");
@@ -317,32 +189,14 @@ fn vtk_reads_mesher_vtu() {
 
 #[test]
 fn gmsh_checks_mesher_msh() {
-    if !require_tool("gmsh", "gmsh", &["--version"]) {
+    if !require_gmsh() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let mesh = shell_mesh();
     for format in [Format::Msh41, Format::Msh22] {
         let path = write_file(&mesh, format, dir.path(), "shell");
-        let (ok, out) = run(Command::new("gmsh")
-            .arg(&path)
-            .arg("-check")
-            .arg("-nopopup"));
-        assert!(
-            ok && !out.contains("Error"),
-            "gmsh -check {}:\n{out}",
-            path.display()
-        );
-        for want in [
-            format!("{} nodes", mesh.points.len()),
-            format!("{} elements", mesh.tets.len() + mesh.boundary.len()),
-        ] {
-            assert!(
-                out.contains(&want),
-                "gmsh -check {}: no {want:?} in\n{out}",
-                path.display()
-            );
-        }
+        gmsh_check(&path, &mesh);
     }
 }
 
@@ -350,38 +204,10 @@ fn gmsh_checks_mesher_msh() {
 // CalculiX
 // ---------------------------------------------------------------------------------------
 
-/// Temperatures by node id (1-based) from a CalculiX `.dat` `temperatures` block.
-fn dat_temperatures(dat: &str) -> HashMap<usize, f64> {
-    let block = dat
-        .split("temperatures")
-        .nth(1)
-        .expect("no temperatures in the .dat");
-    block
-        .lines()
-        .skip(1)
-        .map(str::split_whitespace)
-        .filter_map(|mut f| Some((f.next()?.parse().ok()?, f.next()?.parse().ok()?)))
-        .collect()
-}
-
 /// Runs `ccx` on `deck` (stem `job`) in `dir`; returns the temperatures of the `.dat`, one
 /// per node of `mesh`.
 fn run_ccx(dir: &Path, job: &str, deck: &str, mesh: &TetMesh) -> HashMap<usize, f64> {
-    fs::write(dir.join(format!("{job}.inp")), deck).unwrap();
-    let (ok, out) = run(Command::new("ccx")
-        .arg("-i")
-        .arg(job)
-        .current_dir(dir)
-        .env("OMP_NUM_THREADS", "1"));
-    let lower = out.to_lowercase();
-    assert!(
-        ok && !lower.contains("*error") && !lower.contains("jacobian"),
-        "ccx failed on {job}:\n{out}"
-    );
-    assert!(
-        out.contains("Job finished"),
-        "ccx did not finish {job}:\n{out}"
-    );
+    run_ccx_job(dir, job, deck, &["jacobian"]);
     let temps = dat_temperatures(&fs::read_to_string(dir.join(format!("{job}.dat"))).unwrap());
     assert_eq!(temps.len(), mesh.points.len(), "{job}: temperatures");
     for id in 1..=mesh.points.len() {
@@ -391,26 +217,6 @@ fn run_ccx(dir: &Path, job: &str, deck: &str, mesh: &TetMesh) -> HashMap<usize, 
         );
     }
     temps
-}
-
-/// Deck head: the mesh, a unit-conductivity material, a steady heat step and the fixed
-/// temperatures `(set, value)`.
-fn heat_deck(fixed: &[(&str, f64)]) -> String {
-    let mut deck = String::from(
-        "*INCLUDE, INPUT=mesh.inp\n*MATERIAL, NAME=M\n*CONDUCTIVITY\n1.\n\
-         *SOLID SECTION, ELSET=DOMAIN, MATERIAL=M\n*STEP\n*HEAT TRANSFER, STEADY STATE\n\
-         *BOUNDARY\n",
-    );
-    for (set, t) in fixed {
-        deck.push_str(&format!("{set}, 11, 11, {t:?}\n"));
-    }
-    deck
-}
-
-const DECK_TAIL: &str = "*NODE PRINT, NSET=NALL\nNT\n*NODE FILE\nNT\n*END STEP\n";
-
-fn require_ccx() -> bool {
-    require_tool("CalculiX (ccx)", "sh", &["-c", "command -v ccx"])
 }
 
 /// Shell, T = 0 on ALPHA and T = 1 on BETA, no source: the fixed values are kept and every

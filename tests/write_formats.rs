@@ -6,11 +6,18 @@
 //!   `gmsh -check` and a CalculiX (`ccx`) heat-transfer run on the `.inp`. A missing tool
 //!   makes the test fail, unless `TPTD_SKIP_EXTERNAL=1`, which turns those tests into no-ops.
 
+mod common;
+
 use std::collections::HashMap;
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::external::{
+    check_mesh_py, dat_temperatures, gmsh_check, require_ccx, require_gmsh, require_python_with,
+    run, run_ccx_job, write_file, Format, DECK_HEAD, DECK_TAIL,
+};
+use common::files::listing;
 use tptd::io::atomic::{write_atomically, WriteError};
 use tptd::io::inp::write_inp;
 use tptd::io::msh::{write_msh, MshVersion};
@@ -166,126 +173,12 @@ fn bar() -> TetMesh {
 // Helpers
 // ---------------------------------------------------------------------------------------
 
-#[derive(Clone, Copy, Debug)]
-enum Format {
-    Msh41,
-    Msh22,
-    Inp,
-    Vtu,
-}
-
-impl Format {
-    const ALL: [Format; 4] = [Format::Msh41, Format::Msh22, Format::Inp, Format::Vtu];
-
-    fn key(self) -> &'static str {
-        match self {
-            Format::Msh41 => "msh41",
-            Format::Msh22 => "msh22",
-            Format::Inp => "inp",
-            Format::Vtu => "vtu",
-        }
-    }
-
-    fn file_name(self, stem: &str) -> String {
-        match self {
-            Format::Msh41 => format!("{stem}.v41.msh"),
-            Format::Msh22 => format!("{stem}.v22.msh"),
-            Format::Inp => format!("{stem}.inp"),
-            Format::Vtu => format!("{stem}.vtu"),
-        }
-    }
-}
-
 fn render(mesh: &TetMesh, format: Format) -> Vec<u8> {
     let mut out = Vec::new();
-    match format {
-        Format::Msh41 => write_msh(mesh, &mut out, MshVersion::V41),
-        Format::Msh22 => write_msh(mesh, &mut out, MshVersion::V22),
-        Format::Inp => write_inp(mesh, &mut out),
-        Format::Vtu => write_vtu(mesh, &mut out),
-    }
-    .expect("writing to a Vec cannot fail");
+    format
+        .write(mesh, &mut out)
+        .expect("writing to a Vec cannot fail");
     out
-}
-
-/// Writes `mesh` in `format` into `dir` through [`write_atomically`]; returns the path.
-fn write_file(mesh: &TetMesh, format: Format, dir: &Path, stem: &str) -> PathBuf {
-    let path = dir.join(format.file_name(stem));
-    write_atomically(&path, |w| match format {
-        Format::Msh41 => write_msh(mesh, w, MshVersion::V41),
-        Format::Msh22 => write_msh(mesh, w, MshVersion::V22),
-        Format::Inp => write_inp(mesh, w),
-        Format::Vtu => write_vtu(mesh, w),
-    })
-    .unwrap();
-    path
-}
-
-fn skip_external() -> bool {
-    std::env::var("TPTD_SKIP_EXTERNAL").is_ok_and(|v| v == "1")
-}
-
-/// Returns false (after a note) when external tools are to be skipped; panics with a clear
-/// message when `cmd args` cannot be run successfully.
-fn require_tool(what: &str, cmd: &str, args: &[&str]) -> bool {
-    if skip_external() {
-        eprintln!("note: TPTD_SKIP_EXTERNAL=1, skipping the {what} round trip");
-        return false;
-    }
-    match Command::new(cmd).args(args).output() {
-        Ok(o) if o.status.success() => true,
-        Ok(o) => panic!(
-            "{what} is required for this test but `{cmd} {}` failed ({}): {}{}\n\
-             install it (see the repo's test script) or set TPTD_SKIP_EXTERNAL=1",
-            args.join(" "),
-            o.status,
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-        Err(e) => panic!(
-            "{what} is required for this test but `{cmd}` could not be run: {e}\n\
-             install it (see the repo's test script) or set TPTD_SKIP_EXTERNAL=1"
-        ),
-    }
-}
-
-fn python() -> String {
-    std::env::var("PYTHON").unwrap_or_else(|_| "python3".to_string())
-}
-
-fn expected_json(mesh: &TetMesh) -> String {
-    let mut boundary = serde_json::Map::new();
-    for label in BoundaryLabel::ALL {
-        let tris: Vec<_> = mesh
-            .boundary
-            .iter()
-            .zip(&mesh.boundary_labels)
-            .filter(|&(_, &l)| l == label)
-            .map(|(t, _)| t.to_vec())
-            .collect();
-        if !tris.is_empty() {
-            boundary.insert(label.name().to_string(), serde_json::json!(tris));
-        }
-    }
-    serde_json::json!({
-        "points": mesh.points,
-        "values": mesh.values,
-        "tets": mesh.tets,
-        "boundary": boundary,
-    })
-    .to_string()
-}
-
-fn run(cmd: &mut Command) -> (bool, String) {
-    let o = cmd
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    (o.status.success(), text)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -530,15 +423,6 @@ fn empty_mesh_writes() {
 // Atomic output
 // ---------------------------------------------------------------------------------------
 
-fn dir_entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into())
-        .collect();
-    v.sort();
-    v
-}
-
 #[test]
 fn atomic_failing_writer_leaves_nothing() {
     let dir = tempfile::tempdir().unwrap();
@@ -554,17 +438,13 @@ fn atomic_failing_writer_leaves_nothing() {
         "{msg}"
     );
     assert!(matches!(err, WriteError::Io { .. }));
-    assert!(
-        dir_entries(dir.path()).is_empty(),
-        "{:?}",
-        dir_entries(dir.path())
-    );
+    assert!(listing(dir.path()).is_empty(), "{:?}", listing(dir.path()));
 
     // an existing file survives a failed rewrite untouched
     fs::write(&path, "old").unwrap();
     assert!(write_atomically(&path, |_| Err(std::io::Error::other("boom"))).is_err());
     assert_eq!(fs::read_to_string(&path).unwrap(), "old");
-    assert_eq!(dir_entries(dir.path()), ["out.msh"]);
+    assert_eq!(listing(dir.path()), ["out.msh"]);
 }
 
 #[test]
@@ -574,7 +454,7 @@ fn atomic_success_replaces_existing_file() {
     fs::write(&path, "a much longer old content that must disappear").unwrap();
     write_atomically(&path, |w| w.write_all(b"new")).unwrap();
     assert_eq!(fs::read_to_string(&path).unwrap(), "new");
-    assert_eq!(dir_entries(dir.path()), ["mesh.vtu"]);
+    assert_eq!(listing(dir.path()), ["mesh.vtu"]);
 
     // a relative path with no directory part works too (written into the current dir)
     let name = format!("tptd-atomic-test-{}.txt", std::process::id());
@@ -592,7 +472,7 @@ fn atomic_refuses_directories_and_special_files() {
     assert!(matches!(err, WriteError::IsDirectory { .. }), "{err}");
     assert!(err.to_string().contains("sub") && !err.to_string().contains('\n'));
     assert!(sub.is_dir());
-    assert_eq!(dir_entries(dir.path()), ["sub"]);
+    assert_eq!(listing(dir.path()), ["sub"]);
 
     // missing parent directory: an I/O error naming the path, nothing created
     let missing = dir.path().join("nope/out.inp");
@@ -610,7 +490,7 @@ fn atomic_refuses_directories_and_special_files() {
         if ok {
             let err = write_atomically(&fifo, |w| w.write_all(b"x")).unwrap_err();
             assert!(matches!(err, WriteError::NotRegularFile { .. }), "{err}");
-            assert_eq!(dir_entries(dir.path()), ["fifo", "sub"]);
+            assert_eq!(listing(dir.path()), ["fifo", "sub"]);
         }
     }
 }
@@ -619,34 +499,13 @@ fn atomic_refuses_directories_and_special_files() {
 // Round trips through real readers
 // ---------------------------------------------------------------------------------------
 
-fn check_script() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/check_mesh.py")
-}
-
 fn python_check(reader: &str, format: Format) {
-    let imports = if reader == "vtk" {
-        "import numpy, vtk"
-    } else {
-        "import numpy, meshio"
-    };
-    if !require_tool(
-        &format!("python3 with {reader}"),
-        &python(),
-        &["-c", imports],
-    ) {
+    if !require_python_with(reader) {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     for (stem, mesh) in [("cube6", cube6()), ("slab12", slab12()), ("bar", bar())] {
-        let path = write_file(&mesh, format, dir.path(), stem);
-        let exp = dir.path().join(format!("{stem}.json"));
-        fs::write(&exp, expected_json(&mesh)).unwrap();
-        let (ok, out) = run(Command::new(python())
-            .arg(check_script())
-            .args([reader, format.key()])
-            .arg(&path)
-            .arg(&exp));
-        assert!(ok, "{reader} failed on {}:\n{out}", path.display());
+        let out = check_mesh_py(reader, format, &mesh, dir.path(), stem, &[]);
         eprint!("{out}");
     }
 }
@@ -678,32 +537,14 @@ fn vtk_reads_vtu() {
 
 #[test]
 fn gmsh_checks_msh() {
-    if !require_tool("gmsh", "gmsh", &["--version"]) {
+    if !require_gmsh() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     for (stem, mesh) in [("cube6", cube6()), ("slab12", slab12()), ("bar", bar())] {
         for format in [Format::Msh41, Format::Msh22] {
             let path = write_file(&mesh, format, dir.path(), stem);
-            let (ok, out) = run(Command::new("gmsh")
-                .arg(&path)
-                .arg("-check")
-                .arg("-nopopup"));
-            assert!(
-                ok && !out.contains("Error"),
-                "gmsh -check {}:\n{out}",
-                path.display()
-            );
-            for want in [
-                format!("{} nodes", mesh.points.len()),
-                format!("{} elements", mesh.tets.len() + mesh.boundary.len()),
-            ] {
-                assert!(
-                    out.contains(&want),
-                    "gmsh -check {}: no {want:?} in\n{out}",
-                    path.display()
-                );
-            }
+            gmsh_check(&path, &mesh);
             // gmsh re-exports the mesh: converting to 2.2 must keep every element
             let copy = dir
                 .path()
@@ -733,38 +574,13 @@ fn gmsh_checks_msh() {
     }
 }
 
-/// Temperatures by node id from a CalculiX `.dat` `temperatures` block.
-fn dat_temperatures(dat: &str) -> HashMap<usize, f64> {
-    let block = dat
-        .split("temperatures")
-        .nth(1)
-        .expect("no temperatures in the .dat");
-    block
-        .lines()
-        .skip(1)
-        .map(str::split_whitespace)
-        .filter_map(|mut f| Some((f.next()?.parse().ok()?, f.next()?.parse().ok()?)))
-        .collect()
-}
-
 /// Runs `ccx` on `deck` (stem `job`) in `dir`; returns the `.dat` text.
 fn run_ccx(dir: &Path, job: &str, deck: &str) -> String {
-    fs::write(dir.join(format!("{job}.inp")), deck).unwrap();
-    let (ok, out) = run(Command::new("ccx")
-        .arg("-i")
-        .arg(job)
-        .current_dir(dir)
-        .env("OMP_NUM_THREADS", "1"));
-    let lower = out.to_lowercase();
-    assert!(
-        ok && !lower.contains("*error")
-            && !lower.contains("negative jacobian")
-            && !lower.contains("nonpositive jacobian"),
-        "ccx failed on {job}:\n{out}"
-    );
-    assert!(
-        out.contains("Job finished"),
-        "ccx did not finish {job}:\n{out}"
+    run_ccx_job(
+        dir,
+        job,
+        deck,
+        &["negative jacobian", "nonpositive jacobian"],
     );
     let frd = dir.join(format!("{job}.frd"));
     assert!(
@@ -776,17 +592,15 @@ fn run_ccx(dir: &Path, job: &str, deck: &str) -> String {
 
 #[test]
 fn calculix_solves_heat_transfer_on_inp() {
-    if !require_tool("CalculiX (ccx)", "sh", &["-c", "command -v ccx"]) {
+    if !require_ccx() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let mesh = bar();
     write_atomically(&dir.path().join("mesh.inp"), |w| write_inp(&mesh, w)).unwrap();
     let inp = parse_inp(&fs::read_to_string(dir.path().join("mesh.inp")).unwrap());
-    let head = "*INCLUDE, INPUT=mesh.inp\n*MATERIAL, NAME=M\n*CONDUCTIVITY\n1.\n\
-                *SOLID SECTION, ELSET=DOMAIN, MATERIAL=M\n*STEP\n*HEAT TRANSFER, STEADY STATE\n\
-                *BOUNDARY\nALPHA, 11, 11, 0.\n";
-    let tail = "*NODE PRINT, NSET=NALL\nNT\n*NODE FILE\nNT\n*END STEP\n";
+    let head = format!("{DECK_HEAD}ALPHA, 11, 11, 0.\n");
+    let tail = DECK_TAIL;
 
     // 1) body flux on DOMAIN, T = 0 on ALPHA: runs, temperatures positive away from ALPHA
     let deck = format!("{head}*DFLUX\nDOMAIN, BF, 1.\n{tail}");

@@ -1,7 +1,10 @@
 //! Shared helpers of the independent test harness (reference topology, MC33 configurations,
-//! mesh invariants, a tiny deterministic RNG).
+//! mesh invariants, a tiny deterministic RNG), of the external round trips of written meshes
+//! and small file helpers.
 #![allow(dead_code)]
 
+pub mod external;
+pub mod files;
 pub mod invariants;
 pub mod mc33;
 pub mod reference;
