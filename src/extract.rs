@@ -452,8 +452,45 @@ fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     let [cx, cy, _] = ctx.grid.cell_dims();
     let mut slab = Slab::new(ctx.grid.dims[0] * ctx.grid.dims[1], k);
     let mut tets: Vec<[u8; 4]> = Vec::with_capacity(64);
+    // Skip cells entirely below alpha or above beta 64 at a time: bit i of a row word is set
+    // when vertex i of that grid row is below (resp. above); a cell is outside when its eight
+    // corners are, i.e. when the AND of its four rows has bits i and i + 1 set.
+    let nx = ctx.grid.dims[0];
+    let words = nx.div_ceil(64);
+    let ny = ctx.grid.dims[1];
+    // plane_bits[p][side][j * words + w]: plane z = k + p, side 0 below / 1 above
+    let mut plane_bits = [
+        [vec![0u64; ny * words], vec![0u64; ny * words]],
+        [vec![0u64; ny * words], vec![0u64; ny * words]],
+    ];
+    for (p, bits) in plane_bits.iter_mut().enumerate() {
+        let base = ctx.grid.index(0, 0, k + p);
+        for (jj, row) in ctx.grid.values[base..base + nx * ny]
+            .chunks_exact(nx)
+            .enumerate()
+        {
+            for (i, &v) in row.iter().enumerate() {
+                bits[0][jj * words + i / 64] |= ((v <= ctx.alpha) as u64) << (i % 64);
+                bits[1][jj * words + i / 64] |= ((v >= ctx.beta) as u64) << (i % 64);
+            }
+        }
+    }
+    let mut outside = vec![0u64; words];
     for j in 0..cy {
+        outside.fill(0);
+        for side in 0..2 {
+            let row = |p: usize, jj: usize, w: usize| plane_bits[p][side][jj * words + w];
+            let all = |w: usize| row(0, j, w) & row(0, j + 1, w) & row(1, j, w) & row(1, j + 1, w);
+            for (w, o) in outside.iter_mut().enumerate() {
+                let here = all(w);
+                let next = if w + 1 < words { all(w + 1) } else { 0 };
+                *o |= here & ((here >> 1) | (next << 63));
+            }
+        }
         for i in 0..cx {
+            if (outside[i / 64] >> (i % 64)) & 1 == 1 {
+                continue;
+            }
             process_cell(ctx, [i, j, k], &mut tets, &mut slab);
         }
     }
