@@ -146,15 +146,14 @@ const RECENT: usize = 256;
 
 impl Slab {
     fn new(plane: usize, k: usize) -> Self {
-        let points = 2 * plane;
         Slab {
             corner_ids: vec![u32::MAX; 2 * plane],
             plane_base: k * plane,
             recent: Box::new([(PointKey::MAX, 0); RECENT]),
-            map: FxHashMap::with_capacity_and_hasher(points, Default::default()),
-            keys: Vec::with_capacity(points),
-            pos: Vec::with_capacity(points),
-            val: Vec::with_capacity(points),
+            map: FxHashMap::with_capacity_and_hasher(plane / 4, Default::default()),
+            keys: Vec::new(),
+            pos: Vec::new(),
+            val: Vec::new(),
             tets: Vec::new(),
             tris: Vec::new(),
             labels: Vec::new(),
@@ -475,20 +474,35 @@ fn process_slab(ctx: &Ctx, k: usize) -> Slab {
             }
         }
     }
-    let mut outside = vec![0u64; words];
+    let mut outside = vec![0u64; words * cy];
     for j in 0..cy {
-        outside.fill(0);
+        let out = &mut outside[j * words..(j + 1) * words];
         for side in 0..2 {
             let row = |p: usize, jj: usize, w: usize| plane_bits[p][side][jj * words + w];
             let all = |w: usize| row(0, j, w) & row(0, j + 1, w) & row(1, j, w) & row(1, j + 1, w);
-            for (w, o) in outside.iter_mut().enumerate() {
+            for (w, o) in out.iter_mut().enumerate() {
                 let here = all(w);
                 let next = if w + 1 < words { all(w + 1) } else { 0 };
                 *o |= here & ((here >> 1) | (next << 63));
             }
         }
+    }
+    // Reserve for the cells to be meshed (about 7 tets and 2 new points each) so the slab's
+    // vectors do not grow by copying.
+    let meshed = cx * cy
+        - outside
+            .iter()
+            .map(|w| w.count_ones() as usize)
+            .sum::<usize>();
+    slab.tets.reserve(7 * meshed);
+    slab.keys.reserve(2 * meshed);
+    slab.pos.reserve(2 * meshed);
+    slab.val.reserve(2 * meshed);
+    slab.tris.reserve(meshed);
+    slab.labels.reserve(meshed);
+    for j in 0..cy {
         for i in 0..cx {
-            if (outside[i / 64] >> (i % 64)) & 1 == 1 {
+            if (outside[j * words + i / 64] >> (i % 64)) & 1 == 1 {
                 continue;
             }
             process_cell(ctx, [i, j, k], &mut tets, &mut slab);

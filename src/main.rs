@@ -523,6 +523,10 @@ fn run(cli: Cli) -> Result<()> {
         // A closed stdout (e.g. `| head`) is not an error of the run.
         let _ = std::io::stdout().lock().write_all(text.as_bytes());
     }
+    // The process ends here: let the OS reclaim the mesh and the grid at exit instead of
+    // freeing hundreds of megabytes page by page first.
+    std::mem::forget(out);
+    std::mem::forget(grid);
     Ok(())
 }
 
