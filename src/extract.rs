@@ -12,7 +12,7 @@ use rustc_hash::FxHashMap;
 
 use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex, Interval};
 use crate::decompose::plan::{corners_connected, face_needed, is_full, CellClasses};
-use crate::decompose::{five, six, tptd, CellCase, CellPoints, BODY0, BODY1, NUM_LOCAL};
+use crate::decompose::{five, six, tptd, CellCase, CellPoints, BODY0, NUM_LOCAL};
 use crate::grid::{corner_faces, corner_offset, ScalarGrid};
 use crate::keys::{on_z_plane, split, vertex_key, vertex_point, PointKey, BODY, CORNER, FACE};
 use crate::mesh::{BoundaryLabel, TetMesh};
@@ -645,7 +645,6 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
         });
         clip_tet(&tv, &ctx.interval, box_planes, slab);
     }
-    let _ = BODY1;
 }
 
 /// Whether cell `c` touches the grid box (its faces may carry `box` triangles).

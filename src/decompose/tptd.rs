@@ -275,7 +275,6 @@ fn prisms(
             }
         }
     }
-    let _ = c_small;
     if !orient_tiling(&mut out[start..], pts, 1.0) {
         out.truncate(start);
         return false;
