@@ -18,21 +18,27 @@ pub fn eval(v: &[f64; 8], p: [f64; 3]) -> f64 {
     c0 * (1.0 - z) + c1 * z
 }
 
+/// How far (in cell units) a saddle must lie from the cell's or face's boundary to count as
+/// inside. Saddles closer than this are degenerate (on an edge or a face up to rounding, e.g.
+/// at 3e-17 with integer data) and belong to the boundary, where they change no topology.
+pub const INSIDE_EPS: f64 = 1e-9;
+
 /// A saddle of the bilinear interpolant on one cell face.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FaceSaddle {
     /// Position in the face's own coordinates `(u, v)` along its two in-plane axes
-    /// (lower-numbered axis first), strictly inside `(0, 1)^2`.
+    /// (lower-numbered axis first), at least [`INSIDE_EPS`] inside `(0, 1)^2`.
     pub uv: [f64; 2],
     /// Value of the bilinear interpolant at the saddle.
     pub value: f64,
 }
 
 /// The saddle of the bilinear interpolant with corner values `q` given in
-/// [`face_corners`] cyclic order `(f00, f10, f11, f01)`, if it lies strictly inside the face.
+/// [`face_corners`] cyclic order `(f00, f10, f11, f01)`, if it lies inside the face by at least
+/// [`INSIDE_EPS`].
 ///
 /// Degenerate faces (parallel asymptotes, i.e. `f00 + f11 == f10 + f01`, including
-/// constant faces) and saddles on or outside the face's edges give `None`.
+/// constant faces) and saddles on, next to or outside the face's edges give `None`.
 #[inline]
 pub fn face_saddle_of(q: [f64; 4]) -> Option<FaceSaddle> {
     let [f00, f10, f11, f01] = q;
@@ -42,7 +48,7 @@ pub fn face_saddle_of(q: [f64; 4]) -> Option<FaceSaddle> {
     }
     let u = (f00 - f01) / d;
     let v = (f00 - f10) / d;
-    if !(u > 0.0 && u < 1.0 && v > 0.0 && v < 1.0) {
+    if !(u > INSIDE_EPS && u < 1.0 - INSIDE_EPS && v > INSIDE_EPS && v < 1.0 - INSIDE_EPS) {
         return None;
     }
     Some(FaceSaddle {
@@ -77,7 +83,7 @@ pub fn face_point(f: usize, uv: [f64; 2]) -> [f64; 3] {
 /// A saddle of the trilinear interpolant strictly inside the cell.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BodySaddle {
-    /// Cell-local position, strictly inside `(0, 1)^3`.
+    /// Cell-local position, at least [`INSIDE_EPS`] inside `(0, 1)^3`.
     pub pos: [f64; 3],
     /// Value of the trilinear interpolant there.
     pub value: f64,
@@ -99,7 +105,7 @@ pub fn coefficients(v: &[f64; 8]) -> [f64; 8] {
     ]
 }
 
-/// The body saddles (0, 1 or 2) strictly inside the cell, sorted by increasing value.
+/// The body saddles (0, 1 or 2) inside the cell (by at least [`INSIDE_EPS`]), sorted by increasing value.
 ///
 /// The gradient of a trilinear function vanishes where (with `h != 0` and the shift
 /// `x = X - f/h`, `y = Y - g/h`, `z = Z - e/h`) `YZ = p`, `XZ = q`, `XY = r`, so
@@ -114,7 +120,7 @@ pub fn body_saddles(v: &[f64; 8]) -> ([BodySaddle; 2], usize) {
     }; 2];
     let mut n = 0;
     let mut push = |p: [f64; 3]| {
-        if p.iter().all(|&x| x > 0.0 && x < 1.0) {
+        if p.iter().all(|&x| x > INSIDE_EPS && x < 1.0 - INSIDE_EPS) {
             out[n] = BodySaddle {
                 pos: p,
                 value: eval(v, p),
