@@ -29,11 +29,42 @@ impl Dsu {
     }
 }
 
-fn count_components(n: usize, used: &[bool], links: impl Iterator<Item = (u32, u32)>) -> usize {
-    let mut d = Dsu::new(n);
-    for (a, b) in links {
-        d.union(a, b);
-    }
+/// Number of connected components among the `used` elements of `0..n` linked by the pairs
+/// `links` yields for each item. Items are split among threads, each building its own
+/// union–find; the forests are then merged (linking each element to its root in the other
+/// forest keeps exactly the same components).
+fn count_components<T: Sync>(
+    n: usize,
+    used: &[bool],
+    items: &[T],
+    links: impl Fn(&T) -> [(u32, u32); 3] + Sync,
+) -> usize {
+    use rayon::prelude::*;
+    let chunk = items
+        .len()
+        .div_ceil(rayon::current_num_threads())
+        .max(1 << 16);
+    let mut d = items
+        .par_chunks(chunk)
+        .map(|c| {
+            let mut d = Dsu::new(n);
+            for t in c {
+                for (a, b) in links(t) {
+                    d.union(a, b);
+                }
+            }
+            d
+        })
+        .reduce_with(|mut a, mut b| {
+            for v in 0..n as u32 {
+                let r = b.find(v);
+                if r != v {
+                    a.union(v, r);
+                }
+            }
+            a
+        })
+        .unwrap_or_else(|| Dsu::new(n));
     (0..n as u32)
         .filter(|&i| used[i as usize] && d.find(i) == i)
         .count()
@@ -51,26 +82,18 @@ pub fn betti(mesh: &TetMesh) -> [usize; 3] {
             used[i as usize] = true;
         }
     }
-    let b0 = count_components(
-        n,
-        &used,
-        mesh.tets
-            .iter()
-            .flat_map(|t| [(t[0], t[1]), (t[0], t[2]), (t[0], t[3])]),
-    );
+    let b0 = count_components(n, &used, &mesh.tets, |t| {
+        [(t[0], t[1]), (t[0], t[2]), (t[0], t[3])]
+    });
     let mut on_b = vec![false; n];
     for t in &mesh.boundary {
         for &i in t {
             on_b[i as usize] = true;
         }
     }
-    let surfaces = count_components(
-        n,
-        &on_b,
-        mesh.boundary
-            .iter()
-            .flat_map(|t| [(t[0], t[1]), (t[0], t[2])]),
-    );
+    let surfaces = count_components(n, &on_b, &mesh.boundary, |t| {
+        [(t[0], t[1]), (t[0], t[2]), (t[1], t[2])]
+    });
     let vb = on_b.iter().filter(|&&x| x).count() as i64;
     let fb = mesh.boundary.len() as i64;
     // χ(∂M) = V − E + F with E = 3F/2; χ(M) = χ(∂M)/2
