@@ -225,6 +225,14 @@ fn random_volumes_all_methods() {
                 }
             };
             let mut errs = verify(f, vol.alpha, vol.beta, &mesh, None);
+            // the library's shortcut (boundary components and χ(∂M)/2) against the
+            // independent count over all simplices
+            let (lib, own) = (tptd::topology::betti(&mesh), mesh_betti(&mesh));
+            if lib != own {
+                errs.push(format!(
+                    "tptd::topology::betti {lib:?} but simplex count {own:?}"
+                ));
+            }
             if matches!(method, Method::Tptd | Method::Ctd) {
                 betti_of.push((method, mesh_betti(&mesh)));
             }
