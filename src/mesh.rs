@@ -60,9 +60,23 @@ impl TetMesh {
         signed_volume(a, b, c, d)
     }
 
-    /// Sum of the tet volumes.
+    /// Sum of the tet volumes. Summed in fixed-size blocks (in parallel) whose partial sums are
+    /// added in order, so the result does not depend on the thread count.
     pub fn volume(&self) -> f64 {
-        (0..self.tets.len()).map(|t| self.tet_volume(t)).sum()
+        use rayon::prelude::*;
+        let partial: Vec<f64> = self
+            .tets
+            .par_chunks(1 << 14)
+            .map(|c| {
+                c.iter()
+                    .map(|t| {
+                        let [a, b, c, d] = t.map(|i| self.points[i as usize]);
+                        signed_volume(a, b, c, d)
+                    })
+                    .sum()
+            })
+            .collect();
+        partial.iter().sum()
     }
 }
 
