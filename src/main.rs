@@ -259,9 +259,11 @@ fn fmt_bound(v: f64) -> String {
     }
 }
 
-/// `[a, b]` for messages.
+/// `[a, b]` for messages, with an open bracket at an infinite end: `(-inf, b]`, `[a, inf)`.
 fn fmt_interval(alpha: f64, beta: f64) -> String {
-    format!("[{}, {}]", fmt_bound(alpha), fmt_bound(beta))
+    let open = if alpha.is_infinite() { '(' } else { '[' };
+    let close = if beta.is_infinite() { ')' } else { ']' };
+    format!("{open}{}, {}{close}", fmt_bound(alpha), fmt_bound(beta))
 }
 
 fn data_range(values: &[f64]) -> (f64, f64) {
