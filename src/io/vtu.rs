@@ -24,6 +24,18 @@ const VTK_TETRA: u8 = 10;
 /// Bytes converted per `write_all` call for the binary arrays.
 const CHUNK: usize = 1 << 16;
 
+/// The UInt64 byte count that precedes each appended array.
+fn header_bytes(size: u64) -> [u8; 8] {
+    size.to_le_bytes()
+}
+
+/// Hands the pending bytes of `buf` to `w`.
+fn flush(buf: &mut Vec<u8>, w: &mut dyn Write) -> io::Result<()> {
+    w.write_all(buf)?;
+    buf.clear();
+    Ok(())
+}
+
 /// Writes the tetrahedra and the nodal field `f` of `mesh` as a VTK XML UnstructuredGrid
 /// with raw appended binary data (see the module documentation; boundary triangles are not
 /// written). The output is deterministic and independent of the host's byte order.
@@ -97,22 +109,39 @@ pub fn write_vtu(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
         Ok(())
     };
 
-    put(&mut buf, &sizes[0].to_le_bytes(), w)?;
-    for &v in &mesh.values {
-        put(&mut buf, &v.to_le_bytes(), w)?;
-    }
-    put(&mut buf, &sizes[1].to_le_bytes(), w)?;
-    for p in &mesh.points {
-        for &x in p {
-            put(&mut buf, &x.to_le_bytes(), w)?;
+    // On a little-endian host the in-memory f64 and u32 arrays already are the file's bytes
+    // (ids fit in Int32 unless `wide`): write them as they are.
+    let native = cfg!(target_endian = "little");
+    w.write_all(&header_bytes(sizes[0]))?;
+    if native {
+        w.write_all(bytemuck::cast_slice(&mesh.values))?;
+    } else {
+        for &v in &mesh.values {
+            put(&mut buf, &v.to_le_bytes(), w)?;
         }
     }
-    put(&mut buf, &sizes[2].to_le_bytes(), w)?;
-    for &v in mesh.tets.iter().flatten() {
-        if wide {
-            put(&mut buf, &i64::from(v).to_le_bytes(), w)?;
-        } else {
-            put(&mut buf, &(v as i32).to_le_bytes(), w)?;
+    flush(&mut buf, w)?;
+    w.write_all(&header_bytes(sizes[1]))?;
+    if native {
+        w.write_all(bytemuck::cast_slice(&mesh.points))?;
+    } else {
+        for p in &mesh.points {
+            for &x in p {
+                put(&mut buf, &x.to_le_bytes(), w)?;
+            }
+        }
+    }
+    flush(&mut buf, w)?;
+    w.write_all(&header_bytes(sizes[2]))?;
+    if native && !wide {
+        w.write_all(bytemuck::cast_slice(&mesh.tets))?;
+    } else {
+        for &v in mesh.tets.iter().flatten() {
+            if wide {
+                put(&mut buf, &i64::from(v).to_le_bytes(), w)?;
+            } else {
+                put(&mut buf, &(v as i32).to_le_bytes(), w)?;
+            }
         }
     }
     put(&mut buf, &sizes[3].to_le_bytes(), w)?;
