@@ -222,8 +222,6 @@ impl ClipSink for Slab {
 struct Ctx<'a> {
     grid: &'a ScalarGrid,
     interval: Interval,
-    alpha: f64,
-    beta: f64,
     method: Method,
     /// Box-plane mask of every local id (corners: their three faces; face saddles: their face).
     local_box: [u8; NUM_LOCAL],
@@ -237,9 +235,13 @@ impl Ctx<'_> {
     fn cell_full(&self, c: [usize; 3]) -> bool {
         match self.method {
             Method::Tptd => true,
-            Method::Ctd | Method::Std => {
-                compute_full(self.grid, self.method, self.alpha, self.beta, c)
-            }
+            Method::Ctd | Method::Std => compute_full(
+                self.grid,
+                self.method,
+                self.interval.alpha,
+                self.interval.beta,
+                c,
+            ),
             Method::Five | Method::Six => false,
         }
     }
@@ -272,8 +274,6 @@ fn run(
     let ctx = Ctx {
         grid,
         interval: Interval::new(opts.alpha, opts.beta, &grid.values),
-        alpha: opts.alpha,
-        beta: opts.beta,
         method: opts.method,
         local_box,
     };
@@ -469,8 +469,8 @@ fn process_slab(ctx: &Ctx, k: usize) -> Slab {
             .enumerate()
         {
             for (i, &v) in row.iter().enumerate() {
-                bits[0][jj * words + i / 64] |= ((v <= ctx.alpha) as u64) << (i % 64);
-                bits[1][jj * words + i / 64] |= ((v >= ctx.beta) as u64) << (i % 64);
+                bits[0][jj * words + i / 64] |= ((v <= ctx.interval.alpha) as u64) << (i % 64);
+                bits[1][jj * words + i / 64] |= ((v >= ctx.interval.beta) as u64) << (i % 64);
             }
         }
     }
@@ -518,15 +518,16 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
     let grid = ctx.grid;
     let [i, j, k] = c;
     let v = grid.cell_values(i, j, k);
-    let cls = CellClasses::new(&v, ctx.alpha, ctx.beta);
+    let cls = CellClasses::new(&v, ctx.interval.alpha, ctx.interval.beta);
     if cls.all_outside() {
         return;
     }
+    let cd = grid.cell_dims();
     let mut pts = CellPoints::from_corners(&v);
     tets.clear();
     let case = match ctx.method {
         Method::Six => {
-            if cls.all_inside() && !on_box(c, grid.cell_dims()) {
+            if cls.all_inside() && !on_box(c, cd) {
                 emit_six_inside(grid, c, &v, slab);
                 slab.cases[CellCase::I as usize] += 1;
                 return;
@@ -540,7 +541,6 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
         }
         method => {
             let crosses = cls.crosses_alpha() || cls.crosses_beta();
-            let cd = grid.cell_dims();
             let (bodies, nb): ([BodySaddle; 2], usize) = if crosses || method == Method::Tptd {
                 body_saddles(&v)
             } else {
@@ -618,7 +618,6 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
             _ => vertex_key(base, BODY + (id as u64 - BODY0 as u64)),
         }
     };
-    let cd = grid.cell_dims();
     let mut box_planes = 0u8;
     for axis in 0..3 {
         if c[axis] == 0 {
@@ -686,12 +685,12 @@ fn safe_apexes(ctx: &Ctx, cls: CellClasses, used: u8, fv: &[f64; 6]) -> u8 {
             continue;
         }
         let m = if cls.crosses_alpha() {
-            if fv[f] <= ctx.alpha {
+            if fv[f] <= ctx.interval.alpha {
                 cls.below
             } else {
                 !cls.below
             }
-        } else if fv[f] >= ctx.beta {
+        } else if fv[f] >= ctx.interval.beta {
             cls.above
         } else {
             !cls.above

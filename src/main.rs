@@ -266,14 +266,6 @@ fn fmt_interval(alpha: f64, beta: f64) -> String {
     format!("{open}{}, {}{close}", fmt_bound(alpha), fmt_bound(beta))
 }
 
-fn data_range(values: &[f64]) -> (f64, f64) {
-    values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-            (lo.min(v), hi.max(v))
-        })
-}
-
 /// The warning for a bound that equals grid values exactly, if it does.
 fn bound_warning(values: &[f64], name: &str, bound: f64, lower: bool) -> Option<String> {
     if !bound.is_finite() {
@@ -442,7 +434,7 @@ fn run(cli: Cli) -> Result<()> {
     let out = result.map_err(|e| file_error(&input_name, e))?;
     let t_mesh = secs(t);
     if out.mesh.tets.is_empty() {
-        let (lo, hi) = data_range(&grid.values);
+        let (lo, hi) = grid.value_range();
         return Err(file_error(
             &input_name,
             format_args!(

@@ -264,12 +264,7 @@ fn write_v41(
             .s(" ")
             .int(count)
             .nl()?;
-        for (tri, _) in mesh
-            .boundary
-            .iter()
-            .zip(&mesh.boundary_labels)
-            .filter(|&(_, &l)| l == label)
-        {
+        for tri in triangles_labelled(mesh, label) {
             tag += 1;
             out.int(tag);
             for &v in tri {
@@ -314,12 +309,7 @@ fn write_v22(
     let mut tag = n_tets;
     for &(label, _) in present {
         let lt = label_tag(label);
-        for (tri, _) in mesh
-            .boundary
-            .iter()
-            .zip(&mesh.boundary_labels)
-            .filter(|&(_, &l)| l == label)
-        {
+        for tri in triangles_labelled(mesh, label) {
             tag += 1;
             out.int(tag).s(" 2 2 ").int(lt).s(" ").int(lt);
             for &v in tri {
@@ -330,4 +320,13 @@ fn write_v22(
     }
     out.s("$EndElements").nl()?;
     node_data(mesh, out)
+}
+
+/// The boundary triangles of `mesh` that carry `label`, in mesh order.
+fn triangles_labelled(mesh: &TetMesh, label: BoundaryLabel) -> impl Iterator<Item = &[u32; 3]> {
+    mesh.boundary
+        .iter()
+        .zip(&mesh.boundary_labels)
+        .filter(move |&(_, &l)| l == label)
+        .map(|(tri, _)| tri)
 }
