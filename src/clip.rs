@@ -11,8 +11,9 @@
 //! outward by a per-run constant ([`Interval`]): the field stays linear on every tet, so each
 //! clipped piece stays convex, no output point coincides with another and no tet is flat.
 
+use crate::geom::signed_volume;
 use crate::keys::{cut_point, vertex_point, PointKey, VertexKey};
-use crate::mesh::{signed_volume, BoundaryLabel};
+use crate::mesh::BoundaryLabel;
 
 /// Fraction of the smallest gap between a level and the data values by which tied values are
 /// moved outward when cuts are placed.

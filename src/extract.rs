@@ -13,10 +13,10 @@ use rustc_hash::FxHashMap;
 use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex, Interval};
 use crate::decompose::plan::{corners_connected, face_needed, is_full, CellClasses};
 use crate::decompose::{five, six, tptd, CellCase, CellPoints, BODY0, NUM_LOCAL};
-use crate::grid::{corner_faces, corner_offset, ScalarGrid};
+use crate::grid::{corner_faces, corner_offset, ScalarGrid, LOW_FACES};
 use crate::keys::{on_z_plane, split, vertex_key, vertex_point, PointKey, BODY, CORNER, FACE};
 use crate::mesh::{BoundaryLabel, TetMesh};
-use crate::trilinear::{body_saddles, face_point, face_saddle, BodySaddle};
+use crate::trilinear::{body_saddles, face_saddle, face_saddle_point, BodySaddle};
 
 pub use crate::decompose::plan::Method;
 
@@ -574,7 +574,7 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
                 }
                 used |= 1 << f;
                 fv[f] = s.value;
-                pts.pos[8 + f] = face_point(f, s.uv.map(|x| x.clamp(0.3, 0.7)));
+                pts.pos[8 + f] = face_saddle_point(f, s.uv);
                 pts.val[8 + f] = s.value;
             }
             if used == 0 && nb == 0 && cls.all_inside() && !on_box(c, cd) {
@@ -583,7 +583,7 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
                 slab.cases[CellCase::I as usize] += 1;
                 return;
             }
-            if !full && own == 0 && used & EVEN_FACES != 0 && used & !EVEN_FACES != 0 {
+            if !full && own == 0 && used & LOW_FACES != 0 && used & !LOW_FACES != 0 {
                 // Saddles used only for full neighbours, on faces of both parities: no corner
                 // apex fits, so one of them must be the apex. Safe are those on the side of
                 // the level whose corners are edge-connected (the apex joins all of them).
@@ -672,9 +672,6 @@ fn emit_six_inside(grid: &ScalarGrid, c: [usize; 3], v: &[f64; 8], slab: &mut Sl
         slab.tets.push(t.map(|l| ids[l as usize]));
     }
 }
-
-/// Faces 0, 2, 4 (the `-x`, `-y`, `-z` faces).
-const EVEN_FACES: u8 = 0b01_0101;
 
 /// The used faces whose saddle lies on a side of the (single) level crossing the cell whose
 /// corners are edge-connected.

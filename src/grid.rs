@@ -49,6 +49,12 @@ pub enum GridError {
 /// Identity direction matrix.
 pub const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
+/// Face bit mask of the faces at corner 0 (`-x`, `-y`, `-z`: faces 0, 2, 4).
+pub const LOW_FACES: u8 = 0b01_0101;
+
+/// Face bit mask of the faces at corner 7 (`+x`, `+y`, `+z`: faces 1, 3, 5).
+pub const HIGH_FACES: u8 = 0b10_1010;
+
 /// Offset of cell corner `c` along each axis.
 #[inline]
 pub const fn corner_offset(c: usize) -> [usize; 3] {

@@ -14,6 +14,7 @@ pub mod clip;
 pub mod decompose;
 pub mod demo;
 pub mod extract;
+pub mod geom;
 pub mod grid;
 pub mod io;
 pub mod keys;

@@ -2,7 +2,8 @@
 
 use rayon::prelude::*;
 
-use crate::mesh::{cross, dot, sub, TetMesh};
+use crate::geom::{cross, dot, sub};
+use crate::mesh::TetMesh;
 
 /// Edge (i, j) and the two other vertices (k, l): the dihedral angle at edge (i, j) is the
 /// angle between the faces (i, j, k) and (i, j, l).

@@ -64,6 +64,18 @@ pub fn face_saddle(v: &[f64; 8], f: usize) -> Option<FaceSaddle> {
     face_saddle_of([v[fc[0]], v[fc[1]], v[fc[2]], v[fc[3]]])
 }
 
+/// Face saddles are placed at their true face coordinates clamped into
+/// `[FACE_SADDLE_CLAMP.0, FACE_SADDLE_CLAMP.1]²`, which keeps every tet around them positive.
+pub const FACE_SADDLE_CLAMP: (f64, f64) = (0.3, 0.7);
+
+/// Cell-local 3D position at which a face saddle with face coordinates `uv` is placed on
+/// face `f` (its true position clamped by [`FACE_SADDLE_CLAMP`]).
+#[inline]
+pub fn face_saddle_point(f: usize, uv: [f64; 2]) -> [f64; 3] {
+    let (lo, hi) = FACE_SADDLE_CLAMP;
+    face_point(f, uv.map(|x| x.clamp(lo, hi)))
+}
+
 /// Cell-local 3D position of a point with face coordinates `uv` on face `f`.
 #[inline]
 pub fn face_point(f: usize, uv: [f64; 2]) -> [f64; 3] {

@@ -33,7 +33,7 @@ pub fn decompose_five(odd: bool, out: &mut Vec<[u8; 4]>) {
 mod tests {
     use super::*;
     use crate::decompose::{orient_tiling, CellPoints};
-    use crate::mesh::signed_volume;
+    use crate::geom::signed_volume;
 
     #[test]
     fn five_is_positive_and_tiles() {

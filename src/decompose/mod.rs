@@ -14,8 +14,8 @@ pub mod plan;
 pub mod six;
 pub mod tptd;
 
+use crate::geom::signed_volume;
 use crate::grid::{corner_offset, face_corners};
-use crate::mesh::signed_volume;
 
 /// Local id of the lower-valued body saddle.
 pub const BODY0: u8 = 14;

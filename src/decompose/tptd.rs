@@ -22,7 +22,7 @@
 //! positively oriented.
 
 use super::{face_id, orient_tiling, push_pyramid, CellCase, CellPoints, BODY0, BODY1};
-use crate::grid::{corner_faces, corner_offset};
+use crate::grid::{corner_faces, corner_offset, HIGH_FACES, LOW_FACES};
 use crate::trilinear::BodySaddle;
 
 /// Decomposes one cell. `face_value[f]` is the saddle value of face `f` (read for used faces
@@ -55,9 +55,7 @@ pub fn decompose_tptd(
         }
         (0, _) => {
             let eligible = apex_faces & used_faces;
-            const ODD: u8 = 0b10_1010;
-            const EVEN: u8 = 0b01_0101;
-            if eligible == 0 && used_faces & EVEN == 0 {
+            if eligible == 0 && used_faces & LOW_FACES == 0 {
                 // Only faces away from corner 0 are split: the 6-fold split seen as three
                 // pyramids from corner 0, with the split faces in four.
                 for f in [1, 3, 5] {
@@ -65,7 +63,7 @@ pub fn decompose_tptd(
                 }
                 return CellCase::I;
             }
-            if eligible == 0 && used_faces & ODD == 0 {
+            if eligible == 0 && used_faces & HIGH_FACES == 0 {
                 for f in [0, 2, 4] {
                     push_pyramid(out, 7, f, used_faces);
                 }
@@ -227,7 +225,13 @@ fn prisms(
     };
     let small_face = 2 * axis + side[axis];
     let big_face = 2 * axis + 1 - side[axis];
-    let small_coord = if side[axis] == 0 { 0.3 } else { 0.7 };
+    // Case-(v) apexes sit on the cell's centre line, 0.3 of the way in from their own face.
+    const APEX_DEPTH: f64 = 0.3;
+    let small_coord = if side[axis] == 0 {
+        APEX_DEPTH
+    } else {
+        1.0 - APEX_DEPTH
+    };
     let all = 0b11_1111u8;
     for (apex, face, coord) in [
         (b_small, small_face, small_coord),
@@ -286,7 +290,7 @@ fn prisms(
 mod tests {
     use super::*;
     use crate::decompose::test_util::assert_tiles_cube;
-    use crate::trilinear::{body_saddles, face_point, face_saddle};
+    use crate::trilinear::{body_saddles, face_saddle, face_saddle_point};
 
     fn rng(seed: &mut u64) -> f64 {
         *seed = seed
@@ -311,7 +315,7 @@ mod tests {
                 if let Some(s) = face_saddle(&v, f) {
                     exists |= 1 << f;
                     fv[f] = s.value;
-                    pts.pos[8 + f] = face_point(f, s.uv.map(|x| x.clamp(0.3, 0.7)));
+                    pts.pos[8 + f] = face_saddle_point(f, s.uv);
                     pts.val[8 + f] = s.value;
                 }
             }
