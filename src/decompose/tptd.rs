@@ -226,12 +226,7 @@ fn prisms(
     let small_face = 2 * axis + side[axis];
     let big_face = 2 * axis + 1 - side[axis];
     // Case-(v) apexes sit on the cell's centre line, 0.3 of the way in from their own face.
-    const APEX_DEPTH: f64 = 0.3;
-    let small_coord = if side[axis] == 0 {
-        APEX_DEPTH
-    } else {
-        1.0 - APEX_DEPTH
-    };
+    let small_coord = if side[axis] == 0 { 0.3 } else { 0.7 };
     let all = 0b11_1111u8;
     for (apex, face, coord) in [
         (b_small, small_face, small_coord),
