@@ -3,6 +3,7 @@
 //! [`crate::mesh::TetMesh`].
 
 pub mod atomic;
+mod header;
 pub mod inp;
 pub mod mhd;
 pub mod msh;

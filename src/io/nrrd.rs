@@ -10,9 +10,10 @@ use std::path::{Path, PathBuf};
 
 use flate2::read::MultiGzDecoder;
 
+use super::header::{self, Fields};
 use super::volume::{
     build_grid, data_size, decode_samples, decompress_exact, quote, read_all, read_raw_range,
-    split_linear, take_exact, Endian, ReadError, SampleType, Skip,
+    split_linear, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
 
@@ -28,39 +29,7 @@ pub fn read_nrrd(path: &Path) -> Result<ScalarGrid, ReadError> {
     let bytes = read_all(path)?;
     let header = parse_header(path, &bytes)?;
     let (count, nbytes) = data_size(path, header.sizes, header.ty)?;
-
-    let data: Vec<u8> = match (&header.data_file, header.encoding) {
-        (Some(file), Encoding::Raw) if header.line_skip == 0 => {
-            let (skip, exact) = if header.byte_skip_from_end {
-                (Skip::FromEnd, false)
-            } else {
-                (Skip::Bytes(header.byte_skip.unwrap_or(0)), true)
-            };
-            read_raw_range(path, file, skip, nbytes, exact)?
-        }
-        (Some(file), _) => {
-            let shown = file.display().to_string();
-            let all = std::fs::read(file)
-                .map_err(|e| ReadError::io(path, format!("cannot read data file {shown}"), e))?;
-            extract(path, &header, &all, nbytes, &format!("data file {shown}"))?
-        }
-        (None, _) => {
-            let start = header.data_start.ok_or_else(|| {
-                ReadError::invalid(
-                    path,
-                    "header has no blank line ending it and no 'data file' field",
-                )
-            })?;
-            extract(
-                path,
-                &header,
-                &bytes[start..],
-                nbytes,
-                "the file after the header",
-            )?
-        }
-    };
-
+    let data = read_data(path, &header, &bytes, nbytes)?;
     let values = match header.encoding {
         Encoding::Ascii => parse_ascii(path, &data, count)?,
         _ => decode_samples(&data, header.ty, header.endian.unwrap_or(Endian::Little)),
@@ -73,6 +42,43 @@ pub fn read_nrrd(path: &Path) -> Result<ScalarGrid, ReadError> {
         header.direction,
         values,
     )
+}
+
+/// The `nbytes` data bytes (still ASCII text for that encoding), from the data file or
+/// from `bytes` (the whole `.nrrd` file) after the header.
+fn read_data(
+    path: &Path,
+    header: &Header,
+    bytes: &[u8],
+    nbytes: usize,
+) -> Result<Vec<u8>, ReadError> {
+    match (&header.data_file, header.encoding) {
+        (Some(file), Encoding::Raw) if header.line_skip == 0 => {
+            let skip = header.byte_skip;
+            read_raw_range(path, file, skip, nbytes, skip != Skip::FromEnd)
+        }
+        (Some(file), _) => {
+            let shown = file.display().to_string();
+            let all = std::fs::read(file)
+                .map_err(|e| ReadError::io(path, format!("cannot read data file {shown}"), e))?;
+            extract(path, header, &all, nbytes, &format!("data file {shown}"))
+        }
+        (None, _) => {
+            let start = header.data_start.ok_or_else(|| {
+                ReadError::invalid(
+                    path,
+                    "header has no blank line ending it and no 'data file' field",
+                )
+            })?;
+            extract(
+                path,
+                header,
+                &bytes[start..],
+                nbytes,
+                "the file after the header",
+            )
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,8 +99,8 @@ struct Header {
     direction: [[f64; 3]; 3],
     data_file: Option<PathBuf>,
     line_skip: u64,
-    byte_skip: Option<u64>,
-    byte_skip_from_end: bool,
+    /// `byte skip`: [`Skip::FromEnd`] for `-1`, `Skip::Bytes(0)` if absent.
+    byte_skip: Skip,
     /// Offset of the attached data, if the header ended with a blank line.
     data_start: Option<usize>,
 }
@@ -114,9 +120,13 @@ fn extract(
         })?;
         block = &block[nl + 1..];
     }
+    let byte_skip = match h.byte_skip {
+        Skip::Bytes(n) => n,
+        Skip::FromEnd => 0,
+    };
     match h.encoding {
         Encoding::Raw => {
-            if h.byte_skip_from_end {
+            if h.byte_skip == Skip::FromEnd {
                 let start = block.len().checked_sub(nbytes).ok_or_else(|| {
                     ReadError::invalid(
                         path,
@@ -128,12 +138,12 @@ fn extract(
                 })?;
                 return Ok(block[start..].to_vec());
             }
-            let block = skip_bytes(path, block, h.byte_skip.unwrap_or(0), what)?;
+            let block = skip_bytes(path, block, byte_skip, what)?;
             Ok(take_exact(path, block, nbytes, true, what)?.to_vec())
         }
         Encoding::Gzip => {
             // byte skip applies to the decompressed data
-            let skip = usize::try_from(h.byte_skip.unwrap_or(0))
+            let skip = usize::try_from(byte_skip)
                 .map_err(|_| ReadError::invalid(path, "'byte skip' is too large"))?;
             let want = nbytes
                 .checked_add(skip)
@@ -142,7 +152,7 @@ fn extract(
             let data = decompress_exact(path, MultiGzDecoder::new(block), want, true, &what)?;
             Ok(data[skip..].to_vec())
         }
-        Encoding::Ascii => Ok(skip_bytes(path, block, h.byte_skip.unwrap_or(0), what)?.to_vec()),
+        Encoding::Ascii => Ok(skip_bytes(path, block, byte_skip, what)?.to_vec()),
     }
 }
 
@@ -222,22 +232,6 @@ fn parse_type(s: &str) -> Option<SampleType> {
     })
 }
 
-/// Parses numbers separated by whitespace.
-fn numbers<const N: usize>(path: &Path, field: &str, value: &str) -> Result<[f64; N], ReadError> {
-    let bad = || {
-        ReadError::invalid(
-            path,
-            format!("'{field}' must be {N} numbers, got {}", quote(value)),
-        )
-    };
-    let v: Vec<f64> = value
-        .split_whitespace()
-        .map(|t| t.parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    v.try_into().map_err(|_| bad())
-}
-
 /// Parses a vector `(x,y,z)`.
 fn vector(path: &Path, field: &str, s: &str) -> Result<[f64; 3], ReadError> {
     let bad = || {
@@ -288,233 +282,17 @@ fn vector_list(s: &str) -> Vec<String> {
     out
 }
 
+/// Parses the header at the start of `bytes`: magic, fields, then each concern in turn
+/// (sample layout, encoding, byte order, geometry, data location).
 fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ReadError> {
-    if bytes.len() < 8 || &bytes[..4] != b"NRRD" {
-        return Err(ReadError::invalid(path, "not an NRRD file (bad magic)"));
-    }
-    let version = &bytes[4..8];
-    if !matches!(version, b"0001" | b"0002" | b"0003" | b"0004" | b"0005") {
-        return Err(ReadError::unsupported(
-            path,
-            format!("NRRD version {}", quote(&String::from_utf8_lossy(version))),
-        ));
-    }
-
-    let mut fields: Vec<(String, String)> = Vec::new();
-    let mut pos = 0usize;
-    let mut first = true;
-    let mut data_start = None;
-    while pos < bytes.len() {
-        let (line, next) = match bytes[pos..].iter().position(|&b| b == b'\n') {
-            Some(n) => (&bytes[pos..pos + n], pos + n + 1),
-            None => (&bytes[pos..], bytes.len()),
-        };
-        pos = next;
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        if first {
-            first = false;
-            continue; // magic line
-        }
-        if line.is_empty() {
-            data_start = Some(pos);
-            break;
-        }
-        if line.starts_with(b"#") {
-            continue;
-        }
-        let line = String::from_utf8_lossy(line);
-        if line.contains(":=") && !line.contains(": ") {
-            continue; // key/value pair, not a field
-        }
-        if let Some((k, v)) = line.split_once(": ") {
-            fields.push((k.trim().to_ascii_lowercase(), v.trim().to_string()));
-        } else if let Some(k) = line.strip_suffix(':') {
-            fields.push((k.trim().to_ascii_lowercase(), String::new()));
-        } else {
-            return Err(ReadError::invalid(
-                path,
-                format!("malformed header line {}", quote(&line)),
-            ));
-        }
-    }
-    let get = |name: &str| {
-        fields
-            .iter()
-            .rev()
-            .find(|(k, _)| k == name)
-            .map(|(_, v)| v.as_str())
-    };
-    let require = |name: &str| {
-        get(name).ok_or_else(|| ReadError::invalid(path, format!("header has no '{name}' field")))
-    };
-
-    let dimension = require("dimension")?;
-    if dimension != "3" {
-        return Err(ReadError::unsupported(
-            path,
-            format!("dimension {} (only 3-D volumes are read)", quote(dimension)),
-        ));
-    }
-    let ty_s = require("type")?;
-    let ty = parse_type(ty_s)
-        .ok_or_else(|| ReadError::unsupported(path, format!("type {}", quote(ty_s))))?;
-    let sizes_s = require("sizes")?;
-    let sizes_v: Vec<usize> = sizes_s
-        .split_whitespace()
-        .map(|t| t.parse::<usize>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| {
-            ReadError::invalid(
-                path,
-                format!(
-                    "'sizes' must be 3 non-negative integers, got {}",
-                    quote(sizes_s)
-                ),
-            )
-        })?;
-    let sizes: [usize; 3] = sizes_v.try_into().map_err(|_| {
-        ReadError::invalid(
-            path,
-            format!("'sizes' must be 3 integers, got {}", quote(sizes_s)),
-        )
-    })?;
-
-    let enc_s = require("encoding")?;
-    let encoding = match enc_s.to_ascii_lowercase().as_str() {
-        "raw" => Encoding::Raw,
-        "gzip" | "gz" => Encoding::Gzip,
-        "ascii" | "text" | "txt" => Encoding::Ascii,
-        _ => {
-            return Err(ReadError::unsupported(
-                path,
-                format!("encoding {} (supported: raw, gzip, ascii)", quote(enc_s)),
-            ))
-        }
-    };
-    let endian = match get("endian").map(str::to_ascii_lowercase).as_deref() {
-        None => None,
-        Some("little") => Some(Endian::Little),
-        Some("big") => Some(Endian::Big),
-        Some(other) => {
-            return Err(ReadError::invalid(
-                path,
-                format!("'endian' must be little or big, got {}", quote(other)),
-            ))
-        }
-    };
-    if endian.is_none() && ty.size() > 1 && encoding != Encoding::Ascii {
-        return Err(ReadError::invalid(
-            path,
-            "header has no 'endian' field (needed for multi-byte types)",
-        ));
-    }
-
-    // geometry
-    let mut spacing = [1.0; 3];
-    let mut direction = IDENTITY;
-    let mut origin = [0.0; 3];
-    if let Some(sd) = get("space directions") {
-        let vecs = vector_list(sd);
-        if vecs.len() != 3 {
-            return Err(ReadError::invalid(
-                path,
-                format!("'space directions' must hold 3 vectors, got {}", quote(sd)),
-            ));
-        }
-        if vecs.iter().any(|v| v.eq_ignore_ascii_case("none")) {
-            return Err(ReadError::unsupported(
-                path,
-                "'space directions' with a non-spatial ('none') axis",
-            ));
-        }
-        let mut m = [[0.0; 3]; 3];
-        for (c, v) in vecs.iter().enumerate() {
-            let col = vector(path, "space directions", v)?;
-            for r in 0..3 {
-                m[r][c] = col[r];
-            }
-        }
-        let (s, d) = split_linear(m).ok_or_else(|| {
-            ReadError::invalid(
-                path,
-                format!(
-                    "'space directions' has a zero or non-finite vector: {}",
-                    quote(sd)
-                ),
-            )
-        })?;
-        spacing = s;
-        direction = d;
-    } else if let Some(sp) = get("spacings") {
-        spacing = numbers::<3>(path, "spacings", sp)?;
-    }
-    if let Some(o) = get("space origin") {
-        origin = vector(path, "space origin", o)?;
-    }
-    if let Some(sdim) = get("space dimension") {
-        if sdim.trim() != "3" {
-            return Err(ReadError::unsupported(
-                path,
-                format!("space dimension {} (only 3)", quote(sdim)),
-            ));
-        }
-    }
-
-    // data location
-    let data_file_s = get("data file").or_else(|| get("datafile"));
-    let data_file = match data_file_s {
-        None => None,
-        Some(f) => {
-            if f.starts_with("LIST") || f.split_whitespace().count() > 1 {
-                return Err(ReadError::unsupported(
-                    path,
-                    format!("multi-file data {}", quote(f)),
-                ));
-            }
-            let p = Path::new(f);
-            Some(if p.is_absolute() {
-                p.to_path_buf()
-            } else {
-                path.parent().unwrap_or_else(|| Path::new("")).join(p)
-            })
-        }
-    };
-    let line_skip = match get("line skip").or_else(|| get("lineskip")) {
-        None => 0,
-        Some(s) => s.parse::<u64>().map_err(|_| {
-            ReadError::invalid(
-                path,
-                format!(
-                    "'line skip' must be a non-negative integer, got {}",
-                    quote(s)
-                ),
-            )
-        })?,
-    };
-    let (byte_skip, byte_skip_from_end) = match get("byte skip").or_else(|| get("byteskip")) {
-        None => (None, false),
-        Some("-1") => {
-            if encoding != Encoding::Raw {
-                return Err(ReadError::invalid(
-                    path,
-                    "'byte skip: -1' is only allowed with raw encoding",
-                ));
-            }
-            (None, true)
-        }
-        Some(s) => (
-            Some(s.parse::<u64>().map_err(|_| {
-                ReadError::invalid(
-                    path,
-                    format!(
-                        "'byte skip' must be -1 or a non-negative integer, got {}",
-                        quote(s)
-                    ),
-                )
-            })?),
-            false,
-        ),
-    };
+    check_magic(path, bytes)?;
+    let fields = Fields::read_colon(path, bytes)?;
+    let (ty, sizes) = sample_layout(path, &fields)?;
+    let encoding = encoding(path, &fields)?;
+    let endian = endian(path, &fields, ty, encoding)?;
+    let (spacing, origin, direction) = geometry(path, &fields)?;
+    let data_file = data_file(path, &fields)?;
+    let (line_skip, byte_skip) = skips(path, &fields, encoding)?;
     if data_file.is_none()
         && path
             .extension()
@@ -536,9 +314,178 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ReadError> {
         data_file,
         line_skip,
         byte_skip,
-        byte_skip_from_end,
-        data_start,
+        data_start: fields.end(),
     })
+}
+
+/// Checks the `NRRD000n` magic and version.
+fn check_magic(path: &Path, bytes: &[u8]) -> Result<(), ReadError> {
+    if bytes.len() < 8 || &bytes[..4] != b"NRRD" {
+        return Err(ReadError::invalid(path, "not an NRRD file (bad magic)"));
+    }
+    let version = &bytes[4..8];
+    if !matches!(version, b"0001" | b"0002" | b"0003" | b"0004" | b"0005") {
+        return Err(ReadError::unsupported(
+            path,
+            format!("NRRD version {}", quote(&String::from_utf8_lossy(version))),
+        ));
+    }
+    Ok(())
+}
+
+/// The value of a required field.
+fn require<'a>(path: &Path, fields: &'a Fields, name: &str) -> Result<&'a str, ReadError> {
+    fields
+        .get(name)
+        .ok_or_else(|| ReadError::invalid(path, format!("header has no '{name}' field")))
+}
+
+/// `dimension` (must be 3), `type` and `sizes`.
+fn sample_layout(path: &Path, fields: &Fields) -> Result<(SampleType, [usize; 3]), ReadError> {
+    let dimension = require(path, fields, "dimension")?;
+    if dimension != "3" {
+        return Err(ReadError::unsupported(
+            path,
+            format!("dimension {} (only 3-D volumes are read)", quote(dimension)),
+        ));
+    }
+    let ty_s = require(path, fields, "type")?;
+    let ty = parse_type(ty_s)
+        .ok_or_else(|| ReadError::unsupported(path, format!("type {}", quote(ty_s))))?;
+    let sizes = header::sizes(path, "'sizes'", require(path, fields, "sizes")?)?;
+    Ok((ty, sizes))
+}
+
+/// The `encoding` field.
+fn encoding(path: &Path, fields: &Fields) -> Result<Encoding, ReadError> {
+    let enc_s = require(path, fields, "encoding")?;
+    match enc_s.to_ascii_lowercase().as_str() {
+        "raw" => Ok(Encoding::Raw),
+        "gzip" | "gz" => Ok(Encoding::Gzip),
+        "ascii" | "text" | "txt" => Ok(Encoding::Ascii),
+        _ => Err(ReadError::unsupported(
+            path,
+            format!("encoding {} (supported: raw, gzip, ascii)", quote(enc_s)),
+        )),
+    }
+}
+
+/// The `endian` field, required for multi-byte types stored in binary.
+fn endian(
+    path: &Path,
+    fields: &Fields,
+    ty: SampleType,
+    encoding: Encoding,
+) -> Result<Option<Endian>, ReadError> {
+    let endian = match fields.get("endian").map(str::to_ascii_lowercase).as_deref() {
+        None => None,
+        Some("little") => Some(Endian::Little),
+        Some("big") => Some(Endian::Big),
+        Some(other) => {
+            return Err(ReadError::invalid(
+                path,
+                format!("'endian' must be little or big, got {}", quote(other)),
+            ))
+        }
+    };
+    if endian.is_none() && ty.size() > 1 && encoding != Encoding::Ascii {
+        return Err(ReadError::invalid(
+            path,
+            "header has no 'endian' field (needed for multi-byte types)",
+        ));
+    }
+    Ok(endian)
+}
+
+/// Spacing, origin and direction from `space directions` (or `spacings`), `space origin`
+/// and `space dimension` (must be 3 if present).
+fn geometry(path: &Path, fields: &Fields) -> Result<Geometry, ReadError> {
+    let (spacing, direction) = if let Some(sd) = fields.get("space directions") {
+        space_directions(path, sd)?
+    } else if let Some(sp) = fields.get("spacings") {
+        (header::numbers::<3>(path, "'spacings'", sp)?, IDENTITY)
+    } else {
+        ([1.0; 3], IDENTITY)
+    };
+    let origin = match fields.get("space origin") {
+        Some(o) => vector(path, "space origin", o)?,
+        None => [0.0; 3],
+    };
+    if let Some(sdim) = fields.get("space dimension") {
+        if sdim.trim() != "3" {
+            return Err(ReadError::unsupported(
+                path,
+                format!("space dimension {} (only 3)", quote(sdim)),
+            ));
+        }
+    }
+    Ok((spacing, origin, direction))
+}
+
+/// Spacing and direction from the three vectors of `space directions`.
+fn space_directions(path: &Path, sd: &str) -> Result<([f64; 3], [[f64; 3]; 3]), ReadError> {
+    let vecs = vector_list(sd);
+    if vecs.len() != 3 {
+        return Err(ReadError::invalid(
+            path,
+            format!("'space directions' must hold 3 vectors, got {}", quote(sd)),
+        ));
+    }
+    if vecs.iter().any(|v| v.eq_ignore_ascii_case("none")) {
+        return Err(ReadError::unsupported(
+            path,
+            "'space directions' with a non-spatial ('none') axis",
+        ));
+    }
+    let mut m = [[0.0; 3]; 3];
+    for (c, v) in vecs.iter().enumerate() {
+        let col = vector(path, "space directions", v)?;
+        for r in 0..3 {
+            m[r][c] = col[r];
+        }
+    }
+    split_linear(m).ok_or_else(|| {
+        ReadError::invalid(
+            path,
+            format!(
+                "'space directions' has a zero or non-finite vector: {}",
+                quote(sd)
+            ),
+        )
+    })
+}
+
+/// The `data file` (or `datafile`) field: a single file, relative to the header.
+fn data_file(path: &Path, fields: &Fields) -> Result<Option<PathBuf>, ReadError> {
+    let Some(f) = fields.get("data file").or_else(|| fields.get("datafile")) else {
+        return Ok(None);
+    };
+    if f.starts_with("LIST") || f.split_whitespace().count() > 1 {
+        return Err(ReadError::unsupported(
+            path,
+            format!("multi-file data {}", quote(f)),
+        ));
+    }
+    Ok(Some(header::data_file_path(path, f)))
+}
+
+/// `line skip` and `byte skip` (`-1` only with raw encoding).
+fn skips(path: &Path, fields: &Fields, encoding: Encoding) -> Result<(u64, Skip), ReadError> {
+    let line_skip = match fields.get("line skip").or_else(|| fields.get("lineskip")) {
+        None => 0,
+        Some(s) => header::count(path, "'line skip'", s)?,
+    };
+    let byte_skip = match fields.get("byte skip").or_else(|| fields.get("byteskip")) {
+        None => Skip::Bytes(0),
+        Some(s) => header::skip(path, "'byte skip'", s)?,
+    };
+    if byte_skip == Skip::FromEnd && encoding != Encoding::Raw {
+        return Err(ReadError::invalid(
+            path,
+            "'byte skip: -1' is only allowed with raw encoding",
+        ));
+    }
+    Ok((line_skip, byte_skip))
 }
 
 #[cfg(test)]

@@ -406,6 +406,9 @@ pub(crate) fn decompress_exact(
     Ok(out)
 }
 
+/// Spacing, origin and direction of a grid, in the order [`build_grid`] takes them.
+pub(crate) type Geometry = ([f64; 3], [f64; 3], [[f64; 3]; 3]);
+
 /// Splits a 3×3 linear map (row-major, columns = index-axis vectors) into spacing (column
 /// norms) and direction (normalised columns). `None` if a column is zero or not finite.
 pub(crate) fn split_linear(m: [[f64; 3]; 3]) -> Option<([f64; 3], [[f64; 3]; 3])> {
