@@ -16,9 +16,10 @@ use std::path::Path;
 
 use flate2::read::ZlibDecoder;
 
+use super::header::{self, Fields};
 use super::volume::{
     build_grid, data_size, decode_samples, decompress_exact, quote, read_all, read_raw_range,
-    take_exact, Endian, ReadError, SampleType, Skip,
+    take_exact, Endian, Geometry, ReadError, SampleType, Skip,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
 
@@ -35,38 +36,7 @@ pub fn read_mhd(path: &Path) -> Result<ScalarGrid, ReadError> {
     let h = parse_header(path, &bytes)?;
     let (_, nbytes) = data_size(path, h.dims, h.ty)?;
     let data: Vec<u8> = match (&h.data, h.compressed) {
-        (DataLocation::Local(start), false) => {
-            let block = &bytes[*start..];
-            match h.header_size {
-                Some(Skip::FromEnd) => {
-                    let from = block.len().checked_sub(nbytes).ok_or_else(|| {
-                        ReadError::invalid(
-                            path,
-                            format!(
-                                "header says {nbytes} bytes of data but the file holds {}",
-                                block.len()
-                            ),
-                        )
-                    })?;
-                    block[from..].to_vec()
-                }
-                Some(Skip::Bytes(s)) => {
-                    let block = usize::try_from(s)
-                        .ok()
-                        .and_then(|s| block.get(s..))
-                        .ok_or_else(|| {
-                            ReadError::invalid(
-                                path,
-                                format!("HeaderSize {s} goes past the end of the file"),
-                            )
-                        })?;
-                    take_exact(path, block, nbytes, true, "the file after the header")?.to_vec()
-                }
-                None => {
-                    take_exact(path, block, nbytes, true, "the file after the header")?.to_vec()
-                }
-            }
-        }
+        (DataLocation::Local(start), false) => read_local_raw(path, &h, &bytes[*start..], nbytes)?,
         (DataLocation::Local(start), true) => {
             let block = &bytes[*start..];
             check_compressed_size(
@@ -81,22 +51,65 @@ pub fn read_mhd(path: &Path) -> Result<ScalarGrid, ReadError> {
             let skip = h.header_size.unwrap_or(Skip::Bytes(0));
             read_raw_range(path, file, skip, nbytes, skip != Skip::FromEnd)?
         }
-        (DataLocation::File(file), true) => {
-            let shown = file.display().to_string();
-            let all = std::fs::read(file)
-                .map_err(|e| ReadError::io(path, format!("cannot read data file {shown}"), e))?;
-            check_compressed_size(
-                path,
-                h.compressed_size,
-                all.len(),
-                &format!("data file {shown}"),
-            )?;
-            let what = format!("zlib data file {shown}");
-            decompress_exact(path, ZlibDecoder::new(all.as_slice()), nbytes, true, &what)?
-        }
+        (DataLocation::File(file), true) => read_zlib_file(path, &h, file, nbytes)?,
     };
     let values = decode_samples(&data, h.ty, h.endian);
     build_grid(path, h.dims, h.spacing, h.origin, h.direction, values)
+}
+
+/// The `nbytes` uncompressed data bytes of a `.mha` file, from `block` (the file after the
+/// header) and `HeaderSize`.
+fn read_local_raw(
+    path: &Path,
+    h: &Header,
+    block: &[u8],
+    nbytes: usize,
+) -> Result<Vec<u8>, ReadError> {
+    let block = match h.header_size {
+        Some(Skip::FromEnd) => {
+            let from = block.len().checked_sub(nbytes).ok_or_else(|| {
+                ReadError::invalid(
+                    path,
+                    format!(
+                        "header says {nbytes} bytes of data but the file holds {}",
+                        block.len()
+                    ),
+                )
+            })?;
+            return Ok(block[from..].to_vec());
+        }
+        Some(Skip::Bytes(s)) => usize::try_from(s)
+            .ok()
+            .and_then(|s| block.get(s..))
+            .ok_or_else(|| {
+                ReadError::invalid(
+                    path,
+                    format!("HeaderSize {s} goes past the end of the file"),
+                )
+            })?,
+        None => block,
+    };
+    Ok(take_exact(path, block, nbytes, true, "the file after the header")?.to_vec())
+}
+
+/// Decompresses the `nbytes` data bytes of the zlib data file `file`.
+fn read_zlib_file(
+    path: &Path,
+    h: &Header,
+    file: &Path,
+    nbytes: usize,
+) -> Result<Vec<u8>, ReadError> {
+    let shown = file.display().to_string();
+    let all = std::fs::read(file)
+        .map_err(|e| ReadError::io(path, format!("cannot read data file {shown}"), e))?;
+    check_compressed_size(
+        path,
+        h.compressed_size,
+        all.len(),
+        &format!("data file {shown}"),
+    )?;
+    let what = format!("zlib data file {shown}");
+    decompress_exact(path, ZlibDecoder::new(all.as_slice()), nbytes, true, &what)
 }
 
 /// Checks `CompressedDataSize`, if the header gives it, against the bytes present.
@@ -137,6 +150,13 @@ struct Header {
     data: DataLocation,
 }
 
+/// How the data are stored: `CompressedData`, `CompressedDataSize` and `HeaderSize`.
+struct Storage {
+    compressed: bool,
+    compressed_size: Option<u64>,
+    header_size: Option<Skip>,
+}
+
 fn element_type(s: &str) -> Option<SampleType> {
     Some(match s {
         "MET_UCHAR" => SampleType::U8,
@@ -164,71 +184,51 @@ fn boolean(path: &Path, key: &str, v: &str) -> Result<bool, ReadError> {
     }
 }
 
-fn numbers<const N: usize>(path: &Path, key: &str, v: &str) -> Result<[f64; N], ReadError> {
-    let bad = || ReadError::invalid(path, format!("{key} must be {N} numbers, got {}", quote(v)));
-    let list: Vec<f64> = v
-        .split_whitespace()
-        .map(str::parse::<f64>)
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    list.try_into().map_err(|_| bad())
-}
-
+/// Parses the header at the start of `bytes` (up to and including `ElementDataFile`), one
+/// concern at a time: object kind, sizes, sample type, byte order, storage, geometry and
+/// data location.
 fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ReadError> {
-    let mut fields: Vec<(String, String)> = Vec::new();
-    let mut data_start = None;
-    let mut pos = 0usize;
-    while pos < bytes.len() {
-        let (line, next) = match bytes[pos..].iter().position(|&b| b == b'\n') {
-            Some(n) => (&bytes[pos..pos + n], pos + n + 1),
-            None => (&bytes[pos..], bytes.len()),
-        };
-        let line_start = pos;
-        pos = next;
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        if line.iter().all(u8::is_ascii_whitespace) {
-            continue;
-        }
-        let text = std::str::from_utf8(line).map_err(|_| {
-            ReadError::invalid(
-                path,
-                format!("header line at byte {line_start} is not text (not a MetaImage header?)"),
-            )
-        })?;
-        let (k, v) = text.split_once('=').ok_or_else(|| {
-            ReadError::invalid(
-                path,
-                format!(
-                    "malformed header line {} (expected Key = Value)",
-                    quote(text)
-                ),
-            )
-        })?;
-        let (k, v) = (k.trim().to_string(), v.trim().to_string());
-        let is_data_file = k.eq_ignore_ascii_case("ElementDataFile");
-        fields.push((k, v));
-        if is_data_file {
-            // ElementDataFile is always the last field
-            data_start = Some(pos);
-            break;
-        }
-    }
-    let get = |name: &str| {
-        fields
-            .iter()
-            .rev()
-            .find(|(k, _)| k.eq_ignore_ascii_case(name))
-            .map(|(_, v)| v.as_str())
-    };
-    let get_any = |names: &[&'static str]| names.iter().find_map(|&n| get(n).map(|v| (n, v)));
-    let require = |name: &str| {
-        get(name).ok_or_else(|| ReadError::invalid(path, format!("header has no {name} field")))
-    };
-
+    let fields = Fields::read_equals(path, bytes, "ElementDataFile")?;
     if fields.is_empty() {
         return Err(ReadError::invalid(path, "empty MetaImage header"));
     }
-    if let Some(t) = get("ObjectType") {
+    check_image(path, &fields)?;
+    let dims = header::sizes(path, "DimSize", require(path, &fields, "DimSize")?)?;
+    let ty = sample_type(path, &fields)?;
+    let endian = endian(path, &fields)?;
+    let storage = storage(path, &fields)?;
+    let (spacing, origin, direction) = geometry(path, &fields)?;
+    let data = data_location(path, &fields, bytes.len())?;
+    if storage.compressed && storage.header_size.is_some_and(|s| s != Skip::Bytes(0)) {
+        return Err(ReadError::unsupported(
+            path,
+            "HeaderSize with CompressedData = True",
+        ));
+    }
+    Ok(Header {
+        dims,
+        ty,
+        endian,
+        compressed: storage.compressed,
+        compressed_size: storage.compressed_size,
+        header_size: storage.header_size,
+        spacing,
+        origin,
+        direction,
+        data,
+    })
+}
+
+/// The value of a required field.
+fn require<'a>(path: &Path, fields: &'a Fields, name: &str) -> Result<&'a str, ReadError> {
+    fields
+        .get(name)
+        .ok_or_else(|| ReadError::invalid(path, format!("header has no {name} field")))
+}
+
+/// `ObjectType` (must be `Image` if present) and `NDims` (must be 3).
+fn check_image(path: &Path, fields: &Fields) -> Result<(), ReadError> {
+    if let Some(t) = fields.get("ObjectType") {
         if !t.eq_ignore_ascii_case("Image") {
             return Err(ReadError::unsupported(
                 path,
@@ -236,34 +236,23 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ReadError> {
             ));
         }
     }
-    let ndims = require("NDims")?;
+    let ndims = require(path, fields, "NDims")?;
     if ndims != "3" {
         return Err(ReadError::unsupported(
             path,
             format!("NDims = {} (only 3-D volumes are read)", quote(ndims)),
         ));
     }
-    let ds = require("DimSize")?;
-    let dims_v: Vec<usize> = ds
-        .split_whitespace()
-        .map(str::parse::<usize>)
-        .collect::<Result<_, _>>()
-        .map_err(|_| {
-            ReadError::invalid(
-                path,
-                format!("DimSize must be 3 non-negative integers, got {}", quote(ds)),
-            )
-        })?;
-    let dims: [usize; 3] = dims_v.try_into().map_err(|_| {
-        ReadError::invalid(
-            path,
-            format!("DimSize must be 3 integers, got {}", quote(ds)),
-        )
-    })?;
-    let et = require("ElementType")?;
+    Ok(())
+}
+
+/// `ElementType`, with `ElementNumberOfChannels` (must be 1) and `BinaryData` (must be
+/// true) if present.
+fn sample_type(path: &Path, fields: &Fields) -> Result<SampleType, ReadError> {
+    let et = require(path, fields, "ElementType")?;
     let ty = element_type(et)
         .ok_or_else(|| ReadError::unsupported(path, format!("ElementType {}", quote(et))))?;
-    if let Some(ch) = get("ElementNumberOfChannels") {
+    if let Some(ch) = fields.get("ElementNumberOfChannels") {
         if ch != "1" {
             return Err(ReadError::unsupported(
                 path,
@@ -274,7 +263,7 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ReadError> {
             ));
         }
     }
-    if let Some(b) = get("BinaryData") {
+    if let Some(b) = fields.get("BinaryData") {
         if !boolean(path, "BinaryData", b)? {
             return Err(ReadError::unsupported(
                 path,
@@ -282,39 +271,31 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ReadError> {
             ));
         }
     }
-    let msb = match get_any(&["BinaryDataByteOrderMSB", "ElementByteOrderMSB"]) {
+    Ok(ty)
+}
+
+/// `BinaryDataByteOrderMSB` / `ElementByteOrderMSB` (little-endian if absent).
+fn endian(path: &Path, fields: &Fields) -> Result<Endian, ReadError> {
+    let msb = match fields.get_any(&["BinaryDataByteOrderMSB", "ElementByteOrderMSB"]) {
         Some((k, v)) => boolean(path, k, v)?,
         None => false,
     };
-    let endian = if msb { Endian::Big } else { Endian::Little };
-    let compressed = match get("CompressedData") {
+    Ok(if msb { Endian::Big } else { Endian::Little })
+}
+
+/// `CompressedData`, `CompressedDataSize` and `HeaderSize` (`-1` only without compression).
+fn storage(path: &Path, fields: &Fields) -> Result<Storage, ReadError> {
+    let compressed = match fields.get("CompressedData") {
         Some(v) => boolean(path, "CompressedData", v)?,
         None => false,
     };
-    let compressed_size = match get("CompressedDataSize") {
+    let compressed_size = match fields.get("CompressedDataSize") {
         None => None,
-        Some(v) => Some(v.parse::<u64>().map_err(|_| {
-            ReadError::invalid(
-                path,
-                format!(
-                    "CompressedDataSize must be a non-negative integer, got {}",
-                    quote(v)
-                ),
-            )
-        })?),
+        Some(v) => Some(header::count(path, "CompressedDataSize", v)?),
     };
-    let header_size = match get("HeaderSize") {
+    let header_size = match fields.get("HeaderSize") {
         None => None,
-        Some("-1") => Some(Skip::FromEnd),
-        Some(v) => Some(Skip::Bytes(v.parse::<u64>().map_err(|_| {
-            ReadError::invalid(
-                path,
-                format!(
-                    "HeaderSize must be -1 or a non-negative integer, got {}",
-                    quote(v)
-                ),
-            )
-        })?)),
+        Some(v) => Some(header::skip(path, "HeaderSize", v)?),
     };
     if compressed && header_size == Some(Skip::FromEnd) {
         return Err(ReadError::invalid(
@@ -322,18 +303,26 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ReadError> {
             "HeaderSize = -1 cannot be used with CompressedData = True",
         ));
     }
+    Ok(Storage {
+        compressed,
+        compressed_size,
+        header_size,
+    })
+}
 
-    let spacing = match get_any(&["ElementSpacing", "ElementSize"]) {
-        Some((k, v)) => numbers::<3>(path, k, v)?,
+/// Spacing, origin and direction; the 9 numbers of the direction are column-major.
+fn geometry(path: &Path, fields: &Fields) -> Result<Geometry, ReadError> {
+    let spacing = match fields.get_any(&["ElementSpacing", "ElementSize"]) {
+        Some((k, v)) => header::numbers::<3>(path, k, v)?,
         None => [1.0; 3],
     };
-    let origin = match get_any(&["Offset", "Position", "Origin"]) {
-        Some((k, v)) => numbers::<3>(path, k, v)?,
+    let origin = match fields.get_any(&["Offset", "Position", "Origin"]) {
+        Some((k, v)) => header::numbers::<3>(path, k, v)?,
         None => [0.0; 3],
     };
-    let direction = match get_any(&["TransformMatrix", "Rotation", "Orientation"]) {
+    let direction = match fields.get_any(&["TransformMatrix", "Rotation", "Orientation"]) {
         Some((k, v)) => {
-            let m = numbers::<9>(path, k, v)?;
+            let m = header::numbers::<9>(path, k, v)?;
             let mut d = [[0.0; 3]; 3];
             for (r, row) in d.iter_mut().enumerate() {
                 for (c, x) in row.iter_mut().enumerate() {
@@ -344,41 +333,23 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ReadError> {
         }
         None => IDENTITY,
     };
+    Ok((spacing, origin, direction))
+}
 
-    let df = require("ElementDataFile")?;
-    let data = if df.eq_ignore_ascii_case("LOCAL") {
-        DataLocation::Local(data_start.unwrap_or(bytes.len()))
+/// `ElementDataFile`: `LOCAL` (the data follow the header, whose end is `fields.end()`, or
+/// `len` if unknown) or a single file relative to the header.
+fn data_location(path: &Path, fields: &Fields, len: usize) -> Result<DataLocation, ReadError> {
+    let df = require(path, fields, "ElementDataFile")?;
+    if df.eq_ignore_ascii_case("LOCAL") {
+        Ok(DataLocation::Local(fields.end().unwrap_or(len)))
     } else if df.starts_with("LIST") || df.contains('%') || df.split_whitespace().count() > 1 {
-        return Err(ReadError::unsupported(
+        Err(ReadError::unsupported(
             path,
             format!("multi-file data {}", quote(df)),
-        ));
+        ))
     } else {
-        let p = Path::new(df);
-        DataLocation::File(if p.is_absolute() {
-            p.to_path_buf()
-        } else {
-            path.parent().unwrap_or_else(|| Path::new("")).join(p)
-        })
-    };
-    if compressed && header_size.is_some_and(|s| s != Skip::Bytes(0)) {
-        return Err(ReadError::unsupported(
-            path,
-            "HeaderSize with CompressedData = True",
-        ));
+        Ok(DataLocation::File(header::data_file_path(path, df)))
     }
-    Ok(Header {
-        dims,
-        ty,
-        endian,
-        compressed,
-        compressed_size,
-        header_size,
-        spacing,
-        origin,
-        direction,
-        data,
-    })
 }
 
 #[cfg(test)]
