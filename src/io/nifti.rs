@@ -19,7 +19,7 @@ use flate2::read::MultiGzDecoder;
 
 use super::volume::{
     build_grid, data_size, decode_samples, decompress_exact, read_all, split_linear, take_exact,
-    to_dim, Endian, ReadError, SampleType,
+    to_dim, Endian, Geometry, ReadError, SampleType,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
 
@@ -38,19 +38,7 @@ const NIFTI2_HDR: usize = 540;
 pub fn read_nifti(path: &Path) -> Result<ScalarGrid, ReadError> {
     let raw = read_all(path)?;
     let gz = raw.starts_with(&[0x1f, 0x8b]);
-    // With gzip, decompress the header first (the largest is NIfTI-2's 540 bytes + 4).
-    let head: Vec<u8> = if gz {
-        let mut dec = MultiGzDecoder::new(raw.as_slice());
-        let mut head = Vec::new();
-        (&mut dec)
-            .take((NIFTI2_HDR + 4) as u64)
-            .read_to_end(&mut head)
-            .map_err(|e| ReadError::invalid(path, format!("gzip stream is corrupt: {e}")))?;
-        head
-    } else {
-        raw.get(..NIFTI2_HDR + 4).unwrap_or(&raw).to_vec()
-    };
-    let h = parse_header(path, &head)?;
+    let h = parse_header(path, &head_bytes(path, &raw, gz)?)?;
     let (_, nbytes) = data_size(path, h.dims, h.ty)?;
     let end = h
         .vox_offset
@@ -84,6 +72,20 @@ pub fn read_nifti(path: &Path) -> Result<ScalarGrid, ReadError> {
         }
     }
     build_grid(path, h.dims, h.spacing, h.origin, h.direction, values)
+}
+
+/// The first bytes of the file, enough for the largest header (NIfTI-2's 540 bytes + 4);
+/// with gzip, only those are decompressed.
+fn head_bytes(path: &Path, raw: &[u8], gz: bool) -> Result<Vec<u8>, ReadError> {
+    if !gz {
+        return Ok(raw.get(..NIFTI2_HDR + 4).unwrap_or(raw).to_vec());
+    }
+    let mut head = Vec::new();
+    MultiGzDecoder::new(raw)
+        .take((NIFTI2_HDR + 4) as u64)
+        .read_to_end(&mut head)
+        .map_err(|e| ReadError::invalid(path, format!("gzip stream is corrupt: {e}")))?;
+    Ok(head)
 }
 
 #[derive(Debug)]
@@ -226,7 +228,31 @@ fn datatype(code: i64) -> Option<SampleType> {
     })
 }
 
+/// Parses the header at the start of `head`, one concern at a time: version and byte order,
+/// magic, dimensions, datatype, data offset, scaling and geometry.
 fn parse_header(path: &Path, head: &[u8]) -> Result<Header, ReadError> {
+    let (layout, endian) = detect(path, head)?;
+    check_magic(path, head, layout)?;
+    let f = Fields { b: head, endian };
+    let dims = dims(path, layout, &f)?;
+    let ty = sample_type(path, layout, &f)?;
+    let vox_offset = vox_offset(path, layout, &f)?;
+    let scale = scaling(path, layout, &f)?;
+    let (spacing, origin, direction) = geometry(path, layout, &f)?;
+    Ok(Header {
+        endian,
+        ty,
+        dims,
+        vox_offset,
+        scale,
+        spacing,
+        origin,
+        direction,
+    })
+}
+
+/// The NIfTI version and byte order, from `sizeof_hdr`; checks the whole header is present.
+fn detect(path: &Path, head: &[u8]) -> Result<(&'static Layout, Endian), ReadError> {
     let Some(first) = head.get(..4) else {
         return Err(ReadError::invalid(
             path,
@@ -260,7 +286,11 @@ fn parse_header(path: &Path, head: &[u8]) -> Result<Header, ReadError> {
             ),
         ));
     }
-    let f = Fields { b: head, endian };
+    Ok((layout, endian))
+}
+
+/// Checks the magic: single-file `n+1`/`n+2`; the `ni1`/`ni2` pair form is unsupported.
+fn check_magic(path: &Path, head: &[u8], layout: &Layout) -> Result<(), ReadError> {
     let (moff, single, pair) = layout.magic;
     let magic = &head[moff..moff + 4];
     if magic == pair {
@@ -279,39 +309,47 @@ fn parse_header(path: &Path, head: &[u8]) -> Result<Header, ReadError> {
             ),
         ));
     }
+    Ok(())
+}
 
-    // dimensions
-    let ndim = layout.dim(&f, 0);
+/// The three sizes from `dim` (3-D, or more with every extra dimension 1).
+fn dims(path: &Path, layout: &Layout, f: &Fields) -> Result<[usize; 3], ReadError> {
+    let ndim = layout.dim(f, 0);
     if !(1..=7).contains(&ndim) {
         return Err(ReadError::invalid(
             path,
             format!("dim[0] is {ndim}, must be 1 to 7"),
         ));
     }
-    let dim_list: Vec<i64> = (1..=ndim as usize).map(|i| layout.dim(&f, i)).collect();
+    let dim_list: Vec<i64> = (1..=ndim as usize).map(|i| layout.dim(f, i)).collect();
     if ndim < 3 || dim_list[3..].iter().any(|&d| d != 1) {
         return Err(ReadError::unsupported(
             path,
             format!("image of dimensions {dim_list:?}; only 3-D volumes are read"),
         ));
     }
-    let dims = [
+    Ok([
         to_dim(path, dim_list[0], "dim[1]")?,
         to_dim(path, dim_list[1], "dim[2]")?,
         to_dim(path, dim_list[2], "dim[3]")?,
-    ];
+    ])
+}
 
+/// The sample type from `datatype`.
+fn sample_type(path: &Path, layout: &Layout, f: &Fields) -> Result<SampleType, ReadError> {
     let code = f.i16(layout.datatype); // int16 in both versions
-    let ty = datatype(code).ok_or_else(|| {
+    datatype(code).ok_or_else(|| {
         ReadError::unsupported(
             path,
             format!(
                 "NIfTI datatype {code} (supported: uint8, int8, (u)int16/32/64, float32, float64)"
             ),
         )
-    })?;
+    })
+}
 
-    // data offset
+/// The byte offset of the data from `vox_offset`.
+fn vox_offset(path: &Path, layout: &Layout, f: &Fields) -> Result<usize, ReadError> {
     let vox = if layout.version == 1 {
         f.f32(layout.vox_offset)
     } else {
@@ -324,83 +362,90 @@ fn parse_header(path: &Path, head: &[u8]) -> Result<Header, ReadError> {
         ));
     }
     // 0 (or anything inside the header) is taken as "right after the header + extension flag"
-    let vox_offset = (vox as usize).max(layout.hdr_size + 4);
+    Ok((vox as usize).max(layout.hdr_size + 4))
+}
 
-    // scaling
-    let slope = layout.float(&f, layout.scl_slope);
-    let inter = layout.float(&f, layout.scl_inter);
-    let scale = if slope.is_finite() && slope != 0.0 {
-        if !inter.is_finite() {
-            return Err(ReadError::invalid(
-                path,
-                format!("scl_slope is {slope} but scl_inter is {inter}"),
-            ));
-        }
-        Some((slope, inter))
-    } else {
-        None
-    };
+/// `(scl_slope, scl_inter)` if the slope is finite and non-zero.
+fn scaling(path: &Path, layout: &Layout, f: &Fields) -> Result<Option<(f64, f64)>, ReadError> {
+    let slope = layout.float(f, layout.scl_slope);
+    let inter = layout.float(f, layout.scl_inter);
+    if !(slope.is_finite() && slope != 0.0) {
+        return Ok(None);
+    }
+    if !inter.is_finite() {
+        return Err(ReadError::invalid(
+            path,
+            format!("scl_slope is {slope} but scl_inter is {inter}"),
+        ));
+    }
+    Ok(Some((slope, inter)))
+}
 
-    // geometry
+/// Spacing, origin and direction: from the sform if `sform_code > 0`, else from the qform if
+/// `qform_code > 0`, else from `pixdim` alone.
+fn geometry(path: &Path, layout: &Layout, f: &Fields) -> Result<Geometry, ReadError> {
     let mut pixdim = [0.0; 4];
     for (i, p) in pixdim.iter_mut().enumerate() {
-        *p = layout.float_at(&f, layout.pixdim, i);
+        *p = layout.float_at(f, layout.pixdim, i);
     }
-    let step = |p: f64| if p.is_finite() && p != 0.0 { p } else { 1.0 };
-    let sform_code = layout.code(&f, layout.sform_code);
-    let qform_code = layout.code(&f, layout.qform_code);
-    let (spacing, origin, direction) = if sform_code > 0 {
-        let mut m = [[0.0; 3]; 3];
-        let mut t = [0.0; 3];
-        for (r, row) in m.iter_mut().enumerate() {
-            let base = layout.srow_x + r * 4 * if layout.version == 1 { 4 } else { 8 };
-            for (c, x) in row.iter_mut().enumerate() {
-                *x = layout.float_at(&f, base, c);
-            }
-            t[r] = layout.float_at(&f, base, 3);
-        }
-        let (s, d) = split_linear(m).ok_or_else(|| {
-            ReadError::invalid(path, format!("sform {m:?} has a zero or non-finite column"))
-        })?;
-        (s, t, d)
-    } else if qform_code > 0 {
-        let q = [0, 1, 2].map(|i| layout.float_at(&f, layout.quatern_b, i));
-        let offset = [3, 4, 5].map(|i| layout.float_at(&f, layout.quatern_b, i));
-        let qfac = if pixdim[0] < 0.0 { -1.0 } else { 1.0 };
-        let r = quaternion_matrix(q[0], q[1], q[2]);
-        let mut d = r;
-        for row in &mut d {
-            row[2] *= qfac;
-        }
-        // nifti1_io: non-positive pixdim reads as 1 for the qform
-        let s = [1, 2, 3].map(|i| {
-            if pixdim[i] > 0.0 && pixdim[i].is_finite() {
-                pixdim[i]
-            } else {
-                1.0
-            }
-        });
-        (s, offset, d)
+    if layout.code(f, layout.sform_code) > 0 {
+        sform_geometry(path, layout, f)
+    } else if layout.code(f, layout.qform_code) > 0 {
+        Ok(qform_geometry(layout, f, pixdim))
     } else {
-        let mut d = IDENTITY;
-        let mut s = [0.0; 3];
-        for i in 0..3 {
-            let p = step(pixdim[i + 1]);
-            s[i] = p.abs();
-            d[i][i] = p.signum();
+        Ok(pixdim_geometry(pixdim))
+    }
+}
+
+/// Geometry from the sform rows `srow_x`, `srow_y`, `srow_z`.
+fn sform_geometry(path: &Path, layout: &Layout, f: &Fields) -> Result<Geometry, ReadError> {
+    let mut m = [[0.0; 3]; 3];
+    let mut t = [0.0; 3];
+    for (r, row) in m.iter_mut().enumerate() {
+        let base = layout.srow_x + r * 4 * if layout.version == 1 { 4 } else { 8 };
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = layout.float_at(f, base, c);
         }
-        (s, [0.0; 3], d)
-    };
-    Ok(Header {
-        endian,
-        ty,
-        dims,
-        vox_offset,
-        scale,
-        spacing,
-        origin,
-        direction,
-    })
+        t[r] = layout.float_at(f, base, 3);
+    }
+    let (s, d) = split_linear(m).ok_or_else(|| {
+        ReadError::invalid(path, format!("sform {m:?} has a zero or non-finite column"))
+    })?;
+    Ok((s, t, d))
+}
+
+/// Geometry from the qform quaternion and offsets, `qfac` from the sign of `pixdim[0]`.
+fn qform_geometry(layout: &Layout, f: &Fields, pixdim: [f64; 4]) -> Geometry {
+    let q = [0, 1, 2].map(|i| layout.float_at(f, layout.quatern_b, i));
+    let offset = [3, 4, 5].map(|i| layout.float_at(f, layout.quatern_b, i));
+    let qfac = if pixdim[0] < 0.0 { -1.0 } else { 1.0 };
+    let mut d = quaternion_matrix(q[0], q[1], q[2]);
+    for row in &mut d {
+        row[2] *= qfac;
+    }
+    // nifti1_io: non-positive pixdim reads as 1 for the qform
+    let s = [1, 2, 3].map(|i| {
+        if pixdim[i] > 0.0 && pixdim[i].is_finite() {
+            pixdim[i]
+        } else {
+            1.0
+        }
+    });
+    (s, offset, d)
+}
+
+/// "Method 1" geometry: spacing `|pixdim[1..=3]|` (zero or non-finite reads as 1), axis
+/// signs from `pixdim`, zero origin.
+fn pixdim_geometry(pixdim: [f64; 4]) -> Geometry {
+    let step = |p: f64| if p.is_finite() && p != 0.0 { p } else { 1.0 };
+    let mut d = IDENTITY;
+    let mut s = [0.0; 3];
+    for i in 0..3 {
+        let p = step(pixdim[i + 1]);
+        s[i] = p.abs();
+        d[i][i] = p.signum();
+    }
+    (s, [0.0; 3], d)
 }
 
 /// Rotation matrix of the unit quaternion `(a, b, c, d)` with `a` derived from `b, c, d`
