@@ -8,7 +8,8 @@
 use std::path::Path;
 
 use super::volume::{
-    build_grid, data_size, decode_samples, read_all, take_exact, Endian, ReadError, SampleType,
+    build_grid, data_size, decode_samples, quote, read_all, take_exact, Endian, ReadError,
+    SampleType,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
 
@@ -71,7 +72,41 @@ struct NpyHeader {
     data_start: usize,
 }
 
+/// Parses the magic, version and header dictionary at the start of `bytes`.
 fn parse_npy(path: &Path, bytes: &[u8]) -> Result<NpyHeader, ReadError> {
+    let (text, data_start) = header_text(path, bytes)?;
+    let dict = parse_dict(text)
+        .map_err(|m| ReadError::invalid(path, format!("malformed .npy header: {m}")))?;
+    let (descr, fortran_order, shape) = dict_entries(path, dict)?;
+    let (ty, endian) = parse_descr(&descr).ok_or_else(|| {
+        ReadError::unsupported(
+            path,
+            format!(
+                "dtype {} (supported: u1 i1 u2 i2 u4 i4 u8 i8 f4 f8 b1)",
+                quote(&descr)
+            ),
+        )
+    })?;
+    let shape: [usize; 3] = shape.as_slice().try_into().map_err(|_| {
+        ReadError::invalid(
+            path,
+            format!(
+                "array is {}-D, a volume must be 3-D (shape {shape:?})",
+                shape.len()
+            ),
+        )
+    })?;
+    Ok(NpyHeader {
+        ty,
+        endian,
+        fortran_order,
+        shape,
+        data_start,
+    })
+}
+
+/// Checks the magic and version and returns the header text with the offset of the data.
+fn header_text<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a str, usize), ReadError> {
     if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
         return Err(ReadError::invalid(
             path,
@@ -101,9 +136,15 @@ fn parse_npy(path: &Path, bytes: &[u8]) -> Result<NpyHeader, ReadError> {
     let text = bytes.get(start..end).ok_or_else(too_short)?;
     let text = std::str::from_utf8(text)
         .map_err(|_| ReadError::invalid(path, ".npy header is not text"))?;
-    let dict = parse_dict(text)
-        .map_err(|m| ReadError::invalid(path, format!("malformed .npy header: {m}")))?;
+    Ok((text, end))
+}
 
+/// The `descr`, `fortran_order` and `shape` entries of the header dictionary (all required,
+/// nothing else allowed).
+fn dict_entries(
+    path: &Path,
+    dict: Vec<(String, PyValue)>,
+) -> Result<(String, bool, Vec<usize>), ReadError> {
     let mut descr = None;
     let mut fortran = None;
     let mut shape = None;
@@ -121,10 +162,7 @@ fn parse_npy(path: &Path, bytes: &[u8]) -> Result<NpyHeader, ReadError> {
             (key, _) => {
                 return Err(ReadError::invalid(
                     path,
-                    format!(
-                        "malformed .npy header: bad entry {}",
-                        super::volume::quote(key)
-                    ),
+                    format!("malformed .npy header: bad entry {}", quote(key)),
                 ))
             }
         }
@@ -133,31 +171,7 @@ fn parse_npy(path: &Path, bytes: &[u8]) -> Result<NpyHeader, ReadError> {
     let fortran_order =
         fortran.ok_or_else(|| ReadError::invalid(path, ".npy header has no 'fortran_order'"))?;
     let shape = shape.ok_or_else(|| ReadError::invalid(path, ".npy header has no 'shape'"))?;
-    let (ty, endian) = parse_descr(&descr).ok_or_else(|| {
-        ReadError::unsupported(
-            path,
-            format!(
-                "dtype {} (supported: u1 i1 u2 i2 u4 i4 u8 i8 f4 f8 b1)",
-                super::volume::quote(&descr)
-            ),
-        )
-    })?;
-    let shape: [usize; 3] = shape.as_slice().try_into().map_err(|_| {
-        ReadError::invalid(
-            path,
-            format!(
-                "array is {}-D, a volume must be 3-D (shape {shape:?})",
-                shape.len()
-            ),
-        )
-    })?;
-    Ok(NpyHeader {
-        ty,
-        endian,
-        fortran_order,
-        shape,
-        data_start: end,
-    })
+    Ok((descr, fortran_order, shape))
 }
 
 fn parse_descr(d: &str) -> Option<(SampleType, Endian)> {
