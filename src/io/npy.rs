@@ -295,42 +295,8 @@ impl Parser<'_> {
     fn value(&mut self) -> Result<PyValue, String> {
         match self.s.get(self.pos) {
             Some(b'\'' | b'"') => Ok(PyValue::Str(self.string()?)),
-            Some(b'(') => {
-                self.pos += 1;
-                let mut items = Vec::new();
-                loop {
-                    self.ws();
-                    if self.eat(b')') {
-                        break;
-                    }
-                    items.push(self.integer()?);
-                    self.ws();
-                    if self.eat(b',') {
-                        continue;
-                    }
-                    self.expect(b')')?;
-                    break;
-                }
-                Ok(PyValue::Tuple(items))
-            }
-            Some(b'[') => {
-                // structured dtype: skip to the matching bracket
-                let mut depth = 0usize;
-                while let Some(&c) = self.s.get(self.pos) {
-                    self.pos += 1;
-                    match c {
-                        b'[' => depth += 1,
-                        b']' => {
-                            depth -= 1;
-                            if depth == 0 {
-                                return Ok(PyValue::Other);
-                            }
-                        }
-                        _ => {}
-                    }
-                }
-                Err("unterminated list".into())
-            }
+            Some(b'(') => self.tuple(),
+            Some(b'[') => self.skip_list(),
             _ => {
                 let rest = &self.s[self.pos..];
                 if rest.starts_with(b"True") {
@@ -344,6 +310,45 @@ impl Parser<'_> {
                 }
             }
         }
+    }
+
+    /// A tuple of non-negative integers, starting at its `(`.
+    fn tuple(&mut self) -> Result<PyValue, String> {
+        self.pos += 1;
+        let mut items = Vec::new();
+        loop {
+            self.ws();
+            if self.eat(b')') {
+                break;
+            }
+            items.push(self.integer()?);
+            self.ws();
+            if self.eat(b',') {
+                continue;
+            }
+            self.expect(b')')?;
+            break;
+        }
+        Ok(PyValue::Tuple(items))
+    }
+
+    /// Skips a list (a structured dtype), starting at its `[`, to the matching bracket.
+    fn skip_list(&mut self) -> Result<PyValue, String> {
+        let mut depth = 0usize;
+        while let Some(&c) = self.s.get(self.pos) {
+            self.pos += 1;
+            match c {
+                b'[' => depth += 1,
+                b']' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        return Ok(PyValue::Other);
+                    }
+                }
+                _ => {}
+            }
+        }
+        Err("unterminated list".into())
     }
 
     fn integer(&mut self) -> Result<usize, String> {
