@@ -4,6 +4,7 @@
 
 pub mod atomic;
 pub mod inp;
+mod mesh_out;
 pub mod mhd;
 pub mod msh;
 pub mod nifti;
@@ -11,5 +12,8 @@ pub mod npy;
 pub mod nrrd;
 mod volume;
 pub mod vtu;
+mod write_common;
 
+pub use atomic::{check_writable, write_atomically, WriteError};
+pub use mesh_out::{write_mesh, MeshFormat, WriteOptions};
 pub use volume::{read_volume, ReadError};
