@@ -87,3 +87,82 @@ pub fn write_mesh(path: &Path, mesh: &TetMesh, options: &WriteOptions) -> Result
     let format = MeshFormat::from_path(path)?;
     write_atomically(path, |w| format.write(mesh, w, options))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::BoundaryLabel;
+
+    fn one_tet() -> TetMesh {
+        TetMesh {
+            points: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            values: vec![0.0, 1.0, 2.0, 3.0],
+            tets: vec![[0, 1, 2, 3]],
+            boundary: vec![[0, 2, 1]],
+            boundary_labels: vec![BoundaryLabel::Alpha],
+        }
+    }
+
+    #[test]
+    fn format_follows_the_extension_case_insensitively() {
+        let f = |p: &str| MeshFormat::from_path(Path::new(p)).ok();
+        assert_eq!(f("a.msh"), Some(MeshFormat::Msh));
+        assert_eq!(f("dir/a.INP"), Some(MeshFormat::Inp));
+        assert_eq!(f("a.b.Vtu"), Some(MeshFormat::Vtu));
+        for p in ["a.vtk", "msh", ".msh", "a"] {
+            let e = MeshFormat::from_path(Path::new(p)).unwrap_err();
+            assert!(matches!(e, WriteError::UnknownFormat { .. }), "{p}: {e}");
+        }
+    }
+
+    #[test]
+    fn write_mesh_matches_the_format_writers() {
+        let mesh = one_tet();
+        let dir = tempfile::tempdir().unwrap();
+        let v22 = WriteOptions::default().with_msh_version(MshVersion::V22);
+        for (name, opts) in [
+            ("a.msh", WriteOptions::default()),
+            ("b.msh", v22),
+            ("c.inp", WriteOptions::default()),
+            ("d.vtu", WriteOptions::default()),
+        ] {
+            let path = dir.path().join(name);
+            write_mesh(&path, &mesh, &opts).unwrap();
+            let mut expected = Vec::new();
+            match MeshFormat::from_path(&path).unwrap() {
+                MeshFormat::Msh => write_msh(&mesh, &mut expected, opts.msh_version),
+                MeshFormat::Inp => write_inp(&mesh, &mut expected),
+                MeshFormat::Vtu => write_vtu(&mesh, &mut expected),
+            }
+            .unwrap();
+            assert_eq!(std::fs::read(&path).unwrap(), expected, "{name}");
+        }
+        let bad = dir.path().join("e.stl");
+        assert!(matches!(
+            write_mesh(&bad, &mesh, &WriteOptions::default()),
+            Err(WriteError::UnknownFormat { .. })
+        ));
+        assert!(!bad.exists());
+    }
+
+    #[test]
+    fn check_writable_rejects_directories_and_missing_parents() {
+        use super::super::atomic::check_writable;
+        let dir = tempfile::tempdir().unwrap();
+        assert!(check_writable(&dir.path().join("new.msh")).is_ok());
+        assert!(matches!(
+            check_writable(dir.path()),
+            Err(WriteError::IsDirectory { .. })
+        ));
+        let missing = dir.path().join("no/such/x.msh");
+        assert!(matches!(
+            check_writable(&missing),
+            Err(WriteError::MissingDirectory { .. })
+        ));
+        assert_eq!(
+            WriteOptions::default().msh_version,
+            MshVersion::V41,
+            "default .msh version"
+        );
+    }
+}
