@@ -1,5 +1,4 @@
-//! Atomic file output (write to a temporary in the same directory, then rename) and the
-//! small buffered text formatter shared by the mesh writers.
+//! Atomic file output: write to a temporary in the same directory, then rename.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
@@ -29,6 +28,24 @@ pub enum WriteError {
     NoFileName {
         /// The requested output path.
         path: PathBuf,
+    },
+    /// The path's extension names no mesh format (see [`super::MeshFormat::from_path`]).
+    #[error(
+        "cannot write '{}': unknown output format; use a .msh, .inp or .vtu extension",
+        .path.display()
+    )]
+    UnknownFormat {
+        /// The requested output path.
+        path: PathBuf,
+    },
+    /// The directory the target would be created in does not exist (found by
+    /// [`check_writable`]).
+    #[error("cannot write '{}': directory '{}' does not exist", .path.display(), .dir.display())]
+    MissingDirectory {
+        /// The requested output path.
+        path: PathBuf,
+        /// Its parent directory.
+        dir: PathBuf,
     },
     /// An I/O error while creating, writing, flushing or renaming the temporary file.
     #[error("cannot write '{}': {source}", .path.display())]
@@ -108,6 +125,29 @@ where
     Ok(())
 }
 
+/// Checks early (before any expensive work) that `path` can be a target of
+/// [`write_atomically`]: it must not be an existing directory or other non-regular file, and
+/// its directory must exist. Nothing is created.
+///
+/// # Errors
+/// [`WriteError::IsDirectory`], [`WriteError::NotRegularFile`] or
+/// [`WriteError::MissingDirectory`].
+pub fn check_writable(path: &Path) -> Result<(), WriteError> {
+    let path_buf = || path.to_path_buf();
+    match fs::metadata(path) {
+        Ok(m) if m.is_dir() => return Err(WriteError::IsDirectory { path: path_buf() }),
+        Ok(m) if !m.is_file() => return Err(WriteError::NotRegularFile { path: path_buf() }),
+        _ => {}
+    }
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => Err(WriteError::MissingDirectory {
+            path: path_buf(),
+            dir: dir.to_path_buf(),
+        }),
+        _ => Ok(()),
+    }
+}
+
 fn write_and_sync<F>(file: File, write: F) -> io::Result<()>
 where
     F: FnOnce(&mut dyn Write) -> io::Result<()>,
@@ -116,82 +156,4 @@ where
     write(&mut buf)?;
     let file = buf.into_inner().map_err(|e| e.into_error())?;
     file.sync_all()
-}
-
-/// Threshold at which [`TextOut`] hands its buffer to the underlying writer.
-const CHUNK: usize = 1 << 16;
-
-/// Fast formatter for the text writers: integers via `itoa`, floats via `ryu` (shortest
-/// representation that round-trips), collected in a local buffer that is passed to the
-/// (possibly dynamically dispatched) writer in 64 KiB chunks.
-pub(crate) struct TextOut<'a> {
-    w: &'a mut dyn Write,
-    buf: Vec<u8>,
-    int: itoa::Buffer,
-    float: ryu::Buffer,
-}
-
-impl<'a> TextOut<'a> {
-    pub(crate) fn new(w: &'a mut dyn Write) -> Self {
-        TextOut {
-            w,
-            buf: Vec::with_capacity(CHUNK + 4096),
-            int: itoa::Buffer::new(),
-            float: ryu::Buffer::new(),
-        }
-    }
-
-    /// Appends a string.
-    #[inline]
-    pub(crate) fn s(&mut self, s: &str) -> &mut Self {
-        self.buf.extend_from_slice(s.as_bytes());
-        self
-    }
-
-    /// Appends an integer in decimal.
-    #[inline]
-    pub(crate) fn int<I: itoa::Integer>(&mut self, v: I) -> &mut Self {
-        self.buf.extend_from_slice(self.int.format(v).as_bytes());
-        self
-    }
-
-    /// Appends a float in the shortest form that parses back to the same `f64`
-    /// (`NaN`/`inf`/`-inf` for non-finite values).
-    #[inline]
-    pub(crate) fn float(&mut self, v: f64) -> &mut Self {
-        self.buf.extend_from_slice(self.float.format(v).as_bytes());
-        self
-    }
-
-    /// Appends a float in at most `width` (>= 16) characters: the shortest round-trip form when
-    /// it fits, otherwise scientific notation with `width - 8` fractional digits.
-    #[inline]
-    pub(crate) fn float_width(&mut self, v: f64, width: usize) -> &mut Self {
-        let short = self.float.format(v);
-        if short.len() <= width {
-            self.buf.extend_from_slice(short.as_bytes());
-        } else {
-            use std::io::Write as _;
-            let _ = write!(self.buf, "{:.*e}", width - 8, v);
-        }
-        self
-    }
-
-    /// Ends a line and passes the buffer on when it is full.
-    #[inline]
-    pub(crate) fn nl(&mut self) -> io::Result<()> {
-        self.buf.push(b'\n');
-        if self.buf.len() >= CHUNK {
-            self.w.write_all(&self.buf)?;
-            self.buf.clear();
-        }
-        Ok(())
-    }
-
-    /// Writes whatever is buffered and flushes the underlying writer.
-    pub(crate) fn finish(mut self) -> io::Result<()> {
-        self.w.write_all(&self.buf)?;
-        self.buf.clear();
-        self.w.flush()
-    }
 }

@@ -20,8 +20,7 @@ use std::io::{self, Write};
 
 use rustc_hash::FxHashMap;
 
-use super::atomic::TextOut;
-use super::msh::{check_lengths, invalid, present_labels};
+use super::write_common::{check_lengths, invalid, present_labels, TextOut};
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// Local vertex indices of the C3D4 faces S1..S4.
@@ -44,9 +43,21 @@ const IDS_PER_LINE: usize = 16;
 pub fn write_inp(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
     check_lengths(mesh)?;
     let faces = boundary_faces(mesh)?;
-    let present = present_labels(mesh);
     let mut out = TextOut::new(w);
+    heading(mesh, &mut out)?;
+    nodes(mesh, &mut out)?;
+    elements(mesh, &mut out)?;
+    let mut in_set = vec![false; mesh.points.len()];
+    for (label, _) in present_labels(mesh) {
+        let upper = label.name().to_ascii_uppercase();
+        node_set(mesh, label, &upper, &mut in_set, &mut out)?;
+        surface(mesh, label, &upper, &faces, &mut out)?;
+    }
+    out.finish()
+}
 
+/// `*HEADING` and its one-line title.
+fn heading(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
     out.s("*HEADING").nl()?;
     out.s("tptd interval-volume mesh: ")
         .int(mesh.points.len())
@@ -55,8 +66,11 @@ pub fn write_inp(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
         .s(" C3D4 elements, ")
         .int(mesh.boundary.len())
         .s(" boundary faces")
-        .nl()?;
+        .nl()
+}
 
+/// `*NODE, NSET=NALL` with every node.
+fn nodes(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
     out.s("*NODE, NSET=NALL").nl()?;
     for (i, p) in mesh.points.iter().enumerate() {
         out.int(i + 1);
@@ -65,7 +79,11 @@ pub fn write_inp(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
         }
         out.nl()?;
     }
+    Ok(())
+}
 
+/// `*ELEMENT, TYPE=C3D4, ELSET=DOMAIN` with every tet.
+fn elements(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
     out.s("*ELEMENT, TYPE=C3D4, ELSET=DOMAIN").nl()?;
     for (t, tet) in mesh.tets.iter().enumerate() {
         out.int(t + 1);
@@ -74,48 +92,63 @@ pub fn write_inp(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
         }
         out.nl()?;
     }
+    Ok(())
+}
 
-    let mut in_set = vec![false; mesh.points.len()];
-    for &(label, _) in &present {
-        let upper = label.name().to_ascii_uppercase();
-        in_set.iter_mut().for_each(|b| *b = false);
-        for (tri, _) in labelled(mesh, label) {
-            for &v in tri {
-                in_set[v as usize] = true;
-            }
-        }
-        out.s("*NSET, NSET=").s(&upper).nl()?;
-        let mut on_line = 0;
-        for (i, _) in in_set.iter().enumerate().filter(|(_, &b)| b) {
-            if on_line == IDS_PER_LINE {
-                out.nl()?;
-                on_line = 0;
-            }
-            if on_line > 0 {
-                out.s(", ");
-            }
-            out.int(i + 1);
-            on_line += 1;
-        }
-        if on_line > 0 {
-            out.nl()?;
-        }
-
-        out.s("*SURFACE, NAME=")
-            .s(&upper)
-            .s(", TYPE=ELEMENT")
-            .nl()?;
-        for (b, _) in mesh
-            .boundary_labels
-            .iter()
-            .enumerate()
-            .filter(|&(_, &l)| l == label)
-        {
-            let (tet, face) = faces[b];
-            out.int(tet as usize + 1).s(", S").int(face + 1).nl()?;
+/// `*NSET, NSET={upper}`: the nodes of the triangles labelled `label`, ascending,
+/// [`IDS_PER_LINE`] per line. `in_set` is scratch space of one flag per node.
+fn node_set(
+    mesh: &TetMesh,
+    label: BoundaryLabel,
+    upper: &str,
+    in_set: &mut [bool],
+    out: &mut TextOut,
+) -> io::Result<()> {
+    in_set.iter_mut().for_each(|b| *b = false);
+    for (tri, _) in labelled(mesh, label) {
+        for &v in tri {
+            in_set[v as usize] = true;
         }
     }
-    out.finish()
+    out.s("*NSET, NSET=").s(upper).nl()?;
+    let mut on_line = 0;
+    for (i, _) in in_set.iter().enumerate().filter(|(_, &b)| b) {
+        if on_line == IDS_PER_LINE {
+            out.nl()?;
+            on_line = 0;
+        }
+        if on_line > 0 {
+            out.s(", ");
+        }
+        out.int(i + 1);
+        on_line += 1;
+    }
+    if on_line > 0 {
+        out.nl()?;
+    }
+    Ok(())
+}
+
+/// `*SURFACE, NAME={upper}, TYPE=ELEMENT`: one `element, Sk` line per triangle labelled
+/// `label`, with `faces` from [`boundary_faces`].
+fn surface(
+    mesh: &TetMesh,
+    label: BoundaryLabel,
+    upper: &str,
+    faces: &[(u32, u8)],
+    out: &mut TextOut,
+) -> io::Result<()> {
+    out.s("*SURFACE, NAME=").s(upper).s(", TYPE=ELEMENT").nl()?;
+    for (b, _) in mesh
+        .boundary_labels
+        .iter()
+        .enumerate()
+        .filter(|&(_, &l)| l == label)
+    {
+        let (tet, face) = faces[b];
+        out.int(tet as usize + 1).s(", S").int(face + 1).nl()?;
+    }
+    Ok(())
 }
 
 fn labelled(

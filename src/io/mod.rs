@@ -5,6 +5,7 @@
 pub mod atomic;
 mod header;
 pub mod inp;
+mod mesh_out;
 pub mod mhd;
 pub mod msh;
 pub mod nifti;
@@ -12,5 +13,8 @@ pub mod npy;
 pub mod nrrd;
 mod volume;
 pub mod vtu;
+mod write_common;
 
+pub use atomic::{check_writable, write_atomically, WriteError};
+pub use mesh_out::{write_mesh, MeshFormat, WriteOptions};
 pub use volume::{read_volume, ReadError};

@@ -13,13 +13,14 @@
 
 use std::io::{self, Write};
 
-use super::atomic::TextOut;
+use super::write_common::{check_lengths, present_labels, TextOut};
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// Which `.msh` format version [`write_msh`] produces.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum MshVersion {
-    /// Gmsh 4.1 ASCII (`$Entities`, entity-blocked `$Nodes`/`$Elements`).
+    /// Gmsh 4.1 ASCII (`$Entities`, entity-blocked `$Nodes`/`$Elements`); the default.
+    #[default]
     V41,
     /// Legacy Gmsh 2.2 ASCII, read by most third-party tools.
     V22,
@@ -58,53 +59,6 @@ pub fn write_msh(mesh: &TetMesh, w: &mut dyn Write, version: MshVersion) -> io::
         MshVersion::V22 => write_v22(mesh, &present, &mut out)?,
     }
     out.finish()
-}
-
-pub(crate) fn check_lengths(mesh: &TetMesh) -> io::Result<()> {
-    if mesh.values.len() != mesh.points.len() {
-        return Err(invalid(format!(
-            "mesh has {} points but {} values",
-            mesh.points.len(),
-            mesh.values.len()
-        )));
-    }
-    if mesh.boundary_labels.len() != mesh.boundary.len() {
-        return Err(invalid(format!(
-            "mesh has {} boundary triangles but {} labels",
-            mesh.boundary.len(),
-            mesh.boundary_labels.len()
-        )));
-    }
-    let n = mesh.points.len();
-    let bad = mesh
-        .tets
-        .iter()
-        .flatten()
-        .chain(mesh.boundary.iter().flatten())
-        .any(|&i| i as usize >= n);
-    if bad {
-        return Err(invalid(format!(
-            "mesh refers to a node index >= the {n} points"
-        )));
-    }
-    Ok(())
-}
-
-pub(crate) fn invalid(msg: String) -> io::Error {
-    io::Error::new(io::ErrorKind::InvalidInput, msg)
-}
-
-/// For each label in [`BoundaryLabel::ALL`] order that occurs: (label, triangle count).
-pub(crate) fn present_labels(mesh: &TetMesh) -> Vec<(BoundaryLabel, usize)> {
-    let mut count = [0usize; 3];
-    for &l in &mesh.boundary_labels {
-        count[l as usize] += 1;
-    }
-    BoundaryLabel::ALL
-        .into_iter()
-        .filter(|&l| count[l as usize] > 0)
-        .map(|l| (l, count[l as usize]))
-        .collect()
 }
 
 fn header(out: &mut TextOut, version: &str, present: &[(BoundaryLabel, usize)]) -> io::Result<()> {
@@ -175,31 +129,29 @@ fn write_v41(
     out: &mut TextOut,
 ) -> io::Result<()> {
     header(out, "4.1", present)?;
-    let n_points = mesh.points.len();
-    let n_tets = mesh.tets.len();
+    entities_v41(mesh, present, out)?;
+    nodes_v41(mesh, out)?;
+    elements_v41(mesh, present, out)?;
+    node_data(mesh, out)
+}
 
+/// `$Entities`: one surface per boundary label that occurs, then the volume entity.
+fn entities_v41(
+    mesh: &TetMesh,
+    present: &[(BoundaryLabel, usize)],
+    out: &mut TextOut,
+) -> io::Result<()> {
     out.s("$Entities").nl()?;
     out.s("0 0 ").int(present.len()).s(" 1").nl()?;
     for &(label, _) in present {
-        let nodes = mesh
-            .boundary
-            .iter()
-            .zip(&mesh.boundary_labels)
-            .filter(|&(_, &l)| l == label)
-            .flat_map(|(t, _)| t.iter().copied());
-        let b = bbox(mesh, nodes);
+        let nodes = triangles_labelled(mesh, label).flat_map(|t| t.iter().copied());
         out.int(label_tag(label));
-        for x in b {
-            out.s(" ").float(x);
-        }
+        bbox_fields(out, bbox(mesh, nodes));
         // one physical tag; no bounding curves
         out.s(" 1 ").int(label_tag(label)).s(" 0").nl()?;
     }
-    let b = bbox(mesh, 0..n_points as u32);
     out.int(VOLUME_ENTITY);
-    for x in b {
-        out.s(" ").float(x);
-    }
+    bbox_fields(out, bbox(mesh, 0..mesh.points.len() as u32));
     out.s(" 1 ")
         .int(DOMAIN_PHYSICAL_TAG)
         .s(" ")
@@ -208,9 +160,19 @@ fn write_v41(
         out.s(" ").int(label_tag(label));
     }
     out.nl()?;
-    out.s("$EndEntities").nl()?;
+    out.s("$EndEntities").nl()
+}
 
-    // All nodes in one block classified on the volume entity.
+/// Appends the six numbers of a bounding box, each preceded by a space.
+fn bbox_fields(out: &mut TextOut, b: [f64; 6]) {
+    for x in b {
+        out.s(" ").float(x);
+    }
+}
+
+/// `$Nodes`: all nodes in one block classified on the volume entity.
+fn nodes_v41(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
+    let n_points = mesh.points.len();
     out.s("$Nodes").nl()?;
     let max_tag = n_points; // 0 when empty, matching gmsh's own output for empty meshes
     let min_tag = usize::from(n_points > 0);
@@ -229,10 +191,19 @@ fn write_v41(
     for &p in &mesh.points {
         point(out, p).nl()?;
     }
-    out.s("$EndNodes").nl()?;
+    out.s("$EndNodes").nl()
+}
 
-    out.s("$Elements").nl()?;
+/// `$Elements`: the tets in one block on the volume entity, then one triangle block per
+/// boundary label that occurs.
+fn elements_v41(
+    mesh: &TetMesh,
+    present: &[(BoundaryLabel, usize)],
+    out: &mut TextOut,
+) -> io::Result<()> {
+    let n_tets = mesh.tets.len();
     let n_elems = n_tets + mesh.boundary.len();
+    out.s("$Elements").nl()?;
     out.int(present.len() + 1)
         .s(" ")
         .int(n_elems)
@@ -241,40 +212,45 @@ fn write_v41(
         .s(" ")
         .int(n_elems)
         .nl()?;
-    out.s("3 ")
-        .int(VOLUME_ENTITY)
-        .s(" ")
-        .int(TETRAHEDRON)
-        .s(" ")
-        .int(n_tets)
-        .nl()?;
+    element_block(out, VOLUME_ENTITY, 3, TETRAHEDRON, n_tets)?;
     for (t, tet) in mesh.tets.iter().enumerate() {
-        out.int(t + 1);
-        for &v in tet {
-            out.s(" ").int(v + 1);
-        }
-        out.nl()?;
+        element_nodes(out.int(t + 1), tet)?;
     }
     let mut tag = n_tets;
     for &(label, count) in present {
-        out.s("2 ")
-            .int(label_tag(label))
-            .s(" ")
-            .int(TRIANGLE)
-            .s(" ")
-            .int(count)
-            .nl()?;
+        element_block(out, label_tag(label), 2, TRIANGLE, count)?;
         for tri in triangles_labelled(mesh, label) {
             tag += 1;
-            out.int(tag);
-            for &v in tri {
-                out.s(" ").int(v + 1);
-            }
-            out.nl()?;
+            element_nodes(out.int(tag), tri)?;
         }
     }
-    out.s("$EndElements").nl()?;
-    node_data(mesh, out)
+    out.s("$EndElements").nl()
+}
+
+/// The header line of an element block: entity dimension, entity tag, element type, count.
+fn element_block(
+    out: &mut TextOut,
+    entity: u32,
+    dim: u32,
+    element_type: u32,
+    count: usize,
+) -> io::Result<()> {
+    out.int(dim)
+        .s(" ")
+        .int(entity)
+        .s(" ")
+        .int(element_type)
+        .s(" ")
+        .int(count)
+        .nl()
+}
+
+/// Appends the 1-based node tags of an element, each preceded by a space, and ends the line.
+fn element_nodes(out: &mut TextOut, nodes: &[u32]) -> io::Result<()> {
+    for &v in nodes {
+        out.s(" ").int(v + 1);
+    }
+    out.nl()
 }
 
 fn write_v22(
@@ -290,21 +266,27 @@ fn write_v22(
         point(out, p).nl()?;
     }
     out.s("$EndNodes").nl()?;
+    elements_v22(mesh, present, out)?;
+    node_data(mesh, out)
+}
 
+/// `$Elements` (2.2): the tets, then the boundary triangles grouped by label; each element
+/// carries two tags, physical and elementary.
+fn elements_v22(
+    mesh: &TetMesh,
+    present: &[(BoundaryLabel, usize)],
+    out: &mut TextOut,
+) -> io::Result<()> {
     out.s("$Elements").nl()?;
     let n_tets = mesh.tets.len();
     out.int(n_tets + mesh.boundary.len()).nl()?;
     for (t, tet) in mesh.tets.iter().enumerate() {
-        // type, 2 tags: physical, elementary
         out.int(t + 1)
             .s(" 4 2 ")
             .int(DOMAIN_PHYSICAL_TAG)
             .s(" ")
             .int(VOLUME_ENTITY);
-        for &v in tet {
-            out.s(" ").int(v + 1);
-        }
-        out.nl()?;
+        element_nodes(out, tet)?;
     }
     let mut tag = n_tets;
     for &(label, _) in present {
@@ -312,14 +294,10 @@ fn write_v22(
         for tri in triangles_labelled(mesh, label) {
             tag += 1;
             out.int(tag).s(" 2 2 ").int(lt).s(" ").int(lt);
-            for &v in tri {
-                out.s(" ").int(v + 1);
-            }
-            out.nl()?;
+            element_nodes(out, tri)?;
         }
     }
-    out.s("$EndElements").nl()?;
-    node_data(mesh, out)
+    out.s("$EndElements").nl()
 }
 
 /// The boundary triangles of `mesh` that carry `label`, in mesh order.

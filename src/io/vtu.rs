@@ -15,7 +15,7 @@
 
 use std::io::{self, Write};
 
-use super::msh::check_lengths;
+use super::write_common::check_lengths;
 use crate::mesh::TetMesh;
 
 /// VTK cell type of a linear tetrahedron.
@@ -24,49 +24,56 @@ const VTK_TETRA: u8 = 10;
 /// Bytes converted per `write_all` call for the binary arrays.
 const CHUNK: usize = 1 << 16;
 
-/// The UInt64 byte count that precedes each appended array.
-fn header_bytes(size: u64) -> [u8; 8] {
-    size.to_le_bytes()
+/// Sizes of the appended arrays, in file order, and the integer type of the cell arrays.
+struct Layout {
+    /// Whether `connectivity` and `offsets` need Int64 (an id or offset exceeds `i32`).
+    wide: bool,
+    /// Byte sizes of `f`, `Points`, `connectivity`, `offsets`, `types`.
+    sizes: [u64; 5],
 }
 
-/// Hands the pending bytes of `buf` to `w`.
-fn flush(buf: &mut Vec<u8>, w: &mut dyn Write) -> io::Result<()> {
-    w.write_all(buf)?;
-    buf.clear();
-    Ok(())
-}
-
-/// Writes the tetrahedra and the nodal field `f` of `mesh` as a VTK XML UnstructuredGrid
-/// with raw appended binary data (see the module documentation; boundary triangles are not
-/// written). The output is deterministic and independent of the host's byte order.
-///
-/// # Errors
-/// Returns the first error of `w`, or [`io::ErrorKind::InvalidInput`] when the mesh is
-/// inconsistent (`values` or `boundary_labels` of the wrong length, an out-of-range index).
-pub fn write_vtu(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
-    check_lengths(mesh)?;
-    let n_points = mesh.points.len();
-    let n_tets = mesh.tets.len();
-    let wide = n_points > i32::MAX as usize || n_tets.saturating_mul(4) > i32::MAX as usize;
-    let (int_type, int_size) = if wide {
-        ("Int64", 8u64)
-    } else {
-        ("Int32", 4u64)
-    };
-
-    let sizes = [
-        8 * n_points as u64,
-        24 * n_points as u64,
-        int_size * 4 * n_tets as u64,
-        int_size * n_tets as u64,
-        n_tets as u64,
-    ];
-    let mut offsets = [0u64; 5];
-    for k in 1..5 {
-        offsets[k] = offsets[k - 1] + 8 + sizes[k - 1];
+impl Layout {
+    fn new(mesh: &TetMesh) -> Self {
+        let n_points = mesh.points.len() as u64;
+        let n_tets = mesh.tets.len();
+        let wide = n_points > i32::MAX as u64 || n_tets.saturating_mul(4) > i32::MAX as usize;
+        let int_size = if wide { 8 } else { 4 };
+        let n_tets = n_tets as u64;
+        Layout {
+            wide,
+            sizes: [
+                8 * n_points,
+                24 * n_points,
+                int_size * 4 * n_tets,
+                int_size * n_tets,
+                n_tets,
+            ],
+        }
     }
 
-    let header = format!(
+    /// VTK name of the integer type of `connectivity` and `offsets`.
+    fn int_type(&self) -> &'static str {
+        if self.wide {
+            "Int64"
+        } else {
+            "Int32"
+        }
+    }
+
+    /// Offsets of the arrays in the appended data (each preceded by its UInt64 byte count).
+    fn offsets(&self) -> [u64; 5] {
+        let mut offsets = [0u64; 5];
+        for k in 1..5 {
+            offsets[k] = offsets[k - 1] + 8 + self.sizes[k - 1];
+        }
+        offsets
+    }
+}
+
+/// The XML part of the file, up to and including the `_` that starts the appended data.
+fn xml_header(mesh: &TetMesh, layout: &Layout) -> String {
+    let o = layout.offsets();
+    format!(
         concat!(
             "<?xml version=\"1.0\"?>\n",
             "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
@@ -88,75 +95,142 @@ pub fn write_vtu(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
             "  <AppendedData encoding=\"raw\">\n",
             "   _"
         ),
-        np = n_points,
-        nc = n_tets,
-        it = int_type,
-        o0 = offsets[0],
-        o1 = offsets[1],
-        o2 = offsets[2],
-        o3 = offsets[3],
-        o4 = offsets[4],
-    );
-    w.write_all(header.as_bytes())?;
+        np = mesh.points.len(),
+        nc = mesh.tets.len(),
+        it = layout.int_type(),
+        o0 = o[0],
+        o1 = o[1],
+        o2 = o[2],
+        o3 = o[3],
+        o4 = o[4],
+    )
+}
 
-    let mut buf: Vec<u8> = Vec::with_capacity(CHUNK + 64);
-    let put = |buf: &mut Vec<u8>, bytes: &[u8], w: &mut dyn Write| -> io::Result<()> {
-        buf.extend_from_slice(bytes);
-        if buf.len() >= CHUNK {
-            w.write_all(buf)?;
-            buf.clear();
+/// The binary appended data: small pieces are collected in a buffer that is handed to the
+/// writer in [`CHUNK`]-sized pieces; large native arrays go to the writer directly.
+struct Appended<'a> {
+    w: &'a mut dyn Write,
+    buf: Vec<u8>,
+}
+
+impl Appended<'_> {
+    /// Appends `bytes`, passing the buffer on when it is full.
+    fn put(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.buf.extend_from_slice(bytes);
+        if self.buf.len() >= CHUNK {
+            self.flush()?;
         }
         Ok(())
-    };
+    }
 
-    // On a little-endian host the in-memory f64 and u32 arrays already are the file's bytes
-    // (ids fit in Int32 unless `wide`): write them as they are.
-    let native = cfg!(target_endian = "little");
-    w.write_all(&header_bytes(sizes[0]))?;
-    if native {
-        w.write_all(bytemuck::cast_slice(&mesh.values))?;
-    } else {
+    /// Hands the pending bytes to the writer.
+    fn flush(&mut self) -> io::Result<()> {
+        self.w.write_all(&self.buf)?;
+        self.buf.clear();
+        Ok(())
+    }
+
+    /// Writes `bytes` after whatever is pending, bypassing the buffer.
+    fn put_direct(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.flush()?;
+        self.w.write_all(bytes)
+    }
+
+    /// The UInt64 byte count that precedes each appended array.
+    fn array_size(&mut self, size: u64) -> io::Result<()> {
+        self.put(&size.to_le_bytes())
+    }
+
+    /// The field values `f` as Float64.
+    fn values(&mut self, mesh: &TetMesh, size: u64) -> io::Result<()> {
+        self.array_size(size)?;
+        if NATIVE {
+            return self.put_direct(bytemuck::cast_slice(&mesh.values));
+        }
         for &v in &mesh.values {
-            put(&mut buf, &v.to_le_bytes(), w)?;
+            self.put(&v.to_le_bytes())?;
         }
+        Ok(())
     }
-    flush(&mut buf, w)?;
-    w.write_all(&header_bytes(sizes[1]))?;
-    if native {
-        w.write_all(bytemuck::cast_slice(&mesh.points))?;
-    } else {
-        for p in &mesh.points {
-            for &x in p {
-                put(&mut buf, &x.to_le_bytes(), w)?;
-            }
+
+    /// The node coordinates as Float64 × 3.
+    fn points(&mut self, mesh: &TetMesh, size: u64) -> io::Result<()> {
+        self.array_size(size)?;
+        if NATIVE {
+            return self.put_direct(bytemuck::cast_slice(&mesh.points));
         }
+        for &x in mesh.points.iter().flatten() {
+            self.put(&x.to_le_bytes())?;
+        }
+        Ok(())
     }
-    flush(&mut buf, w)?;
-    w.write_all(&header_bytes(sizes[2]))?;
-    if native && !wide {
-        w.write_all(bytemuck::cast_slice(&mesh.tets))?;
-    } else {
+
+    /// The tets' node ids as Int32, or Int64 when `wide`.
+    fn connectivity(&mut self, mesh: &TetMesh, size: u64, wide: bool) -> io::Result<()> {
+        self.array_size(size)?;
+        if NATIVE && !wide {
+            return self.put_direct(bytemuck::cast_slice(&mesh.tets));
+        }
         for &v in mesh.tets.iter().flatten() {
             if wide {
-                put(&mut buf, &i64::from(v).to_le_bytes(), w)?;
+                self.put(&i64::from(v).to_le_bytes())?;
             } else {
-                put(&mut buf, &(v as i32).to_le_bytes(), w)?;
+                self.put(&(v as i32).to_le_bytes())?;
             }
         }
+        Ok(())
     }
-    put(&mut buf, &sizes[3].to_le_bytes(), w)?;
-    for t in 1..=n_tets as u64 {
-        if wide {
-            put(&mut buf, &(4 * t as i64).to_le_bytes(), w)?;
-        } else {
-            put(&mut buf, &(4 * t as i32).to_le_bytes(), w)?;
+
+    /// The end offset `4 t` of every tet `t` (1-based) in `connectivity`.
+    fn offsets(&mut self, n_tets: usize, size: u64, wide: bool) -> io::Result<()> {
+        self.array_size(size)?;
+        for t in 1..=n_tets as u64 {
+            if wide {
+                self.put(&(4 * t as i64).to_le_bytes())?;
+            } else {
+                self.put(&(4 * t as i32).to_le_bytes())?;
+            }
         }
+        Ok(())
     }
-    put(&mut buf, &sizes[4].to_le_bytes(), w)?;
-    for _ in 0..n_tets {
-        put(&mut buf, &[VTK_TETRA], w)?;
+
+    /// The cell types, all [`VTK_TETRA`].
+    fn types(&mut self, n_tets: usize, size: u64) -> io::Result<()> {
+        self.array_size(size)?;
+        for _ in 0..n_tets {
+            self.put(&[VTK_TETRA])?;
+        }
+        Ok(())
     }
-    buf.extend_from_slice(b"\n  </AppendedData>\n</VTKFile>\n");
-    w.write_all(&buf)?;
-    w.flush()
+}
+
+/// On a little-endian host the in-memory f64 and u32 arrays already are the file's bytes
+/// (ids fit in Int32 unless the layout is wide): they are written as they are.
+const NATIVE: bool = cfg!(target_endian = "little");
+
+/// Writes the tetrahedra and the nodal field `f` of `mesh` as a VTK XML UnstructuredGrid
+/// with raw appended binary data (see the module documentation; boundary triangles are not
+/// written). The output is deterministic and independent of the host's byte order.
+///
+/// # Errors
+/// Returns the first error of `w`, or [`io::ErrorKind::InvalidInput`] when the mesh is
+/// inconsistent (`values` or `boundary_labels` of the wrong length, an out-of-range index).
+pub fn write_vtu(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
+    check_lengths(mesh)?;
+    let layout = Layout::new(mesh);
+    let [s_values, s_points, s_conn, s_offsets, s_types] = layout.sizes;
+    let n_tets = mesh.tets.len();
+    w.write_all(xml_header(mesh, &layout).as_bytes())?;
+    let mut out = Appended {
+        w,
+        buf: Vec::with_capacity(CHUNK + 64),
+    };
+    out.values(mesh, s_values)?;
+    out.points(mesh, s_points)?;
+    out.connectivity(mesh, s_conn, layout.wide)?;
+    out.offsets(n_tets, s_offsets, layout.wide)?;
+    out.types(n_tets, s_types)?;
+    out.put(b"\n  </AppendedData>\n</VTKFile>\n")?;
+    out.flush()?;
+    out.w.flush()
 }

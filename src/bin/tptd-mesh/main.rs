@@ -1,0 +1,25 @@
+//! `tptd-mesh`: command-line front end. Reads a scalar volume (or generates the demo volume),
+//! meshes the interval volume `{alpha <= f <= beta}` into tetrahedra, analyses the mesh and
+//! writes it as `.msh`, `.inp` or `.vtu`, plus an optional JSON report.
+//!
+//! This is the only part of the crate that prints. Every failure is reported as one line
+//! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1; outputs are written
+//! atomically, so a failed run leaves no (partial) output file behind.
+//!
+//! Modules: [`cli`] (arguments), [`run`] (the run, step by step), [`summary`] (stdout),
+//! [`progress`] (the progress bar), [`error`] (`{file}: {problem}` errors).
+
+mod cli;
+mod error;
+mod progress;
+mod run;
+mod summary;
+
+fn main() {
+    let cli = cli::parse_or_exit();
+    if let Err(e) = run::run(cli) {
+        let msg = e.to_string().replace(['\n', '\r'], " ");
+        eprintln!("tptd-mesh: error: {msg}");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,43 @@
+//! The progress bar of the meshing stage.
+
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use tptd::{mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput, ScalarGrid};
+
+/// Grids with more cells than this get a progress bar (when stderr is a terminal).
+const PROGRESS_MIN_CELLS: usize = 2_000_000;
+
+/// A progress bar on stderr for the meshing stage, hidden unless stderr is a terminal and the
+/// grid is large.
+fn progress_bar(grid: &ScalarGrid, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() || grid.num_cells() <= PROGRESS_MIN_CELLS {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+    pb.set_style(
+        ProgressStyle::with_template("meshing {bar:40} {percent:>3}% {elapsed_precise} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    pb
+}
+
+/// Meshes `grid` with `opts`, showing a progress bar unless `quiet` (see [`progress_bar`]).
+pub(crate) fn mesh_with_progress(
+    grid: &ScalarGrid,
+    opts: &MeshOptions,
+    quiet: bool,
+) -> Result<MeshOutput, MeshError> {
+    let pb = progress_bar(grid, quiet);
+    let high = AtomicU64::new(0);
+    let result = mesh_interval_with_progress(grid, opts, &|done, total| {
+        pb.set_length(total as u64);
+        let d = high
+            .fetch_max(done as u64, Ordering::Relaxed)
+            .max(done as u64);
+        pb.set_position(d);
+    });
+    pb.finish_and_clear();
+    result
+}

@@ -1,0 +1,324 @@
+//! One run of `tptd-mesh`, step by step: check the arguments, read, mesh, analyse, write the
+//! mesh and the report, print the summary.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Result;
+use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
+use tptd::io::WriteOptions;
+use tptd::io::{check_writable, read_volume, write_atomically, write_mesh, MeshFormat};
+use tptd::report::{build_report, Report, RunInfo, Timings};
+use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid};
+
+use crate::cli::{Cli, Spacing};
+use crate::error::{file_error, write_error};
+use crate::progress::mesh_with_progress;
+use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
+
+/// Output written by `--demo` when no `-o` is given.
+const DEMO_OUTPUT: &str = "tptd-demo.vtu";
+
+/// The checked arguments of a run.
+struct Job {
+    /// The input as named in messages (`demo` for the demo volume).
+    input_name: String,
+    /// The mesh output path.
+    output: PathBuf,
+    /// The meshing options.
+    opts: MeshOptions,
+    /// The mesh writer options.
+    write: WriteOptions,
+}
+
+/// The results of the analysis stage (both `None` with `--no-analysis`).
+struct Analysis {
+    betti: Option<[usize; 3]>,
+    dihedral: Option<(f64, f64)>,
+}
+
+/// Seconds since `t`.
+fn secs(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64()
+}
+
+/// Runs `tptd-mesh` with the parsed arguments.
+pub(crate) fn run(cli: Cli) -> Result<()> {
+    let t_total = Instant::now();
+    let job = check_args(&cli)?;
+
+    let t = Instant::now();
+    let grid = read_grid(&cli, &job.input_name)?;
+    let t_read = secs(t);
+    warn_exact_bounds(&grid, &job);
+
+    let t = Instant::now();
+    let out = mesh(&grid, &job, cli.quiet)?;
+    let t_mesh = secs(t);
+
+    let t = Instant::now();
+    let analysis = analyse(&out, cli.no_analysis);
+    let t_analysis = secs(t);
+    let comparison = compare_demo(&cli, &grid, &job)?;
+
+    let t = Instant::now();
+    write_mesh(&job.output, &out.mesh, &job.write).map_err(write_error)?;
+    let t_write = secs(t);
+
+    let timings = Timings {
+        read: t_read,
+        mesh: t_mesh,
+        analysis: t_analysis,
+        write: t_write,
+        total: secs(t_total),
+    };
+    let report = make_report(&job, &grid, &out, analysis, timings);
+    finish(&cli, &report, comparison.as_ref())?;
+    // The process ends here: let the OS reclaim the mesh and the grid at exit instead of
+    // freeing hundreds of megabytes page by page first.
+    std::mem::forget(out);
+    std::mem::forget(grid);
+    Ok(())
+}
+
+/// Checks the arguments before any work: the interval, the output format and that the
+/// outputs can be written.
+fn check_args(cli: &Cli) -> Result<Job> {
+    let demo = cli.input.is_none();
+    let input_name = match &cli.input {
+        Some(p) => p.display().to_string(),
+        None => "demo".to_string(),
+    };
+    let output = match (&cli.output, demo) {
+        (Some(p), _) => p.clone(),
+        (None, true) => PathBuf::from(DEMO_OUTPUT),
+        (None, false) => unreachable!("clap requires -o without --demo"),
+    };
+    let (alpha, beta) = interval(cli, demo, &input_name)?;
+    check_outputs(&output, cli.report.as_deref())?;
+    let opts = MeshOptions {
+        alpha,
+        beta,
+        method: cli.method.method(),
+        threads: cli.threads.map(|n| n as usize),
+    };
+    let write = WriteOptions::default().with_msh_version(cli.msh_version.version());
+    Ok(Job {
+        input_name,
+        output,
+        opts,
+        write,
+    })
+}
+
+/// The interval `(alpha, beta)` of `--alpha`/`--beta` (the demo's without both), which must
+/// not be empty.
+fn interval(cli: &Cli, demo: bool, input_name: &str) -> Result<(f64, f64)> {
+    let (alpha, beta) = match (cli.alpha, cli.beta) {
+        (None, None) if demo => (DEMO_ALPHA, DEMO_BETA),
+        (None, None) => {
+            return Err(file_error(
+                input_name,
+                "no interval given: use --alpha A and/or --beta B (meshes alpha <= f <= beta)",
+            ))
+        }
+        (a, b) => (a.unwrap_or(f64::NEG_INFINITY), b.unwrap_or(f64::INFINITY)),
+    };
+    if alpha >= beta {
+        return Err(file_error(
+            input_name,
+            format_args!(
+                "empty interval: --alpha ({}) must be less than --beta ({})",
+                fmt_bound(alpha),
+                fmt_bound(beta)
+            ),
+        ));
+    }
+    Ok((alpha, beta))
+}
+
+/// Checks the mesh output (a known format, writable) and the report output (writable, not
+/// the mesh's path).
+fn check_outputs(output: &Path, report: Option<&Path>) -> Result<()> {
+    MeshFormat::from_path(output).map_err(write_error)?;
+    check_writable(output).map_err(write_error)?;
+    if let Some(r) = report {
+        if r == output {
+            return Err(file_error(
+                r.display(),
+                "the report and the mesh cannot be written to the same file",
+            ));
+        }
+        check_writable(r).map_err(write_error)?;
+    }
+    Ok(())
+}
+
+/// Reads the input volume (or generates the demo volume) and applies `--spacing`.
+fn read_grid(cli: &Cli, input_name: &str) -> Result<ScalarGrid> {
+    let mut grid = match &cli.input {
+        Some(p) => read_volume(p)?,
+        None => demo_volume(),
+    };
+    if let Some(Spacing(s)) = cli.spacing {
+        grid = ScalarGrid::with_geometry(grid.dims, s, grid.origin, grid.direction, grid.values)
+            .map_err(|e| file_error(input_name, format_args!("--spacing: {e}")))?;
+    }
+    Ok(grid)
+}
+
+/// Warns on stderr about each bound that equals grid values exactly.
+fn warn_exact_bounds(grid: &ScalarGrid, job: &Job) {
+    let (alpha, beta) = (job.opts.alpha, job.opts.beta);
+    for (name, bound, lower) in [("alpha", alpha, true), ("beta", beta, false)] {
+        if let Some(w) = bound_warning(&grid.values, name, bound, lower) {
+            eprintln!("tptd-mesh: warning: {}: {w}", job.input_name);
+        }
+    }
+}
+
+/// The warning for a bound that equals grid values exactly, if it does.
+fn bound_warning(values: &[f64], name: &str, bound: f64, lower: bool) -> Option<String> {
+    if !bound.is_finite() {
+        return None;
+    }
+    let hits = values.iter().filter(|&&v| v == bound).count();
+    if hits == 0 {
+        return None;
+    }
+    let suggestion = match inside_value(values, bound, lower) {
+        Some(v) => format!(" (e.g. --{name} {} includes them)", fmt_bound(v)),
+        None => String::new(),
+    };
+    Some(format!(
+        "--{name} {} equals the value of {hits} grid vertices; values equal to a bound count \
+         as outside the interval, which can leave hairline gaps or pinch points; use a value \
+         between data values to avoid them{suggestion}",
+        fmt_bound(bound)
+    ))
+}
+
+/// A value between `bound` and the next data value on the inside-making side (below a lower
+/// bound, above an upper one), so the vertices equal to the bound are included; `None` when
+/// there is no such data value.
+fn inside_value(values: &[f64], bound: f64, lower: bool) -> Option<f64> {
+    let next = if lower {
+        values
+            .iter()
+            .copied()
+            .filter(|&v| v < bound)
+            .fold(f64::NEG_INFINITY, f64::max)
+    } else {
+        values
+            .iter()
+            .copied()
+            .filter(|&v| v > bound)
+            .fold(f64::INFINITY, f64::min)
+    };
+    next.is_finite().then(|| bound + (next - bound) / 2.0)
+}
+
+/// Meshes the interval; an empty mesh is an error.
+fn mesh(grid: &ScalarGrid, job: &Job, quiet: bool) -> Result<MeshOutput> {
+    let out =
+        mesh_with_progress(grid, &job.opts, quiet).map_err(|e| file_error(&job.input_name, e))?;
+    if out.mesh.tets.is_empty() {
+        let (lo, hi) = grid.value_range();
+        return Err(file_error(
+            &job.input_name,
+            format_args!(
+                "the interval {} contains no part of the volume; data range is {}",
+                fmt_interval(job.opts.alpha, job.opts.beta),
+                fmt_interval(lo, hi)
+            ),
+        ));
+    }
+    Ok(out)
+}
+
+/// Betti numbers and the dihedral-angle range, unless `--no-analysis`.
+fn analyse(out: &MeshOutput, skip: bool) -> Analysis {
+    if skip {
+        return Analysis {
+            betti: None,
+            dihedral: None,
+        };
+    }
+    Analysis {
+        betti: Some(tptd::topology::betti(&out.mesh)),
+        dihedral: tptd::quality::dihedral_range(&out.mesh),
+    }
+}
+
+/// For the demo (with analysis): the components the same interval has when meshed with a
+/// method of the other kind.
+fn compare_demo(cli: &Cli, grid: &ScalarGrid, job: &Job) -> Result<Option<DemoComparison>> {
+    if cli.input.is_some() || cli.no_analysis {
+        return Ok(None);
+    }
+    let other = match job.opts.method {
+        Method::Six | Method::Five => Method::Ctd,
+        _ => Method::Six,
+    };
+    let o = mesh_interval(
+        grid,
+        &MeshOptions {
+            method: other,
+            ..job.opts.clone()
+        },
+    )
+    .map_err(|e| file_error(&job.input_name, e))?;
+    Ok(Some(DemoComparison {
+        other,
+        other_b0: tptd::topology::betti(&o.mesh)[0],
+    }))
+}
+
+/// The report of the run.
+fn make_report(
+    job: &Job,
+    grid: &ScalarGrid,
+    out: &MeshOutput,
+    analysis: Analysis,
+    timings: Timings,
+) -> Report {
+    let threads = job
+        .opts
+        .threads
+        .unwrap_or_else(rayon::current_num_threads)
+        .max(1);
+    let output_name = job.output.display().to_string();
+    build_report(
+        &RunInfo {
+            input: &job.input_name,
+            output: &output_name,
+            dims: grid.dims,
+            spacing: grid.spacing,
+            method: job.opts.method,
+            alpha: job.opts.alpha,
+            beta: job.opts.beta,
+            threads,
+        },
+        &out.mesh,
+        &out.stats,
+        analysis.betti,
+        analysis.dihedral,
+        timings,
+    )
+}
+
+/// Writes the JSON report (with `--report`) and prints the summary (unless `--quiet`).
+fn finish(cli: &Cli, report: &Report, comparison: Option<&DemoComparison>) -> Result<()> {
+    if let Some(path) = &cli.report {
+        let mut json = report.to_json_pretty();
+        json.push('\n');
+        write_atomically(path, |w| w.write_all(json.as_bytes())).map_err(write_error)?;
+    }
+    if !cli.quiet {
+        let text = summary(report, comparison, cli.report.as_deref());
+        // A closed stdout (e.g. `| head`) is not an error of the run.
+        let _ = std::io::stdout().lock().write_all(text.as_bytes());
+    }
+    Ok(())
+}

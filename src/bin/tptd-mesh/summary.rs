@@ -1,0 +1,177 @@
+//! The human-readable summary printed on stdout, and the number formats of messages.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use tptd::decompose::CellCase;
+use tptd::report::Report;
+use tptd::Method;
+
+/// What the demo shows: the same interval meshed with a method of the other kind.
+pub(crate) struct DemoComparison {
+    /// The method of the other kind.
+    pub(crate) other: Method,
+    /// The number of components `other` gives.
+    pub(crate) other_b0: usize,
+}
+
+/// Formats a bound for messages (`inf`, `-inf` or the shortest round-trip form).
+pub(crate) fn fmt_bound(v: f64) -> String {
+    if v == f64::INFINITY {
+        "inf".into()
+    } else if v == f64::NEG_INFINITY {
+        "-inf".into()
+    } else {
+        format!("{v}")
+    }
+}
+
+/// `[a, b]` for messages, with an open bracket at an infinite end: `(-inf, b]`, `[a, inf)`.
+pub(crate) fn fmt_interval(alpha: f64, beta: f64) -> String {
+    let open = if alpha.is_infinite() { '(' } else { '[' };
+    let close = if beta.is_infinite() { ')' } else { ']' };
+    format!("{open}{}, {}{close}", fmt_bound(alpha), fmt_bound(beta))
+}
+
+/// An angle in degrees with three decimals, or three significant digits when tiny.
+fn fmt_angle(a: f64) -> String {
+    if a != 0.0 && a.abs() < 0.01 {
+        format!("{a:.2e}")
+    } else {
+        format!("{a:.3}")
+    }
+}
+
+/// The human-readable summary printed on stdout.
+pub(crate) fn summary(
+    r: &Report,
+    cmp: Option<&DemoComparison>,
+    report_path: Option<&Path>,
+) -> String {
+    let mut s = String::new();
+    input_lines(&mut s, r);
+    mesh_lines(&mut s, r);
+    analysis_lines(&mut s, r);
+    cells_line(&mut s, r);
+    output_lines(&mut s, r, report_path);
+    if let (Some(c), Some([b0, ..])) = (cmp, r.betti) {
+        demo_lines(&mut s, r, c, b0);
+    }
+    s
+}
+
+/// The first lines: input and output, grid, interval and method.
+fn input_lines(s: &mut String, r: &Report) {
+    let [nx, ny, nz] = r.dims;
+    let alpha = match r.alpha.0 {
+        v if v == f64::NEG_INFINITY => "(-inf".to_string(),
+        v => format!("[{}", fmt_bound(v)),
+    };
+    let beta = match r.beta.0 {
+        v if v == f64::INFINITY => "inf)".to_string(),
+        v => format!("{}]", fmt_bound(v)),
+    };
+    let _ = writeln!(s, "tptd-mesh: {} -> {}", r.input, r.output);
+    let _ = writeln!(
+        s,
+        "  grid      {nx} x {ny} x {nz} vertices, spacing {} x {} x {}, {} cells",
+        r.spacing[0], r.spacing[1], r.spacing[2], r.cells_total
+    );
+    let _ = writeln!(
+        s,
+        "  interval  {alpha}, {beta}   method {}   threads {}",
+        r.method, r.threads
+    );
+}
+
+/// The size of the mesh and of its boundary.
+fn mesh_lines(s: &mut String, r: &Report) {
+    let _ = writeln!(
+        s,
+        "  mesh      {} nodes, {} tets, volume {:.6}",
+        r.nodes, r.tets, r.volume
+    );
+    let bt = |k: &str| r.boundary_triangles.get(k).copied().unwrap_or(0);
+    let _ = writeln!(
+        s,
+        "  boundary  {} triangles: alpha {}, beta {}, box {}",
+        bt("alpha") + bt("beta") + bt("box"),
+        bt("alpha"),
+        bt("beta"),
+        bt("box")
+    );
+}
+
+/// Betti numbers and dihedral angles (or that they were skipped).
+fn analysis_lines(s: &mut String, r: &Report) {
+    match r.betti {
+        Some([b0, b1, b2]) => {
+            let _ = writeln!(s, "  topology  b0 = {b0}, b1 = {b1}, b2 = {b2}");
+        }
+        None => {
+            let _ = writeln!(s, "  topology  (skipped: --no-analysis)");
+        }
+    }
+    if let Some(d) = r.dihedral_degrees {
+        let _ = writeln!(
+            s,
+            "  dihedral  min {} deg, max {} deg",
+            fmt_angle(d.min),
+            fmt_angle(d.max)
+        );
+    }
+}
+
+/// The meshed cells by case.
+fn cells_line(s: &mut String, r: &Report) {
+    let cases: Vec<String> = CellCase::ALL
+        .iter()
+        .filter_map(|c| {
+            let e = r.cells_by_case.get(c.name())?;
+            (e.count > 0).then(|| format!("{} {} ({:.1}%)", c.name(), e.count, 100.0 * e.ratio))
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "  cells     {} meshed of {}: {}",
+        r.cells_meshed,
+        r.cells_total,
+        cases.join(", ")
+    );
+}
+
+/// Timings and the files written.
+fn output_lines(s: &mut String, r: &Report, report_path: Option<&Path>) {
+    let t = &r.timings_seconds;
+    let _ = writeln!(
+        s,
+        "  time      read {:.3} s, mesh {:.3} s, analysis {:.3} s, write {:.3} s, total {:.3} s",
+        t.read, t.mesh, t.analysis, t.write, t.total
+    );
+    let _ = writeln!(s, "  wrote     {}", r.output);
+    if let Some(p) = report_path {
+        let _ = writeln!(s, "  report    {}", p.display());
+    }
+}
+
+/// What the demo shows: the components of this method and of the other kind.
+fn demo_lines(s: &mut String, r: &Report, c: &DemoComparison, b0: usize) {
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "demo: two parallel vessels whose walls are about a third of a voxel apart."
+    );
+    let _ = writeln!(
+        s,
+        "  {}: {b0} component{} (b0 = {b0}); {} would give b0 = {}{}",
+        r.method,
+        if b0 == 1 { "" } else { "s" },
+        c.other.name(),
+        c.other_b0,
+        match (b0, c.other_b0) {
+            (2, 1) => ": the 6-fold decomposition merges the vessels".to_string(),
+            (1, 2) => ": the topology-preserving decomposition keeps them apart".to_string(),
+            _ => String::new(),
+        }
+    );
+}

@@ -1,0 +1,168 @@
+//! Mesh output by file extension: [`write_mesh`] is the twin of [`super::read_volume`], and
+//! [`MeshFormat`] chooses among the writers [`super::msh`], [`super::inp`] and [`super::vtu`].
+
+use std::io::{self, Write};
+use std::path::Path;
+
+use super::atomic::{write_atomically, WriteError};
+use super::inp::write_inp;
+use super::msh::{write_msh, MshVersion};
+use super::vtu::write_vtu;
+use crate::mesh::TetMesh;
+
+/// An output mesh format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshFormat {
+    /// Gmsh ASCII `.msh` ([`write_msh`]).
+    Msh,
+    /// Abaqus / CalculiX `.inp` ([`write_inp`]).
+    Inp,
+    /// VTK XML UnstructuredGrid `.vtu` ([`write_vtu`]).
+    Vtu,
+}
+
+impl MeshFormat {
+    /// The format named by the extension of `path` (case-insensitive): `.msh`, `.inp` or
+    /// `.vtu`.
+    ///
+    /// # Errors
+    /// [`WriteError::UnknownFormat`] for any other extension or none.
+    pub fn from_path(path: &Path) -> Result<Self, WriteError> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("msh") => Ok(MeshFormat::Msh),
+            Some("inp") => Ok(MeshFormat::Inp),
+            Some("vtu") => Ok(MeshFormat::Vtu),
+            _ => Err(WriteError::UnknownFormat {
+                path: path.to_path_buf(),
+            }),
+        }
+    }
+
+    /// Writes `mesh` in this format to `w` (not atomically; see [`write_mesh`]).
+    ///
+    /// # Errors
+    /// Whatever the format's writer returns: the first error of `w`, or
+    /// [`io::ErrorKind::InvalidInput`] for an inconsistent mesh.
+    pub fn write(
+        self,
+        mesh: &TetMesh,
+        w: &mut dyn Write,
+        options: &WriteOptions,
+    ) -> io::Result<()> {
+        match self {
+            MeshFormat::Msh => write_msh(mesh, w, options.msh_version),
+            MeshFormat::Inp => write_inp(mesh, w),
+            MeshFormat::Vtu => write_vtu(mesh, w),
+        }
+    }
+}
+
+/// Options of the mesh writers; [`WriteOptions::default`] gives the defaults of the CLI.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub struct WriteOptions {
+    /// The `.msh` format version (default 4.1); ignored by the other formats.
+    pub msh_version: MshVersion,
+}
+
+impl WriteOptions {
+    /// These options with `.msh` output in `version`.
+    #[must_use]
+    pub fn with_msh_version(mut self, version: MshVersion) -> Self {
+        self.msh_version = version;
+        self
+    }
+}
+
+/// Writes `mesh` to `path` atomically (see [`write_atomically`]), in the format chosen by
+/// the extension of `path` ([`MeshFormat::from_path`]).
+///
+/// # Errors
+/// [`WriteError::UnknownFormat`] for an unknown extension (nothing is created), otherwise
+/// whatever [`write_atomically`] returns; a writer's error is reported as [`WriteError::Io`].
+pub fn write_mesh(path: &Path, mesh: &TetMesh, options: &WriteOptions) -> Result<(), WriteError> {
+    let format = MeshFormat::from_path(path)?;
+    write_atomically(path, |w| format.write(mesh, w, options))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::BoundaryLabel;
+
+    fn one_tet() -> TetMesh {
+        TetMesh {
+            points: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            values: vec![0.0, 1.0, 2.0, 3.0],
+            tets: vec![[0, 1, 2, 3]],
+            boundary: vec![[0, 2, 1]],
+            boundary_labels: vec![BoundaryLabel::Alpha],
+        }
+    }
+
+    #[test]
+    fn format_follows_the_extension_case_insensitively() {
+        let f = |p: &str| MeshFormat::from_path(Path::new(p)).ok();
+        assert_eq!(f("a.msh"), Some(MeshFormat::Msh));
+        assert_eq!(f("dir/a.INP"), Some(MeshFormat::Inp));
+        assert_eq!(f("a.b.Vtu"), Some(MeshFormat::Vtu));
+        for p in ["a.vtk", "msh", ".msh", "a"] {
+            let e = MeshFormat::from_path(Path::new(p)).unwrap_err();
+            assert!(matches!(e, WriteError::UnknownFormat { .. }), "{p}: {e}");
+        }
+    }
+
+    #[test]
+    fn write_mesh_matches_the_format_writers() {
+        let mesh = one_tet();
+        let dir = tempfile::tempdir().unwrap();
+        let v22 = WriteOptions::default().with_msh_version(MshVersion::V22);
+        for (name, opts) in [
+            ("a.msh", WriteOptions::default()),
+            ("b.msh", v22),
+            ("c.inp", WriteOptions::default()),
+            ("d.vtu", WriteOptions::default()),
+        ] {
+            let path = dir.path().join(name);
+            write_mesh(&path, &mesh, &opts).unwrap();
+            let mut expected = Vec::new();
+            match MeshFormat::from_path(&path).unwrap() {
+                MeshFormat::Msh => write_msh(&mesh, &mut expected, opts.msh_version),
+                MeshFormat::Inp => write_inp(&mesh, &mut expected),
+                MeshFormat::Vtu => write_vtu(&mesh, &mut expected),
+            }
+            .unwrap();
+            assert_eq!(std::fs::read(&path).unwrap(), expected, "{name}");
+        }
+        let bad = dir.path().join("e.stl");
+        assert!(matches!(
+            write_mesh(&bad, &mesh, &WriteOptions::default()),
+            Err(WriteError::UnknownFormat { .. })
+        ));
+        assert!(!bad.exists());
+    }
+
+    #[test]
+    fn check_writable_rejects_directories_and_missing_parents() {
+        use super::super::atomic::check_writable;
+        let dir = tempfile::tempdir().unwrap();
+        assert!(check_writable(&dir.path().join("new.msh")).is_ok());
+        assert!(matches!(
+            check_writable(dir.path()),
+            Err(WriteError::IsDirectory { .. })
+        ));
+        let missing = dir.path().join("no/such/x.msh");
+        assert!(matches!(
+            check_writable(&missing),
+            Err(WriteError::MissingDirectory { .. })
+        ));
+        assert_eq!(
+            WriteOptions::default().msh_version,
+            MshVersion::V41,
+            "default .msh version"
+        );
+    }
+}

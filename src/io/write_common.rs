@@ -1,0 +1,134 @@
+//! Helpers shared by the mesh writers (`msh`, `inp`, `vtu`): the mesh consistency check, the
+//! invalid-input error, the boundary labels that occur, and the buffered text formatter.
+
+use std::io::{self, Write};
+
+use crate::mesh::{BoundaryLabel, TetMesh};
+
+/// Checks that `values` and `boundary_labels` have the lengths of `points` and `boundary` and
+/// that every tet and triangle refers to an existing node.
+pub(crate) fn check_lengths(mesh: &TetMesh) -> io::Result<()> {
+    if mesh.values.len() != mesh.points.len() {
+        return Err(invalid(format!(
+            "mesh has {} points but {} values",
+            mesh.points.len(),
+            mesh.values.len()
+        )));
+    }
+    if mesh.boundary_labels.len() != mesh.boundary.len() {
+        return Err(invalid(format!(
+            "mesh has {} boundary triangles but {} labels",
+            mesh.boundary.len(),
+            mesh.boundary_labels.len()
+        )));
+    }
+    let n = mesh.points.len();
+    let bad = mesh
+        .tets
+        .iter()
+        .flatten()
+        .chain(mesh.boundary.iter().flatten())
+        .any(|&i| i as usize >= n);
+    if bad {
+        return Err(invalid(format!(
+            "mesh refers to a node index >= the {n} points"
+        )));
+    }
+    Ok(())
+}
+
+/// An [`io::ErrorKind::InvalidInput`] error with `msg`.
+pub(crate) fn invalid(msg: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, msg)
+}
+
+/// For each label in [`BoundaryLabel::ALL`] order that occurs: (label, triangle count).
+pub(crate) fn present_labels(mesh: &TetMesh) -> Vec<(BoundaryLabel, usize)> {
+    let mut count = [0usize; 3];
+    for &l in &mesh.boundary_labels {
+        count[l as usize] += 1;
+    }
+    BoundaryLabel::ALL
+        .into_iter()
+        .filter(|&l| count[l as usize] > 0)
+        .map(|l| (l, count[l as usize]))
+        .collect()
+}
+
+/// Threshold at which [`TextOut`] hands its buffer to the underlying writer.
+const CHUNK: usize = 1 << 16;
+
+/// Fast formatter for the text writers: integers via `itoa`, floats via `ryu` (shortest
+/// representation that round-trips), collected in a local buffer that is passed to the
+/// (possibly dynamically dispatched) writer in 64 KiB chunks.
+pub(crate) struct TextOut<'a> {
+    w: &'a mut dyn Write,
+    buf: Vec<u8>,
+    int: itoa::Buffer,
+    float: ryu::Buffer,
+}
+
+impl<'a> TextOut<'a> {
+    pub(crate) fn new(w: &'a mut dyn Write) -> Self {
+        TextOut {
+            w,
+            buf: Vec::with_capacity(CHUNK + 4096),
+            int: itoa::Buffer::new(),
+            float: ryu::Buffer::new(),
+        }
+    }
+
+    /// Appends a string.
+    #[inline]
+    pub(crate) fn s(&mut self, s: &str) -> &mut Self {
+        self.buf.extend_from_slice(s.as_bytes());
+        self
+    }
+
+    /// Appends an integer in decimal.
+    #[inline]
+    pub(crate) fn int<I: itoa::Integer>(&mut self, v: I) -> &mut Self {
+        self.buf.extend_from_slice(self.int.format(v).as_bytes());
+        self
+    }
+
+    /// Appends a float in the shortest form that parses back to the same `f64`
+    /// (`NaN`/`inf`/`-inf` for non-finite values).
+    #[inline]
+    pub(crate) fn float(&mut self, v: f64) -> &mut Self {
+        self.buf.extend_from_slice(self.float.format(v).as_bytes());
+        self
+    }
+
+    /// Appends a float in at most `width` (>= 16) characters: the shortest round-trip form when
+    /// it fits, otherwise scientific notation with `width - 8` fractional digits.
+    #[inline]
+    pub(crate) fn float_width(&mut self, v: f64, width: usize) -> &mut Self {
+        let short = self.float.format(v);
+        if short.len() <= width {
+            self.buf.extend_from_slice(short.as_bytes());
+        } else {
+            use std::io::Write as _;
+            let _ = write!(self.buf, "{:.*e}", width - 8, v);
+        }
+        self
+    }
+
+    /// Ends a line and passes the buffer on when it is full.
+    #[inline]
+    pub(crate) fn nl(&mut self) -> io::Result<()> {
+        self.buf.push(b'\n');
+        if self.buf.len() >= CHUNK {
+            self.w.write_all(&self.buf)?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+
+    /// Writes whatever is buffered and flushes the underlying writer.
+    pub(crate) fn finish(mut self) -> io::Result<()> {
+        self.w.write_all(&self.buf)?;
+        self.buf.clear();
+        self.w.flush()
+    }
+}
