@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# SHA-256 of every output tptd-mesh writes, for checking that a refactoring changes no byte.
+#
+#   scripts/output_checksums.sh [BIN] > sums.txt       # BIN default: target/release/tptd-mesh
+#   diff sums-before.txt sums-after.txt
+#
+# Volumes: the demo, the MNI152 T1 and white-matter templates of the `nilearn` package and
+# benchmarks/data/noisy_256.npy (make it with `python3 benchmarks/make_data.py --sizes 256`).
+# Missing volumes are reported and skipped. Every method, every format (msh 4.1 and 2.2, inp,
+# vtu). Outputs go to a temporary folder and are deleted; only the sums are printed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BIN=$(realpath "${1:-target/release/tptd-mesh}")
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+
+NILEARN=$(python3 -c "import nilearn, os; print(os.path.dirname(nilearn.__file__))" 2>/dev/null || true)
+MNI="$NILEARN/datasets/data"
+
+# name | input ('demo' for the bundled one) | interval arguments
+VOLUMES=(
+  "demo|demo|"
+  "mni_t1|$MNI/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz|--alpha 152 --beta 202"
+  "mni_wm|$MNI/mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz|--alpha 127.5"
+  "noisy_256|benchmarks/data/noisy_256.npy|--alpha -2 --beta 2"
+)
+
+for entry in "${VOLUMES[@]}"; do
+  IFS='|' read -r name input interval <<<"$entry"
+  src=("$input")
+  [ "$input" = demo ] && src=(--demo)
+  if [ "$input" != demo ] && [ ! -f "$input" ]; then
+    echo "missing  $name ($input)" >&2
+    continue
+  fi
+  for method in ctd tptd std six five; do
+    for out in v41.msh v22.msh inp vtu; do
+      args=()
+      [ "$out" = v22.msh ] && args=(--msh-version 2.2)
+      # shellcheck disable=SC2086
+      "$BIN" "${src[@]}" $interval --method "$method" -o "$TMP/out.${out##*.}" \
+        --no-analysis -q "${args[@]}"
+      echo "$(sha256sum <"$TMP/out.${out##*.}" | cut -c1-64)  $name $method $out"
+      rm -f "$TMP/out.${out##*.}"
+    done
+  done
+done
