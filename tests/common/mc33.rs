@@ -509,7 +509,10 @@ pub fn mc33_label(b: &Bucket, up: [usize; 3], down: [usize; 3]) -> Option<&'stat
         (13, 3) if b.corner == 2 => ("13.5.1", 2, false),
         _ => return None,
     };
-    (comps == want_comps && tunnel == want_tunnel).then_some(label)
+    // 13.5.1: two balls on each side (a single component on one side is a thin gap that the
+    // sampled reference cannot separate)
+    let both = label != "13.5.1" || up[0] == down[0];
+    (comps == want_comps && tunnel == want_tunnel && both).then_some(label)
 }
 
 pub fn field(cfg: &Config) -> Field {
