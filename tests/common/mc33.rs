@@ -22,8 +22,8 @@
 //! Note: for case 13 with three "joined" faces, the three faces always share a corner (a
 //! random search of 2·10⁷ tetrahedral-pattern cells found no "band" triple). Around a corner of
 //! the minority sign this gives the single 12-vertex disk ({f>iso} and {f<iso} both balls):
-//! labelled 13.4 here (CGAL's `MC_13_12_VTS_*`, which the random search did not hit); around a
-//! corner of the other sign it gives 13.5.1 (two balls each side) or 13.5.2 (tunnel).
+//! labelled 13.4 here (CGAL's `MC_13_12_VTS_*`; the search of `tests/gen_mc33.rs` finds one);
+//! around a corner of the other sign it gives 13.5.1 (two balls each side) or 13.5.2 (tunnel).
 
 #![allow(clippy::approx_constant, clippy::excessive_precision)]
 

@@ -6,6 +6,8 @@
 //! do not edit. The generator is deterministic: after regenerating,
 //! `git diff --exit-code tests/common/mc33_table.rs` checks that this file is up to date.
 
+#![allow(clippy::approx_constant)]
+
 /// (name, MC33 label, corner values, isovalue)
 pub const SEARCHED: [(&str, &str, [f64; 8], f64); 106] = [
     // class 1, 0 of 0 ambiguous faces joined, body saddles 0 in / 0 out; Betti up [1, 0, 0] down [1, 0, 0] (sample 0)
