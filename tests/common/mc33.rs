@@ -8,23 +8,27 @@
 //!   (x most significant); ours is `c = x + 2y + 4z`, so
 //!   `ours[c] = cgal[4*(c&1) + 2*((c>>1)&1) + ((c>>2)&1)]` (a reflection swapping x and z,
 //!   which preserves topology anyway).
-//! * the others were found by a seeded random search over cells (values in [-1, 1]),
-//!   bucketed by (MC sign class under the 24 rotations + complement, number of ambiguous faces
-//!   resolved "joined" for the minority sign, number of body saddles in the cell and their
-//!   side), rounded to 4 decimals, and labelled with the MC33 subcase that the face tests and
-//!   the reference Betti numbers of {f > iso} and {f < iso} identify. Labels are documentation
-//!   only: every test recomputes the truth with `reference.rs`, and `mc33_labels_are_consistent`
-//!   checks the sign class and tunnel claims of each label against the values.
+//! * the others (`SEARCHED`) are generated into `mc33_table.rs` by the seeded random search of
+//!   `tests/gen_mc33.rs` (`cargo test --release --test gen_mc33 -- --ignored
+//!   generate_mc33_table`; do not edit that file by hand): cells with values in [-1, 1],
+//!   bucketed by [`bucket`] (MC sign class under the 24 rotations + complement, number of
+//!   ambiguous faces resolved "joined" for the minority sign, number of body saddles in the
+//!   cell and their side) and by the reference Betti numbers of {f > iso} and {f < iso},
+//!   rounded to 4 decimals, one cell each, labelled by [`mc33_label`] with the MC33 subcase
+//!   that the face tests and the Betti numbers identify. Labels are documentation only: every
+//!   test recomputes the truth with `reference.rs`, and `mc33_labels_are_consistent` checks
+//!   the sign class and tunnel claims of each label against the values.
 //!
 //! Note: for case 13 with three "joined" faces, the three faces always share a corner (a
 //! random search of 2·10⁷ tetrahedral-pattern cells found no "band" triple). Around a corner of
 //! the minority sign this gives the single 12-vertex disk ({f>iso} and {f<iso} both balls):
-//! labelled 13.4 here (CGAL's `MC_13_12_VTS_*`, which the random search did not hit); around a
-//! corner of the other sign it gives 13.5.1 (two balls each side) or 13.5.2 (tunnel).
+//! labelled 13.4 here (CGAL's `MC_13_12_VTS_*`; the search of `tests/gen_mc33.rs` finds one);
+//! around a corner of the other sign it gives 13.5.1 (two balls each side) or 13.5.2 (tunnel).
 
 #![allow(clippy::approx_constant, clippy::excessive_precision)]
 
-use super::reference::{body_saddles, face_saddles, Field};
+use super::mc33_table::SEARCHED;
+use super::reference::{body_saddles, face_saddle, face_saddles, Field, CELL_FACES};
 
 #[derive(Clone, Debug)]
 pub struct Config {
@@ -48,530 +52,16 @@ fn from_cgal(v: [f64; 8]) -> [f64; 8] {
     std::array::from_fn(|c| v[4 * (c & 1) + 2 * ((c >> 1) & 1) + ((c >> 2) & 1)])
 }
 
-const fn c(name: &'static str, case: &'static str, values: [f64; 8], iso: f64) -> Config {
-    Config {
-        name,
-        case,
-        values,
-        iso,
-    }
-}
-
 pub fn configs() -> Vec<Config> {
-    let mut v = vec![
-        c(
-            "1",
-            "1",
-            [
-                0.9707, -0.9802, -0.8748, -0.8646, -0.8626, -0.8471, -0.9436, -0.8873,
-            ],
-            0.0553,
-        ),
-        c(
-            "2",
-            "2",
-            [
-                -0.9225, -0.8843, -0.9524, -0.9577, -0.9594, -0.9144, 0.9551, 0.9805,
-            ],
-            0.0197,
-        ),
-        c(
-            "3.1",
-            "3.1",
-            [
-                0.8678, -0.6246, -0.9276, -0.5489, -0.9987, -0.7792, 0.8444, -0.9697,
-            ],
-            0.3997,
-        ),
-        c(
-            "3.1b",
-            "3.1",
-            [
-                -0.3752, -0.9981, -0.7779, 0.8062, -0.7814, 0.8266, -0.6856, -0.9429,
-            ],
-            0.3381,
-        ),
-        c(
-            "3.2",
-            "3.2",
-            [
-                -0.9494, -0.8063, 0.9851, -0.8062, -0.8088, -0.9809, -0.8829, 0.9824,
-            ],
-            -0.3648,
-        ),
-        c(
-            "3.2b",
-            "3.2",
-            [
-                0.7098, 0.9668, 0.8313, -0.9089, 0.9795, 0.8394, -0.9913, 0.9714,
-            ],
-            0.3453,
-        ),
-        c(
-            "4.1.1",
-            "4.1.1",
-            [
-                -0.7384, 0.7855, -0.3791, -0.8352, -0.9242, 0.0412, 0.8818, -0.066,
-            ],
-            0.399,
-        ),
-        c(
-            "4.1.1b",
-            "4.1.1",
-            [
-                0.9829, 0.8726, 0.9112, -0.984, -0.9823, 0.8738, 0.9982, 0.8119,
-            ],
-            -0.2559,
-        ),
-        c(
-            "4.1.2",
-            "4.1.2",
-            [
-                0.6922, 0.6149, 0.5274, -0.9462, -0.7871, 0.7043, 0.606, 0.7862,
-            ],
-            0.3976,
-        ),
-        c(
-            "5",
-            "5",
-            [
-                -0.9367, -0.9131, -0.8922, -0.8781, 0.9264, 0.9391, 0.9298, -0.9959,
-            ],
-            0.0224,
-        ),
-        c(
-            "6.1.1",
-            "6.1.1",
-            [
-                0.8775, -0.9642, -0.6889, -0.9492, -0.9421, 0.8481, -0.2104, 0.9513,
-            ],
-            0.3981,
-        ),
-        c(
-            "6.1.1b",
-            "6.1.1",
-            [
-                0.9389, -0.9582, -0.8391, 0.9602, 0.0683, 0.8366, -0.9918, 0.2757,
-            ],
-            -0.3846,
-        ),
-        c(
-            "6.1.2",
-            "6.1.2",
-            [
-                -0.9283, -0.2863, 0.4962, -0.8123, -0.6372, 0.5497, -0.5032, -0.4616,
-            ],
-            -0.3911,
-        ),
-        c(
-            "6.2",
-            "6.2",
-            [
-                -0.984, 0.979, 0.8056, 0.9705, 0.8833, 0.8155, -0.9606, -0.7485,
-            ],
-            0.3705,
-        ),
-        c(
-            "6.2b",
-            "6.2",
-            [
-                -0.7866, -0.6931, 0.2315, 0.9022, 0.9667, -0.9555, -0.6271, -0.6677,
-            ],
-            -0.3552,
-        ),
-        c(
-            "7.1",
-            "7.1",
-            [
-                -0.9323, 0.7922, 0.7963, -0.8234, 0.7905, -0.885, -0.8106, -0.7861,
-            ],
-            0.3746,
-        ),
-        c(
-            "7.1b",
-            "7.1",
-            [
-                -0.7755, 0.9493, 0.9014, 0.6019, 0.9777, -0.7788, -0.7677, 0.9794,
-            ],
-            -0.3335,
-        ),
-        c(
-            "7.2",
-            "7.2",
-            [
-                -0.9406, 0.7629, 0.8067, -0.2396, 0.1383, -0.8611, 0.1938, 0.958,
-            ],
-            -0.0351,
-        ),
-        c(
-            "7.2b",
-            "7.2",
-            [
-                -0.8915, -0.7388, 0.9546, -0.2678, 0.2511, -0.9762, -0.7898, 0.855,
-            ],
-            0.0296,
-        ),
-        c(
-            "7.3",
-            "7.3",
-            [
-                0.2047, -0.9552, -0.8119, 0.692, 0.8827, 0.0721, 0.9531, -0.6445,
-            ],
-            -0.0949,
-        ),
-        c(
-            "7.3b",
-            "7.3",
-            [
-                0.8689, -0.0574, -0.9448, 0.9764, -0.8619, -0.8952, 0.9906, 0.0173,
-            ],
-            0.1368,
-        ),
-        c(
-            "7.3c",
-            "7.3",
-            [
-                -0.5451, -0.7916, -0.8645, 0.958, -0.8057, 0.2243, 0.2088, -0.8398,
-            ],
-            -0.2428,
-        ),
-        c(
-            "7.4.1",
-            "7.4.1",
-            [
-                0.9617, -0.5913, -0.5818, 0.4235, 0.5032, 0.4082, 0.415, -0.856,
-            ],
-            0.2205,
-        ),
-        c(
-            "7.4.1b",
-            "7.4.1",
-            [
-                0.8286, -0.9107, 0.835, 0.8418, -0.9058, 0.8002, 0.7723, -0.9732,
-            ],
-            0.3962,
-        ),
-        c(
-            "7.4.1c",
-            "7.4.1",
-            [
-                -0.4615, 0.8855, -0.4298, -0.989, 0.2594, -0.3593, -0.7147, 0.3618,
-            ],
-            -0.2096,
-        ),
-        c(
-            "7.4.2",
-            "7.4.2",
-            [
-                -0.9213, 0.8557, 0.8848, 0.7252, 0.9852, -0.7889, -0.858, 0.7893,
-            ],
-            0.0833,
-        ),
-        c(
-            "8",
-            "8",
-            [
-                -0.8931, -0.9982, -0.8536, -0.8923, 0.9855, 0.9909, 0.986, 0.9647,
-            ],
-            0.0455,
-        ),
-        c(
-            "9",
-            "9",
-            [
-                0.9692, -0.9995, 0.9427, 0.905, -0.9752, -0.971, 0.8904, -0.9621,
-            ],
-            -0.0321,
-        ),
-        c(
-            "9b",
-            "9",
-            [
-                -0.9746, -0.8318, 0.9214, -0.9199, 0.9507, -0.9365, 0.8973, 0.9346,
-            ],
-            -0.0252,
-        ),
-        c(
-            "10.1.1",
-            "10.1.1",
-            [
-                0.8887, 0.8593, -0.9813, -0.9391, -0.9843, -0.9513, 0.9149, 0.7853,
-            ],
-            0.3788,
-        ),
-        c(
-            "10.1.1b",
-            "10.1.1",
-            [
-                -0.9495, 0.9389, 0.8737, -0.8221, -0.7469, 0.8455, 0.9157, -0.9981,
-            ],
-            0.3805,
-        ),
-        c(
-            "10.1.2",
-            "10.1.2",
-            [
-                -0.1744, -0.6724, -0.7293, 0.7549, 0.7162, -0.6116, -0.8474, -0.1666,
-            ],
-            -0.281,
-        ),
-        c(
-            "10.1.2b",
-            "10.1.2",
-            [
-                0.8564, 0.2376, 0.5638, -0.8371, -0.5534, 0.7612, 0.2233, 0.674,
-            ],
-            0.2716,
-        ),
-        c(
-            "10.2",
-            "10.2",
-            [
-                0.7338, 0.2482, -0.4167, -0.9978, -0.4841, -0.8945, 0.9628, 0.2322,
-            ],
-            -0.0915,
-        ),
-        c(
-            "10.2b",
-            "10.2",
-            [
-                -0.018, 0.4578, -0.6017, 0.9233, 0.4587, -0.9867, 0.875, 0.0638,
-            ],
-            0.2478,
-        ),
-        c(
-            "10.2c",
-            "10.2",
-            [
-                -0.1255, -0.9931, 0.921, 0.1768, 0.248, 0.8312, -0.1814, -0.4667,
-            ],
-            -0.0081,
-        ),
-        c(
-            "11",
-            "11",
-            [
-                0.983, -0.9582, -0.9163, -0.9712, 0.9665, 0.9541, -0.9205, 0.9374,
-            ],
-            -0.0216,
-        ),
-        c(
-            "11b",
-            "11",
-            [
-                -0.0261, 0.6174, 0.0142, -0.9062, -0.9664, 0.949, 0.8295, 0.8392,
-            ],
-            0.2751,
-        ),
-        c(
-            "12.1.1",
-            "12.1.1",
-            [
-                0.8421, -0.9432, -0.8007, 0.8582, 0.9467, 0.9842, -0.95, -0.9727,
-            ],
-            0.396,
-        ),
-        c(
-            "12.1.1b",
-            "12.1.1",
-            [
-                -0.9709, 0.845, 0.9182, -0.9563, 0.8871, -0.913, 0.8566, -0.924,
-            ],
-            0.3962,
-        ),
-        c(
-            "12.1.2",
-            "12.1.2",
-            [
-                0.1093, 0.8817, -0.9224, 0.2162, -0.4393, -0.1518, 0.9607, -0.6306,
-            ],
-            -0.0686,
-        ),
-        c(
-            "12.1.2b",
-            "12.1.2",
-            [
-                -0.9507, 0.673, 0.5206, 0.0499, 0.6357, 0.0309, 0.2212, -0.8709,
-            ],
-            0.1195,
-        ),
-        c(
-            "12.2",
-            "12.2",
-            [
-                0.9485, -0.9054, 0.8577, 0.1964, -0.2519, 0.9469, -0.7966, -0.9896,
-            ],
-            -0.0037,
-        ),
-        c(
-            "12.2b",
-            "12.2",
-            [
-                0.8907, 0.531, -0.0445, -0.9674, -0.7521, 0.246, 0.8229, -0.2578,
-            ],
-            0.1262,
-        ),
-        c(
-            "12.2c",
-            "12.2",
-            [
-                -0.4041, -0.5208, 0.6195, -0.9319, 0.3141, 0.9625, -0.9232, -0.1032,
-            ],
-            -0.2621,
-        ),
-        c(
-            "13.1",
-            "13.1",
-            [
-                -0.9832, 0.7431, 0.7356, -0.8505, 0.7555, -0.9689, -0.9211, 0.881,
-            ],
-            0.3442,
-        ),
-        c(
-            "13.1b",
-            "13.1",
-            [
-                0.8644, -0.9034, -0.8771, 0.9185, -0.7998, 0.7944, 0.8865, -0.8907,
-            ],
-            0.3939,
-        ),
-        c(
-            "13.1c",
-            "13.1",
-            [
-                0.9696, -0.8379, -0.7402, 0.8009, -0.8298, 0.9584, 0.7801, -0.7993,
-            ],
-            -0.3621,
-        ),
-        c(
-            "13.1d",
-            "13.1",
-            [
-                -0.9307, 0.9429, 0.9652, -0.9411, 0.9854, -0.9915, -0.8049, 0.9566,
-            ],
-            -0.3772,
-        ),
-        c(
-            "13.2",
-            "13.2",
-            [
-                -0.8872, 0.2337, 0.9961, -0.8915, 0.9174, -0.9282, -0.635, 0.0647,
-            ],
-            -0.0553,
-        ),
-        c(
-            "13.2b",
-            "13.2",
-            [
-                0.5191, -0.8872, -0.6931, 0.1613, -0.7318, 0.9837, 0.7994, -0.4413,
-            ],
-            0.0636,
-        ),
-        c(
-            "13.2c",
-            "13.2",
-            [
-                0.0843, 0.9958, 0.7069, -0.0487, 0.7898, -0.8797, -0.7267, 0.9866,
-            ],
-            0.1799,
-        ),
-        c(
-            "13.2d",
-            "13.2",
-            [
-                0.8366, -0.8019, -0.2392, 0.7032, -0.2297, 0.5477, 0.8737, -0.9089,
-            ],
-            -0.0056,
-        ),
-        c(
-            "13.3",
-            "13.3",
-            [
-                -0.9693, 0.7133, 0.511, -0.2472, 0.2192, -0.6691, -0.2971, 0.8941,
-            ],
-            0.1138,
-        ),
-        c(
-            "13.3b",
-            "13.3",
-            [
-                0.9059, -0.2347, -0.759, 0.6079, -0.7807, 0.5815, 0.1303, -0.9866,
-            ],
-            0.0853,
-        ),
-        c(
-            "13.3c",
-            "13.3",
-            [
-                0.982, -0.3156, -0.4509, 0.1574, -0.9063, 0.9297, 0.1526, -0.9949,
-            ],
-            -0.1738,
-        ),
-        c(
-            "13.3d",
-            "13.3",
-            [
-                0.9041, -0.9918, -0.1712, 0.6917, -0.6384, 0.339, 0.8984, -0.5944,
-            ],
-            -0.0754,
-        ),
-        c(
-            "13.5.1",
-            "13.5.1",
-            [
-                -0.7174, -0.0659, 0.419, -0.863, 0.8619, -0.7839, -0.2892, 0.3132,
-            ],
-            -0.18,
-        ),
-        c(
-            "13.5.1b",
-            "13.5.1",
-            [
-                -0.8829, 0.806, 0.0211, -0.9763, 0.406, -0.2786, -0.7416, 0.8628,
-            ],
-            -0.1166,
-        ),
-        c(
-            "13.5.1c",
-            "13.5.1",
-            [
-                0.0233, 0.9302, 0.8532, -0.4644, 0.8698, -0.7445, -0.1154, 0.3695,
-            ],
-            0.2467,
-        ),
-        c(
-            "13.5.2",
-            "13.5.2",
-            [
-                -0.4695, 0.9089, 0.9047, -0.9184, 0.9582, -0.9989, -0.9337, 0.6472,
-            ],
-            0.1013,
-        ),
-        c(
-            "13.5.2b",
-            "13.5.2",
-            [
-                0.9203, -0.9875, -0.3663, 0.9853, -0.9039, 0.6665, 0.7934, -0.9054,
-            ],
-            -0.046,
-        ),
-        c(
-            "14",
-            "14",
-            [
-                -0.9602, -0.9876, 0.9861, -0.9319, -0.9051, 0.8839, 0.9531, 0.9597,
-            ],
-            -0.0011,
-        ),
-        c(
-            "14b",
-            "14",
-            [
-                -0.801, -0.8569, 0.8793, -0.8985, -0.3702, 0.9852, 0.1242, 0.1231,
-            ],
-            -0.1345,
-        ),
-    ];
+    let mut v: Vec<Config> = SEARCHED
+        .iter()
+        .map(|&(name, case, values, iso)| Config {
+            name,
+            case,
+            values,
+            iso,
+        })
+        .collect();
     // CGAL test_tmc_topology.cpp inner-ambiguity cases (CGAL corner order converted)
     let cgal: [(&'static str, [f64; 8], f64); 13] = [
         (
@@ -775,49 +265,53 @@ pub fn configs() -> Vec<Config> {
 pub fn two_level_cells() -> Vec<TwoLevel> {
     let mut out = Vec::new();
     for cfg in configs() {
-        let v = cfg.values;
-        let fs = face_saddles(&v);
-        let bs = body_saddles(&v);
-        if bs.len() != 2 || fs.len() != 6 {
-            continue;
-        }
-        let mut crit: Vec<f64> = v.to_vec();
-        crit.extend(fs);
-        crit.extend(bs.iter().map(|b| b.1));
-        crit.sort_by(|a, b| a.partial_cmp(b).unwrap());
-        let (s1, s2) = {
-            let (a, b) = (bs[0].1, bs[1].1);
-            (a.min(b), a.max(b))
-        };
-        let below = |s: f64| {
-            crit.iter()
-                .copied()
-                .filter(|&c| c < s)
-                .fold(f64::NEG_INFINITY, f64::max)
-        };
-        let above = |s: f64| {
-            crit.iter()
-                .copied()
-                .filter(|&c| c > s)
-                .fold(f64::INFINITY, f64::min)
-        };
-        let mid = 0.5 * (s1 + s2);
-        let lo = s1 - 0.5 * (s1 - below(s1));
-        let hi = s2 + 0.5 * (above(s2) - s2);
-        let scale = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        if s2 - s1 < 1e-3 * scale {
-            continue;
-        }
-        for (tag, a, b) in [("around", lo, hi), ("low", lo, mid), ("high", mid, hi)] {
+        for (tag, alpha, beta) in two_level_intervals(&cfg.values) {
             out.push(TwoLevel {
                 name: format!("{}:{tag}", cfg.name),
-                values: v,
-                alpha: a,
-                beta: b,
+                values: cfg.values,
+                alpha,
+                beta,
             });
         }
     }
     out
+}
+
+/// The intervals of [`two_level_cells`] for one cell: (tag, alpha, beta).
+pub fn two_level_intervals(v: &[f64; 8]) -> Vec<(&'static str, f64, f64)> {
+    let fs = face_saddles(v);
+    let bs = body_saddles(v);
+    if bs.len() != 2 || fs.len() != 6 {
+        return Vec::new();
+    }
+    let mut crit: Vec<f64> = v.to_vec();
+    crit.extend(fs);
+    crit.extend(bs.iter().map(|b| b.1));
+    crit.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let (s1, s2) = {
+        let (a, b) = (bs[0].1, bs[1].1);
+        (a.min(b), a.max(b))
+    };
+    let below = |s: f64| {
+        crit.iter()
+            .copied()
+            .filter(|&c| c < s)
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let above = |s: f64| {
+        crit.iter()
+            .copied()
+            .filter(|&c| c > s)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mid = 0.5 * (s1 + s2);
+    let lo = s1 - 0.5 * (s1 - below(s1));
+    let hi = s2 + 0.5 * (above(s2) - s2);
+    let scale = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if s2 - s1 < 1e-3 * scale {
+        return Vec::new();
+    }
+    vec![("around", lo, hi), ("low", lo, mid), ("high", mid, hi)]
 }
 
 /// 24 rotations of the cube as corner permutations.
@@ -893,6 +387,132 @@ pub fn sign_class(values: &[f64; 8], iso: f64) -> &'static str {
         }
     }
     unreachable!("every mask has a class")
+}
+
+/// What the MC33 search buckets cells by (see [`bucket`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Bucket {
+    /// MC sign class, 0..=14 (as [`sign_class`]).
+    pub class: u8,
+    /// Ambiguous faces (two diagonal corners of each sign).
+    pub ambiguous: u8,
+    /// Ambiguous faces on which the minority corners are joined (face saddle on their side).
+    pub joined: u8,
+    /// Class 13 with three joined faces: 1 = they share a corner of the joined sign,
+    /// 2 = a corner of the other sign, 3 = no common corner; 0 otherwise.
+    pub corner: u8,
+    /// Body saddles strictly inside the cell on the minority side of the isovalue ...
+    pub saddles_in: u8,
+    /// ... and on the other side (or at the isovalue).
+    pub saddles_out: u8,
+}
+
+/// The bucket of a cell with the minority sign taken as "inside" (f > iso if fewer corners
+/// are above iso than below). For 4/4 cells both signs are minorities and the smaller of the
+/// two buckets is taken, so that a cell and its complement share their bucket.
+pub fn bucket(values: &[f64; 8], iso: f64) -> Bucket {
+    let above = values.iter().filter(|&&x| x > iso).count();
+    match above.cmp(&4) {
+        std::cmp::Ordering::Less => oriented_bucket(values, iso, false),
+        std::cmp::Ordering::Greater => oriented_bucket(values, iso, true),
+        std::cmp::Ordering::Equal => {
+            oriented_bucket(values, iso, false).min(oriented_bucket(values, iso, true))
+        }
+    }
+}
+
+/// The bucket with "inside" = f > iso (`flip` false) or f < iso (`flip` true).
+fn oriented_bucket(values: &[f64; 8], iso: f64, flip: bool) -> Bucket {
+    let s = if flip { -1.0 } else { 1.0 };
+    let v: [f64; 8] = values.map(|x| s * (x - iso));
+    let inside = |c: usize| v[c] > 0.0;
+    let mut ambiguous = 0u8;
+    let mut joined_faces = Vec::new();
+    for f in &CELL_FACES {
+        let [a00, a10, a01, a11] = f.map(&inside);
+        if a00 == a11 && a10 == a01 && a00 != a10 {
+            ambiguous += 1;
+            let sv = face_saddle(v[f[0]], v[f[1]], v[f[2]], v[f[3]])
+                .expect("an ambiguous face has an interior saddle");
+            if sv > 0.0 {
+                joined_faces.push(*f);
+            }
+        }
+    }
+    let class: u8 = sign_class(values, iso).parse().expect("numeric class");
+    let corner = if class == 13 && joined_faces.len() == 3 {
+        match (0..8).find(|c| joined_faces.iter().all(|f| f.contains(c))) {
+            Some(c) if inside(c) => 1,
+            Some(_) => 2,
+            None => 3,
+        }
+    } else {
+        0
+    };
+    let bs = body_saddles(&v);
+    let saddles_in = bs.iter().filter(|b| b.1 > 0.0).count() as u8;
+    Bucket {
+        class,
+        ambiguous,
+        joined: joined_faces.len() as u8,
+        corner,
+        saddles_in,
+        saddles_out: bs.len() as u8 - saddles_in,
+    }
+}
+
+/// The MC33 subcases, in Chernyaev's order.
+pub const MC33_FAMILY: [&str; 31] = [
+    "1", "2", "3.1", "3.2", "4.1.1", "4.1.2", "5", "6.1.1", "6.1.2", "6.2", "7.1", "7.2", "7.3",
+    "7.4.1", "7.4.2", "8", "9", "10.1.1", "10.1.2", "10.2", "11", "12.1.1", "12.1.2", "12.2",
+    "13.1", "13.2", "13.3", "13.4", "13.5.1", "13.5.2", "14",
+];
+
+/// The MC33 subcase of a cell from its bucket (sign class and face tests) and the reference
+/// Betti numbers of {f > iso} (`up`) and {f < iso} (`down`); `None` when they do not fit
+/// Chernyaev's description of any subcase (components and tunnels).
+pub fn mc33_label(b: &Bucket, up: [usize; 3], down: [usize; 3]) -> Option<&'static str> {
+    let tunnel = up[1] + down[1] > 0;
+    let comps = up[0].max(down[0]);
+    let k = b.joined;
+    let (label, want_comps, want_tunnel) = match (b.class, k) {
+        (1, _) => ("1", 1, false),
+        (2, _) => ("2", 1, false),
+        (5, _) => ("5", 1, false),
+        (8, _) => ("8", 1, false),
+        (9, _) => ("9", 1, false),
+        (11, _) => ("11", 1, false),
+        (14, _) => ("14", 1, false),
+        (3, 0) => ("3.1", 2, false),
+        (3, 1) => ("3.2", 1, false),
+        (4, 0) if tunnel => ("4.1.2", 1, true),
+        (4, 0) => ("4.1.1", 2, false),
+        (6, 0) if tunnel => ("6.1.2", 1, true),
+        (6, 0) => ("6.1.1", 2, false),
+        (6, 1) => ("6.2", 1, false),
+        (7, 0) => ("7.1", 3, false),
+        (7, 1) => ("7.2", 2, false),
+        (7, 2) => ("7.3", 1, false),
+        (7, 3) if tunnel => ("7.4.2", 1, true),
+        (7, 3) => ("7.4.1", 2, false),
+        (10, 0) if tunnel => ("10.1.2", 1, true),
+        (10, 0) => ("10.1.1", 2, false),
+        (10, 1) => ("10.2", 1, false),
+        (12, 0) if tunnel => ("12.1.2", 1, true),
+        (12, 0) => ("12.1.1", 2, false),
+        (12, 1) => ("12.2", 1, false),
+        (13, 0) => ("13.1", 4, false),
+        (13, 1) => ("13.2", 3, false),
+        (13, 2) => ("13.3", 2, false),
+        (13, 3) if b.corner == 1 => ("13.4", 1, false),
+        (13, 3) if b.corner == 2 && tunnel => ("13.5.2", 2, true),
+        (13, 3) if b.corner == 2 => ("13.5.1", 2, false),
+        _ => return None,
+    };
+    // 13.5.1: two balls on each side (a single component on one side is a thin gap that the
+    // sampled reference cannot separate)
+    let both = label != "13.5.1" || up[0] == down[0];
+    (comps == want_comps && tunnel == want_tunnel && both).then_some(label)
 }
 
 pub fn field(cfg: &Config) -> Field {

@@ -7,6 +7,7 @@ pub mod external;
 pub mod files;
 pub mod invariants;
 pub mod mc33;
+pub mod mc33_table;
 pub mod reference;
 
 /// splitmix64: tiny, seedable, good enough for test data.
