@@ -16,6 +16,7 @@ pub mod demo;
 pub mod extract;
 pub mod geom;
 pub mod grid;
+pub mod improve;
 pub mod io;
 pub mod keys;
 pub mod mesh;

@@ -1,0 +1,259 @@
+//! Edge collapse: merges vertex `a` into its neighbour `b`, removing the tets around the edge.
+//!
+//! A collapse can change the topology; it is allowed only under the link condition
+//! (Dey, Edelsbrunner et al.): the link of `a` and the link of `b` intersect exactly in the
+//! link of the edge, computed in the complex closed by a virtual vertex coning the boundary,
+//! so that the boundary surface stays a 2-manifold. `b` must lie on every surface `a` lies on
+//! (same level, same box planes), boundary faces keep their labels, and every remaining tet
+//! must stay positive and better than the worst one the collapse removes or changes.
+
+use super::local::{face_key, BoundaryFace, LocalMesh};
+use super::Ctx;
+
+/// The collapse of `a` into `b`, if legal and improving: the smallest quality of the changed
+/// tets afterwards.
+pub fn evaluate_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
+    if !lm.is_free(a) || !lm.is_free(b) {
+        return None;
+    }
+    if !lm.con[a as usize].may_merge_into(&lm.con[b as usize]) {
+        return None;
+    }
+    let shared = shared_tets(lm, a, b);
+    if shared.is_empty() {
+        return None;
+    }
+    if lm.con[a as usize].level.is_some() && !short_edge(lm, a, b, ctx.boundary_collapse_ratio) {
+        return None;
+    }
+    let mut old = f64::INFINITY;
+    let mut new = f64::INFINITY;
+    let xb = lm.x[b as usize];
+    for &t in &lm.star[a as usize] {
+        let tet = lm.tets[t as usize];
+        let p = lm.corners(tet);
+        old = old.min(lm.q[t as usize]);
+        if !shared.contains(&t) {
+            let mut q = p;
+            for (i, &w) in tet.iter().enumerate() {
+                if w == a {
+                    q[i] = xb;
+                }
+            }
+            new = new.min(ctx.quality(q));
+        }
+    }
+    let gain = new > 0.0 && new > old;
+    (gain && link_condition(lm, a, b, &shared)).then_some(new)
+}
+
+/// Whether edge `ab` is short against the other edges at `a`: boundary collapses are kept to
+/// such edges, since merging two boundary vertices further apart shrinks a convex boundary
+/// (the surface is inscribed in the level set).
+fn short_edge(lm: &LocalMesh, a: u32, b: u32, ratio: f64) -> bool {
+    if ratio.is_infinite() {
+        return true;
+    }
+    let xa = lm.x[a as usize];
+    let len = |w: u32| {
+        let d = crate::geom::sub(lm.x[w as usize], xa);
+        crate::geom::dot(d, d).sqrt()
+    };
+    let (mut sum, mut n) = (0.0, 0);
+    for &t in &lm.star[a as usize] {
+        for w in lm.tets[t as usize] {
+            if w != a {
+                sum += len(w);
+                n += 1;
+            }
+        }
+    }
+    n > 0 && len(b) < ratio * sum / n as f64
+}
+
+/// Merges `a` into `b` (legality and gain checked by [`evaluate_collapse`]).
+pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
+    let shared = shared_tets(lm, a, b);
+    let faces = boundary_faces_at(lm, a);
+    for f in &faces {
+        lm.faces.remove(&face_key(f.tri));
+    }
+    for f in faces {
+        if !f.tri.contains(&b) {
+            let tri = f.tri.map(|v| if v == a { b } else { v });
+            lm.faces.insert(face_key(tri), BoundaryFace { tri, ..f });
+        }
+    }
+    for t in shared {
+        lm.kill_tet(t);
+    }
+    let star = std::mem::take(&mut lm.star[a as usize]);
+    for t in star {
+        let tet = &mut lm.tets[t as usize];
+        for w in tet.iter_mut() {
+            if *w == a {
+                *w = b;
+            }
+        }
+        lm.star[b as usize].push(t);
+        lm.update_quality(t);
+    }
+    lm.removed[a as usize] = true;
+}
+
+/// Alive tets containing both `a` and `b`.
+pub fn shared_tets(lm: &LocalMesh, a: u32, b: u32) -> Vec<u32> {
+    lm.star[a as usize]
+        .iter()
+        .copied()
+        .filter(|&t| lm.tets[t as usize].contains(&b))
+        .collect()
+}
+
+/// Boundary faces with `v` as a corner.
+pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> Vec<BoundaryFace> {
+    let mut out: Vec<BoundaryFace> = Vec::new();
+    for &t in &lm.star[v as usize] {
+        let tet = lm.tets[t as usize];
+        for skip in 0..4 {
+            let tri = face_without(tet, skip);
+            if tri.contains(&v) {
+                if let Some(f) = lm.faces.get(&face_key(tri)) {
+                    if !out.contains(f) {
+                        out.push(*f);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The face of `tet` opposite corner `skip` (unoriented).
+#[inline]
+fn face_without(tet: [u32; 4], skip: usize) -> [u32; 3] {
+    let mut f = [0; 3];
+    let mut n = 0;
+    for (i, &v) in tet.iter().enumerate() {
+        if i != skip {
+            f[n] = v;
+            n += 1;
+        }
+    }
+    f
+}
+
+/// The link of `v`, as sorted lists of its vertices, edges and triangles (from the tets of
+/// its star; the virtual boundary vertex is handled separately).
+struct Link {
+    verts: Vec<u32>,
+    edges: Vec<[u32; 2]>,
+    tris: Vec<[u32; 3]>,
+}
+
+fn link_of(lm: &LocalMesh, v: u32) -> Link {
+    let mut l = Link {
+        verts: Vec::new(),
+        edges: Vec::new(),
+        tris: Vec::new(),
+    };
+    for &t in &lm.star[v as usize] {
+        let tet = lm.tets[t as usize];
+        let i = tet.iter().position(|&w| w == v).unwrap_or(0);
+        let tri = face_key(face_without(tet, i));
+        l.verts.extend_from_slice(&tri);
+        l.edges
+            .extend_from_slice(&[[tri[0], tri[1]], [tri[0], tri[2]], [tri[1], tri[2]]]);
+        l.tris.push(tri);
+    }
+    l.verts.sort_unstable();
+    l.verts.dedup();
+    l.edges.sort_unstable();
+    l.edges.dedup();
+    l.tris.sort_unstable();
+    l
+}
+
+/// The link condition for collapsing the edge `ab`, whose tets are `shared`.
+fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
+    let (la, lb) = (link_of(lm, a), link_of(lm, b));
+    let mut edge_verts: Vec<u32> = Vec::new();
+    let mut edge_edges: Vec<[u32; 2]> = Vec::new();
+    for &t in shared {
+        let mut o: Vec<u32> = lm.tets[t as usize]
+            .into_iter()
+            .filter(|&w| w != a && w != b)
+            .collect();
+        o.sort_unstable();
+        edge_verts.extend_from_slice(&o);
+        edge_edges.push([o[0], o[1]]);
+    }
+    edge_verts.sort_unstable();
+    edge_verts.dedup();
+    let outside = |x: &u32| *x != a && *x != b;
+    let common_verts: Vec<u32> = la
+        .verts
+        .iter()
+        .filter(|x| outside(x) && lb.verts.binary_search(x).is_ok())
+        .copied()
+        .collect();
+    if common_verts != edge_verts {
+        return false;
+    }
+    let edge_ok = la
+        .edges
+        .iter()
+        .filter(|e| outside(&e[0]) && outside(&e[1]) && lb.edges.binary_search(e).is_ok())
+        .all(|e| edge_edges.contains(e));
+    let tri_clash = la
+        .tris
+        .iter()
+        .any(|t| t.iter().all(outside) && lb.tris.binary_search(t).is_ok());
+    edge_ok && !tri_clash && boundary_link_condition(lm, a, b)
+}
+
+/// The part of the link condition that involves the virtual vertex coning the boundary.
+fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
+    let (fa, fb) = (boundary_faces_at(lm, a), boundary_faces_at(lm, b));
+    if fa.is_empty() || fb.is_empty() {
+        return true;
+    }
+    let on_edge = |f: &BoundaryFace| f.tri.contains(&a) && f.tri.contains(&b);
+    let ab_faces: Vec<[u32; 3]> = fa
+        .iter()
+        .filter(|f| on_edge(f))
+        .map(|f| face_key(f.tri))
+        .collect();
+    if ab_faces.is_empty() {
+        // Both ends on the boundary but the edge is not: collapsing would pinch the boundary.
+        return false;
+    }
+    let others = |faces: &[BoundaryFace], v: u32| -> (Vec<u32>, Vec<[u32; 2]>) {
+        let mut verts = Vec::new();
+        let mut edges = Vec::new();
+        for f in faces {
+            let o: Vec<u32> = f.tri.into_iter().filter(|&w| w != v).collect();
+            verts.extend_from_slice(&o);
+            let mut e = [o[0], o[1]];
+            e.sort_unstable();
+            edges.push(e);
+        }
+        verts.sort_unstable();
+        verts.dedup();
+        edges.sort_unstable();
+        (verts, edges)
+    };
+    let (va, ea) = others(&fa, a);
+    let (vb, eb) = others(&fb, b);
+    let outside = |x: &u32| *x != a && *x != b;
+    // Boundary edges av and bv: abv must be a boundary face.
+    let verts_ok = va
+        .iter()
+        .filter(|v| outside(v) && vb.binary_search(v).is_ok())
+        .all(|&v| ab_faces.contains(&face_key([a, b, v])));
+    // Boundary faces avw and bvw both present: the virtual tets would clash.
+    let faces_ok = !ea
+        .iter()
+        .any(|e| outside(&e[0]) && outside(&e[1]) && eb.binary_search(e).is_ok());
+    verts_ok && faces_ok
+}

@@ -1,0 +1,184 @@
+//! The trilinear field of a grid, evaluated anywhere in index space, and Newton projection of
+//! a point onto one of its level sets along a subset of the axes.
+
+use crate::grid::ScalarGrid;
+use crate::trilinear;
+
+/// The piecewise-trilinear interpolant of a [`ScalarGrid`], in index coordinates
+/// (grid vertex `(i, j, k)` at `(i, j, k)`).
+pub struct Field<'a> {
+    grid: &'a ScalarGrid,
+    /// Inverse of [`ScalarGrid::linear_map`]: physical offset → index offset.
+    inverse: [[f64; 3]; 3],
+}
+
+/// Newton steps tried by [`Field::project`] before giving up.
+const NEWTON_STEPS: usize = 30;
+
+impl<'a> Field<'a> {
+    /// The interpolant of `grid`.
+    pub fn new(grid: &'a ScalarGrid) -> Self {
+        let m = grid.linear_map();
+        let det = crate::grid::det3(&m);
+        let mut inverse = [[0.0; 3]; 3];
+        for r in 0..3 {
+            for c in 0..3 {
+                // inverse[r][c] = cofactor(c, r) / det
+                let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+                let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+                inverse[r][c] = (m[c1][r1] * m[c2][r2] - m[c1][r2] * m[c2][r1]) / det;
+            }
+        }
+        Field { grid, inverse }
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &ScalarGrid {
+        self.grid
+    }
+
+    /// Index coordinates of physical point `x`.
+    pub fn to_index(&self, x: [f64; 3]) -> [f64; 3] {
+        let d = [0, 1, 2].map(|i| x[i] - self.grid.origin[i]);
+        self.inverse
+            .map(|row| row[0] * d[0] + row[1] * d[1] + row[2] * d[2])
+    }
+
+    /// Physical position of index point `u`.
+    pub fn to_physical(&self, u: [f64; 3]) -> [f64; 3] {
+        self.grid.to_physical(u)
+    }
+
+    /// The cell holding `u` (clamped to the grid) and `u`'s cell-local coordinates.
+    fn locate(&self, u: [f64; 3]) -> ([usize; 3], [f64; 3]) {
+        let mut cell = [0usize; 3];
+        let mut t = [0.0; 3];
+        for a in 0..3 {
+            let hi = self.grid.dims[a] - 2;
+            let c = (u[a].floor().max(0.0) as usize).min(hi);
+            cell[a] = c;
+            t[a] = u[a] - c as f64;
+        }
+        (cell, t)
+    }
+
+    /// Value of the interpolant at index point `u` (extrapolated linearly outside the box).
+    pub fn value(&self, u: [f64; 3]) -> f64 {
+        let (c, t) = self.locate(u);
+        trilinear::eval(&self.grid.cell_values(c[0], c[1], c[2]), t)
+    }
+
+    /// Value and index-space gradient of the interpolant at `u`.
+    pub fn value_gradient(&self, u: [f64; 3]) -> (f64, [f64; 3]) {
+        let (c, [x, y, z]) = self.locate(u);
+        let v = self.grid.cell_values(c[0], c[1], c[2]);
+        let lerp = |a: f64, b: f64, s: f64| a + (b - a) * s;
+        // Along x on the four x-edges, then the rest.
+        let e = [0, 2, 4, 6].map(|i| (lerp(v[i], v[i + 1], x), v[i + 1] - v[i]));
+        let fy0 = lerp(e[0].0, e[1].0, y);
+        let fy1 = lerp(e[2].0, e[3].0, y);
+        let value = lerp(fy0, fy1, z);
+        let gx = lerp(lerp(e[0].1, e[1].1, y), lerp(e[2].1, e[3].1, y), z);
+        let gy = lerp(e[1].0 - e[0].0, e[3].0 - e[2].0, z);
+        let gz = fy1 - fy0;
+        (value, [gx, gy, gz])
+    }
+
+    /// Moves `u` onto the level set `f = level` by Newton steps along the gradient restricted
+    /// to the axes whose bit is set in `free_axes`, staying inside the grid box. Returns the
+    /// projected point when `|f - level| <= tol` was reached, `None` otherwise.
+    pub fn project(&self, u: [f64; 3], level: f64, free_axes: u8, tol: f64) -> Option<[f64; 3]> {
+        let mut p = u;
+        for _ in 0..NEWTON_STEPS {
+            let (f, mut g) = self.value_gradient(p);
+            let r = f - level;
+            if r.abs() <= tol {
+                return Some(p);
+            }
+            for (a, ga) in g.iter_mut().enumerate() {
+                if free_axes & (1 << a) == 0 {
+                    *ga = 0.0;
+                }
+            }
+            let g2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+            if g2 == 0.0 || !g2.is_finite() {
+                return None;
+            }
+            // Newton step, at most a quarter voxel at a time.
+            let mut s = -r / g2;
+            let len = s.abs() * g2.sqrt();
+            if len > 0.25 {
+                s *= 0.25 / len;
+            }
+            for a in 0..3 {
+                let hi = (self.grid.dims[a] - 1) as f64;
+                p[a] = (p[a] + s * g[a]).clamp(0.0, hi);
+            }
+        }
+        let f = self.value(p);
+        ((f - level).abs() <= tol).then_some(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::ScalarGrid;
+
+    fn sphere_grid(n: usize) -> ScalarGrid {
+        let c = (n - 1) as f64 / 2.0;
+        let mut v = Vec::with_capacity(n * n * n);
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let d = [i, j, k].map(|x| x as f64 - c);
+                    v.push((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+                }
+            }
+        }
+        let dir = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+        ScalarGrid::with_geometry([n; 3], [0.5, 1.5, 2.0], [3.0, -1.0, 7.0], dir, v).unwrap()
+    }
+
+    #[test]
+    fn index_and_physical_round_trip() {
+        let g = sphere_grid(6);
+        let f = Field::new(&g);
+        let u = [1.25, 3.5, 0.75];
+        let back = f.to_index(f.to_physical(u));
+        for a in 0..3 {
+            assert!((back[a] - u[a]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn gradient_matches_differences_and_values_match_grid() {
+        let g = sphere_grid(7);
+        let f = Field::new(&g);
+        assert_eq!(f.value([2.0, 3.0, 4.0]), g.value(2, 3, 4));
+        assert_eq!(f.value([6.0, 6.0, 6.0]), g.value(6, 6, 6));
+        let u = [2.3, 1.7, 4.4];
+        let (v, gr) = f.value_gradient(u);
+        assert!((v - f.value(u)).abs() < 1e-12);
+        for a in 0..3 {
+            let mut p = u;
+            p[a] += 1e-6;
+            let num = (f.value(p) - v) / 1e-6;
+            assert!((num - gr[a]).abs() < 1e-5, "{a}: {num} vs {}", gr[a]);
+        }
+    }
+
+    #[test]
+    fn projection_reaches_the_level_on_free_axes_only() {
+        let g = sphere_grid(9);
+        let f = Field::new(&g);
+        let u = [5.9, 4.2, 4.0];
+        let p = f.project(u, 2.0, 0b111, 1e-12).unwrap();
+        assert!((f.value(p) - 2.0).abs() <= 1e-12);
+        let q = f.project(u, 2.0, 0b001, 1e-12).unwrap();
+        assert!((f.value(q) - 2.0).abs() <= 1e-12);
+        assert_eq!((q[1], q[2]), (u[1], u[2]));
+        // No solution along y from a point whose level is out of reach inside the box.
+        assert!(f.project([4.0, 4.0, 4.0], 9.0, 0b010, 1e-9).is_none());
+    }
+}

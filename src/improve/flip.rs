@@ -1,0 +1,157 @@
+//! Topological flips inside the domain: 2-3 (two tets sharing an interior face become three
+//! around the edge joining their apexes) and 3-2 (the inverse). Both replace a triangulation
+//! of a small convex region by another one with the same outer faces, so the underlying space,
+//! the boundary and the labels are unchanged; a flip is applied only when every new tet is
+//! positive and the worst new tet is better than the worst old one.
+
+use super::local::{face_key, LocalMesh};
+use super::Ctx;
+
+/// Tries the 2-3 flip of the face of tet `t` opposite its corner `i`. Returns whether it
+/// flipped.
+pub fn try_flip23(lm: &mut LocalMesh, ctx: &Ctx, t: u32, i: usize) -> bool {
+    let tet = lm.tets[t as usize];
+    let p = tet[i];
+    // [p, b, c, d] is an even permutation of `tet`.
+    let [b, c, d] = opposite_face(tet, i);
+    if ![b, c, d].iter().any(|&v| lm.is_free(v)) || lm.faces.contains_key(&face_key([b, c, d])) {
+        return false;
+    }
+    let Some(s) = other_tet_with_face(lm, t, [b, c, d]) else {
+        return false;
+    };
+    let q = lm.tets[s as usize]
+        .into_iter()
+        .find(|v| ![b, c, d].contains(v))
+        .expect("a tet has a fourth vertex");
+    if lm.star[p as usize]
+        .iter()
+        .any(|&u| lm.tets[u as usize].contains(&q))
+    {
+        return false; // edge pq exists already
+    }
+    let new = [[p, b, c, q], [p, q, c, d], [p, b, q, d]];
+    let old = [t, s];
+    replace_if_better(lm, ctx, &old, &new)
+}
+
+/// Tries the 3-2 flip of the edge `(p, q)` of tet `t`. Returns whether it flipped.
+pub fn try_flip32(lm: &mut LocalMesh, ctx: &Ctx, t: u32, p: u32, q: u32) -> bool {
+    if !lm.is_free(p) && !lm.is_free(q) {
+        return false;
+    }
+    let around: Vec<u32> = lm.star[p as usize]
+        .iter()
+        .copied()
+        .filter(|&u| lm.tets[u as usize].contains(&q))
+        .collect();
+    if around.len() != 3 {
+        return false;
+    }
+    let mut ring: Vec<u32> = around
+        .iter()
+        .flat_map(|&u| lm.tets[u as usize])
+        .filter(|&v| v != p && v != q)
+        .collect();
+    ring.sort_unstable();
+    ring.dedup();
+    if ring.len() != 3 {
+        return false; // an open ring: the edge is on the boundary
+    }
+    // Orient from tet t: [p, b, c, q] even permutation of it; d is the third ring vertex.
+    let (b, c) = even_completion(lm.tets[t as usize], p, q);
+    let d = ring.into_iter().find(|&v| v != b && v != c).unwrap_or(b);
+    if face_exists(lm, [b, c, d]) {
+        return false;
+    }
+    let new = [[p, b, c, d], [q, b, d, c]];
+    replace_if_better(lm, ctx, &around, &new)
+}
+
+/// Replaces the tets `old` by `new` when every new tet is positive and the worst of them is
+/// better than the worst old one.
+fn replace_if_better(lm: &mut LocalMesh, ctx: &Ctx, old: &[u32], new: &[[u32; 4]]) -> bool {
+    let q_old = old
+        .iter()
+        .map(|&t| ctx.quality(lm.corners(lm.tets[t as usize])))
+        .fold(f64::INFINITY, f64::min);
+    let q_new = new
+        .iter()
+        .map(|&t| ctx.quality(lm.corners(t)))
+        .fold(f64::INFINITY, f64::min);
+    if !(q_new > 0.0 && q_new > q_old) {
+        return false;
+    }
+    for &t in old {
+        lm.kill_tet(t);
+    }
+    for &t in new {
+        lm.add_tet(t);
+    }
+    true
+}
+
+/// The face of `tet` opposite corner `i`, ordered so that `[tet[i], f0, f1, f2]` is an even
+/// permutation of `tet`.
+fn opposite_face(tet: [u32; 4], i: usize) -> [u32; 3] {
+    const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
+    FACES[i].map(|k| tet[k])
+}
+
+/// The other alive tet with face `f`, besides `t`.
+fn other_tet_with_face(lm: &LocalMesh, t: u32, f: [u32; 3]) -> Option<u32> {
+    let free = *f.iter().find(|&&v| lm.is_free(v))?;
+    lm.star[free as usize]
+        .iter()
+        .copied()
+        .find(|&u| u != t && f.iter().all(|v| lm.tets[u as usize].contains(v)))
+}
+
+/// Whether some alive tet has the face `f`.
+fn face_exists(lm: &LocalMesh, f: [u32; 3]) -> bool {
+    lm.star[f[0] as usize]
+        .iter()
+        .any(|&u| f.iter().all(|v| lm.tets[u as usize].contains(v)))
+}
+
+/// The two vertices `(x, y)` of `tet` besides `p` and `q` such that `[p, x, y, q]` is an even
+/// permutation of `tet`.
+fn even_completion(tet: [u32; 4], p: u32, q: u32) -> (u32, u32) {
+    let rest: Vec<u32> = tet.into_iter().filter(|&v| v != p && v != q).collect();
+    let cand = [p, rest[0], rest[1], q];
+    if is_even_permutation(tet, cand) {
+        (rest[0], rest[1])
+    } else {
+        (rest[1], rest[0])
+    }
+}
+
+/// Whether `b` is an even permutation of `a` (same four distinct entries).
+fn is_even_permutation(a: [u32; 4], b: [u32; 4]) -> bool {
+    let pos = b.map(|x| a.iter().position(|&y| y == x).unwrap_or(0));
+    let mut inversions = 0;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            if pos[i] > pos[j] {
+                inversions += 1;
+            }
+        }
+    }
+    inversions % 2 == 0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn opposite_faces_are_even_completions() {
+        let tet = [10, 11, 12, 13];
+        for i in 0..4 {
+            let f = opposite_face(tet, i);
+            assert!(is_even_permutation(tet, [tet[i], f[0], f[1], f[2]]), "{i}");
+        }
+        let (x, y) = even_completion(tet, 12, 10);
+        assert!(is_even_permutation(tet, [12, x, y, 10]));
+    }
+}

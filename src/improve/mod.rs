@@ -1,0 +1,208 @@
+//! The quality pass: improves the elements of a mesh while keeping its topology, its boundary
+//! labels and its boundary on the level sets of the trilinear field.
+//!
+//! Pipeline position: `extract` → **improve** → write. Work is proportional to what needs
+//! work: each round marks the vertices of tets below the target quality and the level
+//! vertices off the trilinear level set, copies their stars out ([`local`]), improves them
+//! there (projection, edge collapse, flips, smoothing; one operation per file) and splices the
+//! result back. Everything runs in a fixed order, so the output does not depend on the number
+//! of threads.
+
+pub mod collapse;
+pub mod constraint;
+pub mod field;
+pub mod flip;
+pub mod local;
+pub mod project;
+pub mod quality;
+mod schedule;
+pub mod smooth;
+
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::grid::ScalarGrid;
+use crate::mesh::{BoundaryLabel, TetMesh};
+use field::Field;
+use local::LocalMesh;
+use quality::{biased_min_sine, summarize, QualitySummary};
+
+/// Knobs of the quality pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QualityOptions {
+    /// Target smallest dihedral angle (degrees).
+    pub min_angle: f64,
+    /// Target largest dihedral angle (degrees).
+    pub max_angle: f64,
+    /// Improvement rounds at most (each re-marks what still needs work).
+    pub max_rounds: usize,
+    /// Stop starting new rounds after this much time.
+    pub time_budget: Option<Duration>,
+    /// Boundary vertices are projected until `|f - level| <= level_tolerance · (data range)`.
+    pub level_tolerance: f64,
+    /// Two boundary vertices are merged only along an edge shorter than this times the mean
+    /// length of the edges at the removed vertex. Such merges shrink a convex boundary (the
+    /// surface is inscribed in the level set); a smaller ratio keeps the volume closer and
+    /// leaves more bad elements.
+    pub boundary_collapse_ratio: f64,
+}
+
+impl Default for QualityOptions {
+    fn default() -> Self {
+        QualityOptions {
+            min_angle: 15.0,
+            max_angle: 155.0,
+            max_rounds: 4,
+            time_budget: None,
+            level_tolerance: 1e-9,
+            boundary_collapse_ratio: f64::INFINITY,
+        }
+    }
+}
+
+/// What the quality pass did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ImproveReport {
+    /// Quality before the pass.
+    pub before: QualitySummary,
+    /// Quality after the pass.
+    pub after: QualitySummary,
+    /// Rounds run.
+    pub rounds: usize,
+    /// Tets in the worked-on regions, summed over rounds.
+    pub region_tets: usize,
+    /// Boundary vertices moved onto their level set.
+    pub projected: usize,
+    /// Boundary vertices that could not be moved onto their level set.
+    pub unprojected: usize,
+    /// Edge collapses.
+    pub collapses: usize,
+    /// 2-3 and 3-2 flips.
+    pub flips: usize,
+    /// Vertex moves by smoothing.
+    pub smoothed: usize,
+    /// Seconds spent.
+    pub seconds: f64,
+}
+
+/// Everything an operation needs besides the local mesh.
+pub struct Ctx<'a> {
+    /// The trilinear field.
+    pub field: Field<'a>,
+    /// `[alpha, beta]`.
+    pub levels: [f64; 2],
+    /// Absolute tolerance on `|f - level|` for boundary vertices.
+    pub tol: f64,
+    /// Weight of obtuse angles in [`biased_min_sine`].
+    pub obtuse_weight: f64,
+    /// Biased-sine quality of the target angles: tets below it need work.
+    pub target: f64,
+    /// [`QualityOptions::boundary_collapse_ratio`].
+    pub boundary_collapse_ratio: f64,
+}
+
+impl Ctx<'_> {
+    /// The quality the pass maximises (biased minimum sine).
+    #[inline]
+    pub fn quality(&self, p: [[f64; 3]; 4]) -> f64 {
+        biased_min_sine(p, self.obtuse_weight)
+    }
+
+    /// Whether index point `u` lies strictly inside the interval (where interior vertices
+    /// must stay).
+    pub fn inside_interval(&self, u: [f64; 3]) -> bool {
+        let f = self.field.value(u);
+        f > self.levels[0] && f < self.levels[1]
+    }
+}
+
+/// Improves `mesh`, a mesh of `{alpha <= f <= beta}` of `grid`'s trilinear field as made by
+/// [`crate::mesh_interval`], in place.
+///
+/// Every operation keeps each tet positive, the topology (vertex moves are homeomorphisms,
+/// flips keep the underlying space, collapses obey the link condition), the labels, the box
+/// faces (box vertices stay on their planes) and the level sets (level vertices stay on the
+/// trilinear level set once projected).
+pub fn improve(
+    mesh: &mut TetMesh,
+    grid: &ScalarGrid,
+    alpha: f64,
+    beta: f64,
+    opts: &QualityOptions,
+) -> ImproveReport {
+    let start = Instant::now();
+    let ctx = context(grid, alpha, beta, opts);
+    let mut report = ImproveReport {
+        before: summarize(mesh),
+        ..Default::default()
+    };
+    for _ in 0..opts.max_rounds {
+        if opts.time_budget.is_some_and(|b| start.elapsed() > b) {
+            break;
+        }
+        let (moved, off) = project::project_mesh(mesh, &ctx);
+        report.projected += moved;
+        report.unprojected = off;
+        let work = needs_work(mesh, &ctx);
+        if !work.iter().any(|&w| w) {
+            break;
+        }
+        let (mut lm, region) = LocalMesh::extract(mesh, &work, &ctx);
+        report.rounds += 1;
+        report.region_tets += lm.tets.len();
+        schedule::improve_local(&mut lm, &ctx, &mut report);
+        lm.splice(mesh, region);
+    }
+    report.after = summarize(mesh);
+    report.seconds = start.elapsed().as_secs_f64();
+    report
+}
+
+fn context<'a>(grid: &'a ScalarGrid, alpha: f64, beta: f64, opts: &QualityOptions) -> Ctx<'a> {
+    let (lo, hi) = grid.value_range();
+    let range = (hi - lo).max(f64::MIN_POSITIVE);
+    let lo_s = opts.min_angle.to_radians().sin();
+    let hi_s = (180.0 - opts.max_angle).to_radians().sin();
+    let obtuse_weight = (lo_s / hi_s).min(1.0);
+    Ctx {
+        field: Field::new(grid),
+        levels: [alpha, beta],
+        tol: opts.level_tolerance * range,
+        obtuse_weight,
+        target: lo_s.min(obtuse_weight * hi_s),
+        boundary_collapse_ratio: opts.boundary_collapse_ratio,
+    }
+}
+
+/// Per point: is it a corner of a tet below the target, or a level vertex off its level?
+fn needs_work(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
+    let bad: Vec<bool> = mesh
+        .tets
+        .par_iter()
+        .map(|t| ctx.quality(t.map(|v| mesh.points[v as usize])) < ctx.target)
+        .collect();
+    let mut work = vec![false; mesh.points.len()];
+    for (t, &b) in mesh.tets.iter().zip(&bad) {
+        if b {
+            for &v in t {
+                work[v as usize] = true;
+            }
+        }
+    }
+    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
+        let level = match label {
+            BoundaryLabel::Alpha => ctx.levels[0],
+            BoundaryLabel::Beta => ctx.levels[1],
+            BoundaryLabel::Box => continue,
+        };
+        for &v in tri {
+            let u = ctx.field.to_index(mesh.points[v as usize]);
+            if (ctx.field.value(u) - level).abs() > ctx.tol {
+                work[v as usize] = true;
+            }
+        }
+    }
+    work
+}

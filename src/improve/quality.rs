@@ -1,0 +1,360 @@
+//! Element-quality measures of one tetrahedron and of a whole mesh: dihedral angles, the
+//! biased minimum sine that the quality pass optimises, radius ratio, Gmsh's SICN and gamma,
+//! and histograms.
+//!
+//! Every measure takes the four corners `p` of a tetrahedron `[a, b, c, d]`, positively
+//! oriented when `(b-a)·((c-a)×(d-a)) > 0`. Measures that can be signed (biased sine, SICN)
+//! are negative for inverted elements.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::geom::{cross, dot, signed_volume, sub};
+use crate::mesh::TetMesh;
+
+/// Edge `(i, j)` of a tet and the two other corners `(k, l)`: the dihedral angle at edge
+/// `(i, j)` lies between the faces opposite `k` and `l`.
+pub const TET_EDGES: [(usize, usize, usize, usize); 6] = [
+    (0, 1, 2, 3),
+    (0, 2, 1, 3),
+    (0, 3, 1, 2),
+    (1, 2, 0, 3),
+    (1, 3, 0, 2),
+    (2, 3, 0, 1),
+];
+
+/// Outward area normals of the faces opposite each corner (length twice the face area) of a
+/// positively oriented tet (inward for an inverted one).
+#[inline]
+fn face_normals(p: &[[f64; 3]; 4]) -> [[f64; 3]; 4] {
+    [
+        cross(sub(p[2], p[1]), sub(p[3], p[1])),
+        cross(sub(p[3], p[0]), sub(p[2], p[0])),
+        cross(sub(p[1], p[0]), sub(p[3], p[0])),
+        cross(sub(p[2], p[0]), sub(p[1], p[0])),
+    ]
+}
+
+/// Cosines of the six dihedral angles, in [`TET_EDGES`] order (the angle grows as the cosine
+/// falls). Degenerate faces give a cosine of 1 (angle 0).
+#[inline]
+pub fn dihedral_cosines(p: [[f64; 3]; 4]) -> [f64; 6] {
+    let n = face_normals(&p);
+    TET_EDGES.map(|(_, _, k, l)| {
+        let d = (dot(n[k], n[k]) * dot(n[l], n[l])).sqrt();
+        if d > 0.0 {
+            (-dot(n[k], n[l]) / d).clamp(-1.0, 1.0)
+        } else {
+            1.0
+        }
+    })
+}
+
+/// The six dihedral angles of a tet in degrees, in [`TET_EDGES`] order.
+pub fn dihedral_angles(p: [[f64; 3]; 4]) -> [f64; 6] {
+    dihedral_cosines(p).map(|c| c.acos().to_degrees())
+}
+
+/// Smallest and largest dihedral angle of one tet, in degrees.
+pub fn tet_dihedral_range(p: [[f64; 3]; 4]) -> (f64, f64) {
+    let c = dihedral_cosines(p);
+    let hi = c.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let lo = c.iter().copied().fold(f64::INFINITY, f64::min);
+    (hi.acos().to_degrees(), lo.acos().to_degrees())
+}
+
+/// The minimum over the six dihedral angles θ of `sin θ`, with the sines of obtuse angles
+/// multiplied by `obtuse_weight` (≤ 1), so that large angles count as bad as small ones at the
+/// chosen balance: with `obtuse_weight = sin(θ_min) / sin(180° − θ_max)`, an angle of
+/// `θ_min` and one of `θ_max` score the same. Negative for inverted tets, 0 for flat ones.
+/// This is the objective of the quality pass (Klingner and Shewchuk's biased minimum sine).
+#[inline]
+pub fn biased_min_sine(p: [[f64; 3]; 4], obtuse_weight: f64) -> f64 {
+    let n = face_normals(&p);
+    let n2 = n.map(|x| dot(x, x));
+    let six_v = 6.0 * signed_volume(p[0], p[1], p[2], p[3]);
+    // Minimise sin² θ = (6V)² |e|² / (|n_k|² |n_l|²) and take one square root at the end.
+    let w2 = obtuse_weight * obtuse_weight;
+    let mut q2 = f64::INFINITY;
+    for (i, j, k, l) in TET_EDGES {
+        let e = sub(p[j], p[i]);
+        let d = n2[k] * n2[l];
+        if d <= 0.0 {
+            return 0.0_f64.min(six_v);
+        }
+        let mut s2 = dot(e, e) / d;
+        if dot(n[k], n[l]) > 0.0 {
+            s2 *= w2;
+        }
+        q2 = q2.min(s2);
+    }
+    six_v * q2.sqrt()
+}
+
+/// Radius ratio `3 r_in / r_circ`: 1 for the regular tetrahedron, 0 for a flat one, negative
+/// for an inverted one.
+pub fn radius_ratio(p: [[f64; 3]; 4]) -> f64 {
+    let v = signed_volume(p[0], p[1], p[2], p[3]);
+    let n = face_normals(&p);
+    let area: f64 = n.iter().map(|x| 0.5 * dot(*x, *x).sqrt()).sum();
+    if area <= 0.0 {
+        return 0.0;
+    }
+    let r_in = 3.0 * v.abs() / area;
+    // Circumradius: |a|² (b×c) + |b|² (c×a) + |c|² (a×b) over 12 V, edges from corner 0.
+    let (a, b, c) = (sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0]));
+    let num = [0, 1, 2].map(|i| {
+        dot(a, a) * cross(b, c)[i] + dot(b, b) * cross(c, a)[i] + dot(c, c) * cross(a, b)[i]
+    });
+    if v == 0.0 {
+        return 0.0;
+    }
+    let r_circ = dot(num, num).sqrt() / (12.0 * v.abs());
+    (3.0 * r_in / r_circ).copysign(v)
+}
+
+/// Gmsh's signed inverse condition number (`minSICN`): the inverse of the condition number of
+/// the map from the regular tetrahedron onto this one, with the sign of the volume. 1 for the
+/// regular tetrahedron, 0 for a flat one, negative for an inverted one.
+pub fn sicn(p: [[f64; 3]; 4]) -> f64 {
+    // Regular tet with corners 0, e_x, (1/2, √3/2, 0), (1/2, √3/6, √(2/3)): J = E W⁻¹ where E
+    // holds the edge vectors from corner 0 and W those of the regular tet.
+    const W_INV: [[f64; 3]; 3] = [
+        [1.0, -0.577_350_269_189_625_8, -0.408_248_290_463_863],
+        [0.0, 1.154_700_538_379_251_7, -0.408_248_290_463_863],
+        [0.0, 0.0, 1.224_744_871_391_589],
+    ];
+    let e = [sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0])];
+    // j[r][c] = sum_k e[k][r] * W_INV[k][c]
+    let mut j = [[0.0; 3]; 3];
+    for r in 0..3 {
+        for c in 0..3 {
+            j[r][c] = (0..3).map(|k| e[k][r] * W_INV[k][c]).sum();
+        }
+    }
+    let det = crate::grid::det3(&j);
+    let fro2: f64 = j.iter().flatten().map(|x| x * x).sum();
+    // ||J||_F ||J⁻¹||_F = ||J||_F ||adj J||_F / |det J|; adj J has the cofactors.
+    let cof = |r: usize, c: usize| {
+        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+        let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+        j[r1][c1] * j[r2][c2] - j[r1][c2] * j[r2][c1]
+    };
+    let adj2: f64 = (0..9).map(|i| cof(i / 3, i % 3).powi(2)).sum();
+    if det == 0.0 || adj2 == 0.0 {
+        return 0.0;
+    }
+    3.0 * det / (fro2 * adj2).sqrt()
+}
+
+/// Gmsh's gamma: inscribed radius over longest edge, normalised so that the regular
+/// tetrahedron scores 1 (`gamma = 2√6 · r_in / l_max`), with the sign of the volume.
+pub fn gamma(p: [[f64; 3]; 4]) -> f64 {
+    let v = signed_volume(p[0], p[1], p[2], p[3]);
+    let n = face_normals(&p);
+    let area: f64 = n.iter().map(|x| 0.5 * dot(*x, *x).sqrt()).sum();
+    let l_max = TET_EDGES
+        .iter()
+        .map(|&(i, j, _, _)| dot(sub(p[j], p[i]), sub(p[j], p[i])))
+        .fold(0.0, f64::max)
+        .sqrt();
+    if area <= 0.0 || l_max <= 0.0 {
+        return 0.0;
+    }
+    let r_in = 3.0 * v / area;
+    2.0 * 6.0_f64.sqrt() * r_in / l_max
+}
+
+/// Number of histogram bins of dihedral angles (one per degree, 0° to 180°).
+pub const HISTOGRAM_BINS: usize = 180;
+
+/// Quality summary of a whole mesh.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct QualitySummary {
+    /// Number of tetrahedra.
+    pub tets: usize,
+    /// Smallest dihedral angle (degrees).
+    pub min_dihedral: f64,
+    /// Largest dihedral angle (degrees).
+    pub max_dihedral: f64,
+    /// Smallest radius ratio `3 r_in / r_circ`.
+    pub min_radius_ratio: f64,
+    /// Smallest SICN (Gmsh's `minSICN`).
+    pub min_sicn: f64,
+    /// Smallest gamma (Gmsh's `gamma`).
+    pub min_gamma: f64,
+    /// Tetrahedra whose smallest dihedral angle is below 5°, 10°, 15° and 20°.
+    pub below: [usize; 4],
+    /// Tetrahedra whose largest dihedral angle is above 150°, 155°, 160° and 170°.
+    pub above: [usize; 4],
+    /// Counts of all dihedral angles (6 per tet) per whole degree, `[0, 1)`, …, `[179, 180]`.
+    pub histogram: Vec<u64>,
+}
+
+/// Angles (degrees) reported in [`QualitySummary::below`].
+pub const BELOW_ANGLES: [f64; 4] = [5.0, 10.0, 15.0, 20.0];
+/// Angles (degrees) reported in [`QualitySummary::above`].
+pub const ABOVE_ANGLES: [f64; 4] = [150.0, 155.0, 160.0, 170.0];
+
+impl QualitySummary {
+    fn of_tet(p: [[f64; 3]; 4]) -> Self {
+        let mut s = QualitySummary {
+            tets: 1,
+            min_dihedral: f64::INFINITY,
+            max_dihedral: f64::NEG_INFINITY,
+            min_radius_ratio: radius_ratio(p),
+            min_sicn: sicn(p),
+            min_gamma: gamma(p),
+            histogram: vec![0; HISTOGRAM_BINS],
+            ..Default::default()
+        };
+        for a in dihedral_angles(p) {
+            s.min_dihedral = s.min_dihedral.min(a);
+            s.max_dihedral = s.max_dihedral.max(a);
+            s.histogram[(a as usize).min(HISTOGRAM_BINS - 1)] += 1;
+        }
+        for (i, t) in BELOW_ANGLES.iter().enumerate() {
+            s.below[i] = usize::from(s.min_dihedral < *t);
+        }
+        for (i, t) in ABOVE_ANGLES.iter().enumerate() {
+            s.above[i] = usize::from(s.max_dihedral > *t);
+        }
+        s
+    }
+
+    fn merge(mut self, o: Self) -> Self {
+        if o.tets == 0 {
+            return self;
+        }
+        if self.tets == 0 {
+            return o;
+        }
+        self.tets += o.tets;
+        self.min_dihedral = self.min_dihedral.min(o.min_dihedral);
+        self.max_dihedral = self.max_dihedral.max(o.max_dihedral);
+        self.min_radius_ratio = self.min_radius_ratio.min(o.min_radius_ratio);
+        self.min_sicn = self.min_sicn.min(o.min_sicn);
+        self.min_gamma = self.min_gamma.min(o.min_gamma);
+        for i in 0..4 {
+            self.below[i] += o.below[i];
+            self.above[i] += o.above[i];
+        }
+        for (a, b) in self.histogram.iter_mut().zip(&o.histogram) {
+            *a += b;
+        }
+        self
+    }
+}
+
+/// Quality summary of `mesh`, computed in parallel; independent of the thread count (every
+/// field is a minimum, a maximum or an integer count).
+pub fn summarize(mesh: &TetMesh) -> QualitySummary {
+    mesh.tets
+        .par_iter()
+        .map(|t| QualitySummary::of_tet(t.map(|i| mesh.points[i as usize])))
+        .reduce(QualitySummary::default, QualitySummary::merge)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn regular() -> [[f64; 3]; 4] {
+        [
+            [1.0, 1.0, 1.0],
+            [1.0, -1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+        ]
+    }
+
+    fn orient(mut p: [[f64; 3]; 4]) -> [[f64; 3]; 4] {
+        if signed_volume(p[0], p[1], p[2], p[3]) < 0.0 {
+            p.swap(0, 1);
+        }
+        p
+    }
+
+    #[test]
+    fn regular_tet_scores_one_everywhere() {
+        let p = orient(regular());
+        let want = (1.0_f64 / 3.0).acos().to_degrees();
+        for a in dihedral_angles(p) {
+            assert!((a - want).abs() < 1e-9, "{a}");
+        }
+        assert!((radius_ratio(p) - 1.0).abs() < 1e-12);
+        assert!((sicn(p) - 1.0).abs() < 1e-12, "{}", sicn(p));
+        assert!((gamma(p) - 1.0).abs() < 1e-12, "{}", gamma(p));
+        let s = (8.0_f64 / 9.0).sqrt();
+        assert!((biased_min_sine(p, 1.0) - s).abs() < 1e-12);
+    }
+
+    #[test]
+    fn inverted_tets_are_negative() {
+        let mut p = orient(regular());
+        p.swap(0, 1);
+        assert!(radius_ratio(p) < 0.0 && sicn(p) < 0.0 && gamma(p) < 0.0);
+        assert!(biased_min_sine(p, 0.6) < 0.0);
+    }
+
+    #[test]
+    fn kuhn_tet_is_an_orthoscheme() {
+        // One tet of the 6-fold cube split along the diagonal 0–7.
+        let p = orient([[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 1.0, 1.0]]);
+        let mut a = dihedral_angles(p).map(|x| (x * 1e6).round() / 1e6);
+        a.sort_by(f64::total_cmp);
+        assert_eq!(a, [45.0, 45.0, 60.0, 90.0, 90.0, 90.0]);
+        let (lo, hi) = tet_dihedral_range(p);
+        assert!((lo - 45.0).abs() < 1e-9 && (hi - 90.0).abs() < 1e-9);
+        // Sine of the smallest angle (45°) is the minimum; 90° has sine 1.
+        assert!((biased_min_sine(p, 0.5) - 0.5_f64.sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn biased_sine_weighs_obtuse_angles() {
+        // A flat-ish "cap" tet: apex just above the centroid of a triangle has three obtuse
+        // dihedral angles near 180°.
+        let h = 0.05;
+        let p = orient([
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 0.9, 0.0],
+            [0.5, 0.3, h],
+        ]);
+        let (_, hi) = tet_dihedral_range(p);
+        assert!(hi > 150.0);
+        let s = (180.0 - hi).to_radians().sin();
+        let q = biased_min_sine(p, 0.5);
+        assert!(
+            (q - 0.5 * s).abs() < 1e-9 || q < 0.5 * s,
+            "{q} vs {}",
+            0.5 * s
+        );
+    }
+
+    #[test]
+    fn summary_counts_and_histogram() {
+        let k = [[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 1.0, 1.0]];
+        let mesh = TetMesh {
+            points: k.to_vec(),
+            values: vec![0.0; 4],
+            tets: vec![[0, 1, 2, 3]; 3],
+            ..Default::default()
+        };
+        let m = if mesh.tet_volume(0) < 0.0 {
+            TetMesh {
+                tets: vec![[1, 0, 2, 3]; 3],
+                ..mesh
+            }
+        } else {
+            mesh
+        };
+        let s = summarize(&m);
+        assert_eq!(s.tets, 3);
+        assert_eq!(s.histogram.iter().sum::<u64>(), 18);
+        let bins = |a: usize| s.histogram[a - 1] + s.histogram[a];
+        assert_eq!((bins(45), bins(60), bins(90)), (6, 3, 9));
+        assert_eq!(s.below, [0, 0, 0, 0]);
+        assert!((s.min_dihedral - 45.0).abs() < 1e-9);
+    }
+}

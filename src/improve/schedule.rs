@@ -1,0 +1,123 @@
+//! The order in which the operations run on a region (after Stellar: cheap, safe moves first,
+//! topology changes where moves are not enough, then smoothing again).
+
+use super::collapse::{apply_collapse, evaluate_collapse};
+use super::flip::{try_flip23, try_flip32};
+use super::local::LocalMesh;
+use super::project::project_levels;
+use super::smooth::smooth_vertex;
+use super::{Ctx, ImproveReport};
+
+/// Passes over the region at most.
+const SWEEPS: usize = 6;
+
+/// Improves the region `lm` in place.
+pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
+    let (moved, _) = project_levels(lm, ctx);
+    report.projected += moved;
+    for _ in 0..SWEEPS {
+        // Collapse first: most bad tets have a short edge, and removing it does more than
+        // any move (measured on analytic tori: 15.0° after collapse–flip–smooth sweeps,
+        // 9.9° after smooth–flip–collapse).
+        let mut changed = collapse_pass(lm, ctx, report);
+        changed += flip_pass(lm, ctx, report);
+        changed += smooth_pass(lm, ctx, report);
+        let (moved, _) = project_levels(lm, ctx);
+        report.projected += moved;
+        changed += moved;
+        if changed == 0 {
+            break;
+        }
+    }
+    let _ = project_levels(lm, ctx);
+}
+
+/// Alive tets below the target, worst first (ties by id).
+fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
+    let mut bad: Vec<(f64, u32)> = (0..lm.tets.len() as u32)
+        .filter(|&t| lm.alive[t as usize])
+        .map(|t| (lm.q[t as usize], t))
+        .filter(|&(q, _)| q < ctx.target)
+        .collect();
+    bad.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    bad.into_iter().map(|(_, t)| t).collect()
+}
+
+/// Collapses the shortest edges of bad tets where that helps.
+fn collapse_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
+    let mut n = 0;
+    for t in bad_tets(lm, ctx) {
+        if !lm.alive[t as usize] {
+            continue;
+        }
+        let tet = lm.tets[t as usize];
+        let mut edges: Vec<(f64, u32, u32)> = Vec::with_capacity(6);
+        for i in 0..4 {
+            for j in i + 1..4 {
+                let d = crate::geom::sub(lm.x[tet[i] as usize], lm.x[tet[j] as usize]);
+                edges.push((crate::geom::dot(d, d), tet[i], tet[j]));
+            }
+        }
+        edges.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
+        for (_, a, b) in edges {
+            let ab = evaluate_collapse(lm, ctx, a, b).map(|q| (q, a, b));
+            let ba = evaluate_collapse(lm, ctx, b, a).map(|q| (q, b, a));
+            let best = match (ab, ba) {
+                (Some(x), Some(y)) => Some(if y.0 > x.0 { y } else { x }),
+                (x, y) => x.or(y),
+            };
+            if let Some((_, from, to)) = best {
+                apply_collapse(lm, from, to);
+                report.collapses += 1;
+                n += 1;
+                break;
+            }
+        }
+    }
+    n
+}
+
+/// 2-3 flips of the faces and 3-2 flips of the edges of bad tets.
+fn flip_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
+    let mut n = 0;
+    for t in bad_tets(lm, ctx) {
+        if !lm.alive[t as usize] {
+            continue;
+        }
+        let tet = lm.tets[t as usize];
+        let mut done = (0..4).any(|i| try_flip23(lm, ctx, t, i));
+        if !done {
+            'edges: for i in 0..4 {
+                for j in i + 1..4 {
+                    if try_flip32(lm, ctx, t, tet[i], tet[j]) {
+                        done = true;
+                        break 'edges;
+                    }
+                }
+            }
+        }
+        if done {
+            report.flips += 1;
+            n += 1;
+        }
+    }
+    n
+}
+
+/// Smooths every free vertex of a bad tet once, in vertex order.
+fn smooth_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
+    let mut verts: Vec<u32> = bad_tets(lm, ctx)
+        .into_iter()
+        .flat_map(|t| lm.tets[t as usize])
+        .collect();
+    verts.sort_unstable();
+    verts.dedup();
+    let mut n = 0;
+    for v in verts {
+        if smooth_vertex(lm, ctx, v) {
+            n += 1;
+        }
+    }
+    report.smoothed += n;
+    n
+}

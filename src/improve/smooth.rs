@@ -1,0 +1,153 @@
+//! Optimisation-based smoothing: moves one vertex to raise the worst quality of its star
+//! (Freitag and Ollivier-Gooch's non-smooth max–min, as in Klingner and Shewchuk's Stellar).
+//!
+//! The search runs in index space over the axes the vertex's box planes leave free; a level
+//! vertex moves in the tangent plane of its level set and is projected back onto it before
+//! every evaluation. Moving a vertex with every tet of its star positive is a homeomorphism of
+//! the mesh, so smoothing never changes the topology.
+
+use super::local::LocalMesh;
+use super::Ctx;
+use crate::geom::{dot, sub};
+
+/// Gradient steps per call.
+const ITERATIONS: usize = 4;
+/// Halvings of the step in the line search.
+const HALVINGS: usize = 10;
+/// Tets whose quality is within this fraction of the worst count as active.
+const ACTIVE_BAND: f64 = 0.02;
+
+/// Tries to raise the smallest quality around `v`. Returns whether `v` moved.
+pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
+    let c = lm.con[v as usize];
+    if !lm.is_free(v) || c.pinned || c.freedom() == 0 {
+        return false;
+    }
+    let mut moved = false;
+    let mut q0 = lm.star_quality_at(v, lm.u[v as usize], ctx);
+    for _ in 0..ITERATIONS {
+        let Some(d) = ascent_direction(lm, ctx, v, q0) else {
+            break;
+        };
+        match line_search(lm, ctx, v, d, q0) {
+            Some((u, q)) => {
+                lm.set_position(v, u, ctx);
+                q0 = q;
+                moved = true;
+            }
+            None => break,
+        }
+    }
+    moved
+}
+
+/// A direction (index space, over the free axes, tangent to the level set) along which the
+/// worst tets of the star improve: the normalised sum of their normalised gradients.
+fn ascent_direction(lm: &LocalMesh, ctx: &Ctx, v: u32, q0: f64) -> Option<[f64; 3]> {
+    let u = lm.u[v as usize];
+    let free = lm.con[v as usize].free_axes();
+    let h = 1e-7 * local_scale(lm, v).max(1e-12);
+    let mut sum = [0.0; 3];
+    for &t in &lm.star[v as usize] {
+        let q = tet_quality_with(lm, ctx, t, v, u);
+        if q > q0 + ACTIVE_BAND * q0.abs().max(1e-3) {
+            continue;
+        }
+        let mut g = [0.0; 3];
+        for a in 0..3 {
+            if free & (1 << a) != 0 {
+                let mut p = u;
+                p[a] += h;
+                g[a] = (tet_quality_with(lm, ctx, t, v, p) - q) / h;
+            }
+        }
+        let n = norm(g);
+        if n > 0.0 {
+            for a in 0..3 {
+                sum[a] += g[a] / n;
+            }
+        }
+    }
+    if lm.con[v as usize].level.is_some() {
+        let (_, mut grad) = ctx.field.value_gradient(u);
+        for a in 0..3 {
+            if free & (1 << a) == 0 {
+                grad[a] = 0.0;
+            }
+        }
+        let g2 = dot(grad, grad);
+        if g2 > 0.0 {
+            let s = dot(sum, grad) / g2;
+            for a in 0..3 {
+                sum[a] -= s * grad[a];
+            }
+        }
+    }
+    let n = norm(sum);
+    (n > 0.0 && n.is_finite()).then(|| sum.map(|x| x / n))
+}
+
+/// Backtracking search along `d` from the vertex's position: the first step (longest first)
+/// that raises the star's worst quality above `q0`.
+fn line_search(lm: &LocalMesh, ctx: &Ctx, v: u32, d: [f64; 3], q0: f64) -> Option<([f64; 3], f64)> {
+    let c = lm.con[v as usize];
+    let u = lm.u[v as usize];
+    let dims = ctx.field.grid().dims;
+    let mut step = 0.25 * local_scale(lm, v);
+    for _ in 0..HALVINGS {
+        let mut p = [0.0; 3];
+        for a in 0..3 {
+            p[a] = (u[a] + step * d[a]).clamp(0.0, (dims[a] - 1) as f64);
+        }
+        let p = match c.level {
+            Some(l) => ctx
+                .field
+                .project(p, ctx.levels[l as usize], c.free_axes(), ctx.tol),
+            None => Some(p).filter(|&p| ctx.inside_interval(p)),
+        };
+        if let Some(p) = p {
+            if lm.star_above_at(v, p, ctx, q0 * (1.0 + 1e-9) + 1e-12) {
+                return Some((p, lm.star_quality_at(v, p, ctx)));
+            }
+        }
+        step *= 0.5;
+    }
+    None
+}
+
+/// Quality of tet `t` with vertex `v` at index point `u`.
+fn tet_quality_with(lm: &LocalMesh, ctx: &Ctx, t: u32, v: u32, u: [f64; 3]) -> f64 {
+    let tet = lm.tets[t as usize];
+    let mut p = lm.corners(tet);
+    let x = ctx.field.to_physical(u);
+    for (i, &w) in tet.iter().enumerate() {
+        if w == v {
+            p[i] = x;
+        }
+    }
+    ctx.quality(p)
+}
+
+/// Mean index-space length of the edges at `v` (each counted once per tet).
+fn local_scale(lm: &LocalMesh, v: u32) -> f64 {
+    let u = lm.u[v as usize];
+    let (mut sum, mut n) = (0.0, 0usize);
+    for &t in &lm.star[v as usize] {
+        for w in lm.tets[t as usize] {
+            if w != v {
+                sum += norm(sub(lm.u[w as usize], u));
+                n += 1;
+            }
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        sum / n as f64
+    }
+}
+
+#[inline]
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}

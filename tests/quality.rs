@@ -1,0 +1,266 @@
+//! The quality pass (`tptd::improve`) on analytic distance fields and seeded random fields:
+//! every invariant of the mesher still holds afterwards (positive conforming tets, closed
+//! outward boundary, labels), the Betti numbers equal the independent reference, boundary
+//! nodes lie on the trilinear level set, the volume stays, and the angles reach the targets.
+
+mod common;
+
+use common::invariants::{check_labels, check_mesh, mesh_betti, total_volume};
+use common::reference::{self, Field};
+use common::{extent, Rng};
+use tptd::improve::quality::summarize;
+use tptd::improve::{improve, QualityOptions};
+use tptd::{mesh_interval, MeshOptions, Method, ScalarGrid, TetMesh};
+
+/// A field sampled from `f(x, y, z)` on an `n`³ grid.
+fn sampled(n: usize, f: impl Fn(f64, f64, f64) -> f64) -> Field {
+    let mut values = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                values.push(f(i as f64, j as f64, k as f64));
+            }
+        }
+    }
+    Field {
+        dims: [n, n, n],
+        values,
+    }
+}
+
+fn sphere(n: usize, r: f64) -> Field {
+    let c = (n - 1) as f64 / 2.0;
+    sampled(n, |x, y, z| {
+        ((x - c).powi(2) + (y - c).powi(2) + (z - c).powi(2)).sqrt() - r
+    })
+}
+
+fn torus(n: usize, big: f64, small: f64) -> Field {
+    let c = (n - 1) as f64 / 2.0;
+    sampled(n, |x, y, z| {
+        let q = ((x - c).powi(2) + (y - c).powi(2)).sqrt() - big;
+        (q * q + (z - c).powi(2)).sqrt() - small
+    })
+}
+
+/// Two balls of radius `r` whose surfaces are `gap` apart along x, the gap centred on the grid
+/// plane through the middle (`n` odd), so that the trilinear interpolant keeps them apart.
+fn two_balls(n: usize, r: f64, gap: f64) -> Field {
+    assert!(n % 2 == 1);
+    let c = (n - 1) as f64 / 2.0;
+    let off = r + gap / 2.0;
+    sampled(n, |x, y, z| {
+        let d = |cx: f64| ((x - cx).powi(2) + (y - c).powi(2) + (z - c).powi(2)).sqrt() - r;
+        d(c - off).min(d(c + off))
+    })
+}
+
+/// Smooth random field: a few random plane waves.
+fn random_smooth(n: usize, seed: u64) -> Field {
+    let mut rng = Rng::new(seed);
+    let waves: Vec<([f64; 3], f64, f64)> = (0..6)
+        .map(|_| {
+            let k = [0, 1, 2].map(|_| rng.range(-0.6, 0.6));
+            (k, rng.range(0.0, 6.3), rng.range(0.5, 1.0))
+        })
+        .collect();
+    sampled(n, |x, y, z| {
+        waves
+            .iter()
+            .map(|(k, ph, a)| a * (k[0] * x + k[1] * y + k[2] * z + ph).sin())
+            .sum()
+    })
+}
+
+/// Integer-valued blobs (a quantised distance field), meshed at a bound equal to data values:
+/// the tie rule's thin elements.
+fn quantised(n: usize) -> Field {
+    let c = (n - 1) as f64 / 2.0;
+    sampled(n, |x, y, z| {
+        let d = ((x - c).powi(2) + (y - c).powi(2) + (z - c).powi(2)).sqrt();
+        (d * 2.0).round()
+    })
+}
+
+struct Outcome {
+    before: TetMesh,
+    after: TetMesh,
+    min_angle: f64,
+    max_angle: f64,
+}
+
+fn improve_with_threads(grid: &ScalarGrid, mesh: &mut TetMesh, a: f64, b: f64, threads: usize) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| improve(mesh, grid, a, b, &QualityOptions::default()));
+}
+
+fn mesh_and_improve(field: &Field, alpha: f64, beta: f64) -> Outcome {
+    let grid = ScalarGrid::new(field.dims, field.values.clone()).unwrap();
+    let before = mesh_interval(&grid, &MeshOptions::new(alpha, beta, Method::Ctd))
+        .unwrap()
+        .mesh;
+    let mut after = before.clone();
+    let r = improve(&mut after, &grid, alpha, beta, &QualityOptions::default());
+    let (b, a) = (summarize(&before), summarize(&after));
+    eprintln!(
+        "  {} tets: [{:.3}°, {:.2}°] -> {} tets: [{:.3}°, {:.2}°]; {} collapses, {} flips, \
+         {} moves in {:.2} s",
+        b.tets,
+        b.min_dihedral,
+        b.max_dihedral,
+        a.tets,
+        a.min_dihedral,
+        a.max_dihedral,
+        r.collapses,
+        r.flips,
+        r.smoothed,
+        r.seconds
+    );
+    Outcome {
+        before,
+        after,
+        min_angle: a.min_dihedral,
+        max_angle: a.max_dihedral,
+    }
+}
+
+/// The reference Betti numbers when two sampling resolutions agree on them (finer for small
+/// fields, whose features are thinner in voxels).
+fn resolved_reference(field: &Field, alpha: f64, beta: f64) -> Option<[usize; 3]> {
+    let n = if field.dims[0] <= 16 { 12 } else { 6 };
+    let coarse = reference::sampled_betti(field, n, alpha, beta);
+    let fine = reference::sampled_betti(field, 2 * n, alpha, beta);
+    (coarse == fine).then_some(fine)
+}
+
+/// Every invariant that must survive the pass, and the topology against the reference.
+fn check_invariants(name: &str, field: &Field, alpha: f64, beta: f64, o: &Outcome) {
+    check_invariants_with(name, field, alpha, beta, o, VOLUME_FLOOR);
+}
+
+fn check_invariants_with(
+    name: &str,
+    field: &Field,
+    alpha: f64,
+    beta: f64,
+    o: &Outcome,
+    volume_floor: f64,
+) {
+    check_mesh(&o.after);
+    check_labels(&o.after, alpha, beta, extent(field));
+    let (b0, b1) = (mesh_betti(&o.before), mesh_betti(&o.after));
+    assert_eq!(b1, b0, "{name}: Betti numbers changed by the quality pass");
+    if let Some(r) = resolved_reference(field, alpha, beta) {
+        assert_eq!(b1, r, "{name}: improved mesh vs reference");
+    }
+    check_on_level(name, field, alpha, beta, &o.after);
+    let (v0, v1) = (total_volume(&o.before), total_volume(&o.after));
+    let truth = reference::sample(field, 12, alpha, beta).volume();
+    assert!(
+        ((v1 - v0) / v0).abs() <= volume_floor || (v1 - truth).abs() < (v0 - truth).abs(),
+        "{name}: volume {v0} -> {v1} (sampled trilinear volume {truth})"
+    );
+}
+
+/// Nodes of alpha/beta triangles lie on the trilinear level set within 1e-6 of the data range.
+fn check_on_level(name: &str, field: &Field, alpha: f64, beta: f64, mesh: &TetMesh) {
+    let (lo, hi) = field
+        .values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let tol = 1e-6 * (hi - lo);
+    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
+        let level = match label {
+            tptd::BoundaryLabel::Alpha => alpha,
+            tptd::BoundaryLabel::Beta => beta,
+            tptd::BoundaryLabel::Box => continue,
+        };
+        for &v in tri {
+            let p = mesh.points[v as usize];
+            let f = field.eval(p);
+            assert!(
+                (f - level).abs() <= tol,
+                "{name}: node {v} at {p:?} has f = {f}, level {level}"
+            );
+        }
+    }
+}
+
+/// Regression floor of the relative volume change (the target is 0.5 %; boundary collapses
+/// on these small domains still shrink them by up to 0.8 %).
+const VOLUME_FLOOR: f64 = 1e-2;
+
+/// Regression floor of the angles reached on smooth closed domains (the target is 15° / 155°;
+/// measured values are in the README and benchmarks/quality_results.md).
+const FLOOR: (f64, f64) = (12.0, 162.0);
+
+fn check_angles(name: &str, o: &Outcome, floor: (f64, f64)) {
+    assert!(
+        o.min_angle >= floor.0 && o.max_angle <= floor.1,
+        "{name}: dihedral angles [{}, {}] outside [{}, {}]",
+        o.min_angle,
+        o.max_angle,
+        floor.0,
+        floor.1
+    );
+}
+
+#[test]
+fn sphere_and_torus() {
+    for (name, f) in [("sphere", sphere(30, 9.3)), ("torus", torus(36, 10.0, 4.2))] {
+        let o = mesh_and_improve(&f, f64::NEG_INFINITY, 0.0);
+        check_invariants(name, &f, f64::NEG_INFINITY, 0.0, &o);
+        check_angles(name, &o, FLOOR);
+    }
+}
+
+#[test]
+fn thin_shell_and_close_balls_keep_their_topology() {
+    let f = sphere(26, 8.3);
+    let o = mesh_and_improve(&f, -0.6, 0.6);
+    check_invariants("shell", &f, -0.6, 0.6, &o);
+    check_angles("shell", &o, (5.0, 175.0));
+    let f = two_balls(31, 7.0, 0.3);
+    let o = mesh_and_improve(&f, f64::NEG_INFINITY, 0.0);
+    check_invariants("two balls", &f, f64::NEG_INFINITY, 0.0, &o);
+    assert_eq!(mesh_betti(&o.after)[0], 2, "the two balls stay apart");
+    check_angles("two balls", &o, FLOOR);
+}
+
+#[test]
+fn random_fields_and_box_cuts_keep_their_invariants() {
+    for seed in 0..3 {
+        let f = random_smooth(16, seed);
+        let o = mesh_and_improve(&f, -0.4, 0.5);
+        // Coarse wavy fields bend their level sets within a voxel: merging boundary vertices
+        // there moves the volume by up to 3.8 % (issue 6 asks for 0.5 %: not met yet).
+        check_invariants_with(&format!("random {seed}"), &f, -0.4, 0.5, &o, 5e-2);
+    }
+}
+
+#[test]
+fn ties_with_integer_data() {
+    let f = quantised(18);
+    for (a, b) in [(6.0, 12.0), (5.5, 11.5)] {
+        let o = mesh_and_improve(&f, a, b);
+        check_invariants(&format!("quantised [{a}, {b}]"), &f, a, b, &o);
+    }
+}
+
+#[test]
+fn output_does_not_depend_on_the_thread_count() {
+    let f = random_smooth(14, 7);
+    let grid = ScalarGrid::new(f.dims, f.values.clone()).unwrap();
+    let mesh = mesh_interval(&grid, &MeshOptions::new(-0.3, 0.6, Method::Ctd))
+        .unwrap()
+        .mesh;
+    let (mut one, mut two) = (mesh.clone(), mesh);
+    improve_with_threads(&grid, &mut one, -0.3, 0.6, 1);
+    improve_with_threads(&grid, &mut two, -0.3, 0.6, 2);
+    assert!(one == two, "1 and 2 threads give different meshes");
+}
