@@ -9,6 +9,8 @@ use serde::{Serialize, Serializer};
 
 use crate::decompose::CellCase;
 use crate::extract::{MeshStats, Method};
+use crate::improve::quality::QualitySummary;
+use crate::improve::ImproveReport;
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// A bound of the interval: finite values serialize as JSON numbers, infinities as the strings
@@ -71,6 +73,9 @@ pub struct Timings {
     pub mesh: f64,
     /// Betti numbers and dihedral angles (0 when skipped).
     pub analysis: f64,
+    /// The quality pass (`--quality` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quality: Option<f64>,
     /// Writing the output mesh.
     pub write: f64,
     /// Whole run.
@@ -121,10 +126,27 @@ pub struct Report {
     pub betti: Option<[usize; 3]>,
     /// Dihedral angle range in degrees; `null` when the analysis was skipped.
     pub dihedral_degrees: Option<Dihedral>,
+    /// The quality pass (`--quality` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quality: Option<QualitySection>,
     /// Worker threads used.
     pub threads: usize,
     /// Stage timings.
     pub timings_seconds: Timings,
+}
+
+/// What the quality pass did, with the element quality before and after it (both `None` when
+/// the analysis was skipped).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct QualitySection {
+    /// Target smallest and largest dihedral angle (degrees).
+    pub target_degrees: [f64; 2],
+    /// Quality of the mesh as extracted.
+    pub before: Option<QualitySummary>,
+    /// Quality after the pass.
+    pub after: Option<QualitySummary>,
+    /// The pass's operation counts and time.
+    pub pass: ImproveReport,
 }
 
 /// Everything about a run that is not derived from the mesh itself.
@@ -156,6 +178,7 @@ pub fn build_report(
     stats: &MeshStats,
     betti: Option<[usize; 3]>,
     dihedral: Option<(f64, f64)>,
+    quality: Option<QualitySection>,
     timings: Timings,
 ) -> Report {
     let mut boundary_triangles: BTreeMap<&'static str, usize> =
@@ -195,6 +218,7 @@ pub fn build_report(
         volume: mesh.volume(),
         betti,
         dihedral_degrees: dihedral.map(|(min, max)| Dihedral { min, max }),
+        quality,
         threads: run.threads,
         timings_seconds: timings,
     }
@@ -245,7 +269,7 @@ mod tests {
             beta: f64::INFINITY,
             threads: 1,
         };
-        let r = build_report(&run, &mesh, &stats, None, None, Timings::default());
+        let r = build_report(&run, &mesh, &stats, None, None, None, Timings::default());
         let v: serde_json::Value = serde_json::from_str(&r.to_json_pretty()).unwrap();
         assert_eq!(v["alpha"], "-inf");
         assert_eq!(v["beta"], "inf");

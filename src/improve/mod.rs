@@ -27,7 +27,7 @@ use crate::grid::ScalarGrid;
 use crate::mesh::{BoundaryLabel, TetMesh};
 use field::Field;
 use local::LocalMesh;
-use quality::{biased_min_sine, summarize, QualitySummary};
+use quality::biased_min_sine;
 
 /// Knobs of the quality pass.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,10 +65,6 @@ impl Default for QualityOptions {
 /// What the quality pass did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct ImproveReport {
-    /// Quality before the pass.
-    pub before: QualitySummary,
-    /// Quality after the pass.
-    pub after: QualitySummary,
     /// Rounds run.
     pub rounds: usize,
     /// Tets in the worked-on regions, summed over rounds.
@@ -134,10 +130,7 @@ pub fn improve(
 ) -> ImproveReport {
     let start = Instant::now();
     let ctx = context(grid, alpha, beta, opts);
-    let mut report = ImproveReport {
-        before: summarize(mesh),
-        ..Default::default()
-    };
+    let mut report = ImproveReport::default();
     for _ in 0..opts.max_rounds {
         if opts.time_budget.is_some_and(|b| start.elapsed() > b) {
             break;
@@ -155,7 +148,6 @@ pub fn improve(
         schedule::improve_local(&mut lm, &ctx, &mut report);
         lm.splice(mesh, region);
     }
-    report.after = summarize(mesh);
     report.seconds = start.elapsed().as_secs_f64();
     report
 }

@@ -55,6 +55,24 @@ pub(crate) struct Cli {
     #[arg(long)]
     pub(crate) no_analysis: bool,
 
+    /// Improve the elements after meshing (collapses, flips, smoothing) towards the target
+    /// dihedral angles, keeping the topology, the labels and the boundary on the trilinear
+    /// level sets
+    #[arg(long)]
+    pub(crate) quality: bool,
+
+    /// Target smallest dihedral angle of --quality, in degrees
+    #[arg(long, value_name = "DEG", default_value_t = 15.0, value_parser = parse_min_angle)]
+    pub(crate) min_angle: f64,
+
+    /// Target largest dihedral angle of --quality, in degrees
+    #[arg(long, value_name = "DEG", default_value_t = 155.0, value_parser = parse_max_angle)]
+    pub(crate) max_angle: f64,
+
+    /// Time budget of --quality in seconds: no improvement round starts after it
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub(crate) quality_time: Option<f64>,
+
     /// Mesh a generated sample (two vessels a third of a voxel apart) with the interval
     /// [0.5, inf) and show what the decomposition preserves
     #[arg(long, conflicts_with = "input")]
@@ -95,6 +113,33 @@ pub(crate) enum MshVersionArg {
     V41,
     #[value(name = "2.2")]
     V22,
+}
+
+/// Parses `--min-angle`: a smallest dihedral angle a tetrahedron can have (below 70.5°).
+fn parse_min_angle(s: &str) -> Result<f64, String> {
+    parse_angle(s, 0.0, 70.0)
+}
+
+/// Parses `--max-angle`: a largest dihedral angle a tetrahedron can have (above 70.5°).
+fn parse_max_angle(s: &str) -> Result<f64, String> {
+    parse_angle(s, 71.0, 180.0)
+}
+
+fn parse_angle(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(a) if a > lo && a < hi => Ok(a),
+        _ => Err(format!(
+            "expected an angle in degrees between {lo} and {hi}, got '{s}'"
+        )),
+    }
+}
+
+/// Parses `--quality-time`: a positive number of seconds.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t > 0.0 && t.is_finite() => Ok(t),
+        _ => Err(format!("expected a positive number of seconds, got '{s}'")),
+    }
 }
 
 /// A parsed `--spacing`.

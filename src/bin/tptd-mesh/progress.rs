@@ -1,10 +1,13 @@
-//! The progress bar of the meshing stage.
+//! Progress on stderr: the bar of the meshing stage and the spinner of the quality pass.
 
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use tptd::{mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput, ScalarGrid};
+use tptd::improve::{improve, ImproveReport, QualityOptions};
+use tptd::{mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput, ScalarGrid, TetMesh};
+
+use crate::run::Job;
 
 /// Grids with more cells than this get a progress bar (when stderr is a terminal).
 const PROGRESS_MIN_CELLS: usize = 2_000_000;
@@ -40,4 +43,34 @@ pub(crate) fn mesh_with_progress(
     });
     pb.finish_and_clear();
     result
+}
+
+/// Runs the quality pass on `mesh` (in `job`'s thread pool), with a spinner on stderr unless
+/// `quiet` or stderr is not a terminal.
+pub(crate) fn improve_with_progress(
+    mesh: &mut TetMesh,
+    grid: &ScalarGrid,
+    job: &Job,
+    opts: &QualityOptions,
+    quiet: bool,
+) -> ImproveReport {
+    let pb = if quiet || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let pb = ProgressBar::new_spinner();
+        pb.set_message("improving elements");
+        pb.enable_steady_tick(std::time::Duration::from_millis(200));
+        pb
+    };
+    let (alpha, beta) = (job.opts.alpha, job.opts.beta);
+    let pool = job
+        .opts
+        .threads
+        .and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
+    let report = match pool {
+        Some(pool) => pool.install(|| improve(mesh, grid, alpha, beta, opts)),
+        None => improve(mesh, grid, alpha, beta, opts),
+    };
+    pb.finish_and_clear();
+    report
 }

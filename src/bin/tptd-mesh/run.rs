@@ -3,39 +3,43 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use anyhow::Result;
 use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
+use tptd::improve::quality::{summarize, QualitySummary};
+use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
 use tptd::io::{check_writable, read_volume, write_atomically, write_mesh, MeshFormat};
-use tptd::report::{build_report, Report, RunInfo, Timings};
+use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
 use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid};
 
 use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
-use crate::progress::mesh_with_progress;
+use crate::progress::{improve_with_progress, mesh_with_progress};
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
 
 /// Output written by `--demo` when no `-o` is given.
 const DEMO_OUTPUT: &str = "tptd-demo.vtu";
 
 /// The checked arguments of a run.
-struct Job {
+pub(crate) struct Job {
     /// The input as named in messages (`demo` for the demo volume).
     input_name: String,
     /// The mesh output path.
     output: PathBuf,
     /// The meshing options.
-    opts: MeshOptions,
+    pub(crate) opts: MeshOptions,
     /// The mesh writer options.
     write: WriteOptions,
 }
 
-/// The results of the analysis stage (both `None` with `--no-analysis`).
+/// The results of the analysis stage (all `None` with `--no-analysis`).
 struct Analysis {
     betti: Option<[usize; 3]>,
     dihedral: Option<(f64, f64)>,
+    /// The full quality summary, with `--quality` only.
+    quality: Option<QualitySummary>,
 }
 
 /// Seconds since `t`.
@@ -54,12 +58,18 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     warn_exact_bounds(&grid, &job);
 
     let t = Instant::now();
-    let out = mesh(&grid, &job, cli.quiet)?;
+    let mut out = mesh(&grid, &job, cli.quiet)?;
     let t_mesh = secs(t);
 
+    let (quality, t_quality) = improve_mesh(&cli, &grid, &job, &mut out);
+
     let t = Instant::now();
-    let analysis = analyse(&out, cli.no_analysis);
+    let analysis = analyse(&out, cli.no_analysis, cli.quality);
     let t_analysis = secs(t);
+    let quality = quality.map(|mut q| {
+        q.after = analysis.quality.clone();
+        q
+    });
     let comparison = compare_demo(&cli, &grid, &job)?;
 
     let t = Instant::now();
@@ -70,10 +80,11 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         read: t_read,
         mesh: t_mesh,
         analysis: t_analysis,
+        quality: t_quality,
         write: t_write,
         total: secs(t_total),
     };
-    let report = make_report(&job, &grid, &out, analysis, timings);
+    let report = make_report(&job, &grid, &out, analysis, quality, timings);
     finish(&cli, &report, comparison.as_ref())?;
     // The process ends here: let the OS reclaim the mesh and the grid at exit instead of
     // freeing hundreds of megabytes page by page first.
@@ -238,17 +249,48 @@ fn mesh(grid: &ScalarGrid, job: &Job, quiet: bool) -> Result<MeshOutput> {
 }
 
 /// Betti numbers and the dihedral-angle range, unless `--no-analysis`.
-fn analyse(out: &MeshOutput, skip: bool) -> Analysis {
+fn analyse(out: &MeshOutput, skip: bool, quality: bool) -> Analysis {
     if skip {
         return Analysis {
             betti: None,
             dihedral: None,
+            quality: None,
         };
     }
     Analysis {
         betti: Some(tptd::topology::betti(&out.mesh)),
         dihedral: tptd::quality::dihedral_range(&out.mesh),
+        quality: quality.then(|| summarize(&out.mesh)),
     }
+}
+
+/// With `--quality`: the quality pass (and the quality before it, unless `--no-analysis`),
+/// and its time.
+fn improve_mesh(
+    cli: &Cli,
+    grid: &ScalarGrid,
+    job: &Job,
+    out: &mut MeshOutput,
+) -> (Option<QualitySection>, Option<f64>) {
+    if !cli.quality {
+        return (None, None);
+    }
+    let before = (!cli.no_analysis).then(|| summarize(&out.mesh));
+    let opts = QualityOptions {
+        min_angle: cli.min_angle,
+        max_angle: cli.max_angle,
+        time_budget: cli.quality_time.map(Duration::from_secs_f64),
+        ..QualityOptions::default()
+    };
+    let t = Instant::now();
+    let pass = improve_with_progress(&mut out.mesh, grid, job, &opts, cli.quiet);
+    let section = QualitySection {
+        target_degrees: [opts.min_angle, opts.max_angle],
+        before,
+        after: None,
+        pass,
+    };
+    (Some(section), Some(secs(t)))
 }
 
 /// For the demo (with analysis): the components the same interval has when meshed with a
@@ -281,6 +323,7 @@ fn make_report(
     grid: &ScalarGrid,
     out: &MeshOutput,
     analysis: Analysis,
+    quality: Option<QualitySection>,
     timings: Timings,
 ) -> Report {
     let threads = job
@@ -304,6 +347,7 @@ fn make_report(
         &out.stats,
         analysis.betti,
         analysis.dihedral,
+        quality,
         timings,
     )
 }

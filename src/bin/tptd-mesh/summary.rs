@@ -4,6 +4,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use tptd::decompose::CellCase;
+use tptd::improve::quality::{QualitySummary, BELOW_ANGLES};
 use tptd::report::Report;
 use tptd::Method;
 
@@ -52,6 +53,7 @@ pub(crate) fn summary(
     input_lines(&mut s, r);
     mesh_lines(&mut s, r);
     analysis_lines(&mut s, r);
+    quality_lines(&mut s, r);
     cells_line(&mut s, r);
     output_lines(&mut s, r, report_path);
     if let (Some(c), Some([b0, ..])) = (cmp, r.betti) {
@@ -122,6 +124,56 @@ fn analysis_lines(s: &mut String, r: &Report) {
     }
 }
 
+/// The quality pass: what it did and the angles before and after.
+fn quality_lines(s: &mut String, r: &Report) {
+    let Some(q) = &r.quality else {
+        return;
+    };
+    let p = &q.pass;
+    let _ = writeln!(
+        s,
+        "  quality   target [{}, {}] deg: {} collapses, {} flips, {} moves, {} nodes onto the \
+         level sets ({} left off) in {} rounds",
+        q.target_degrees[0],
+        q.target_degrees[1],
+        p.collapses,
+        p.flips,
+        p.smoothed,
+        p.projected,
+        p.unprojected,
+        p.rounds
+    );
+    if let (Some(b), Some(a)) = (&q.before, &q.after) {
+        let _ = writeln!(
+            s,
+            "            before: {} tets, dihedral [{}, {}] deg, {} tets below {} deg",
+            b.tets,
+            fmt_angle(b.min_dihedral),
+            fmt_angle(b.max_dihedral),
+            below(b, q.target_degrees[0]),
+            q.target_degrees[0]
+        );
+        let _ = writeln!(
+            s,
+            "            after:  {} tets, dihedral [{}, {}] deg, {} tets below {} deg",
+            a.tets,
+            fmt_angle(a.min_dihedral),
+            fmt_angle(a.max_dihedral),
+            below(a, q.target_degrees[0]),
+            q.target_degrees[0]
+        );
+    }
+}
+
+/// Tets whose smallest dihedral angle is below `angle`, from the summary's thresholds
+/// (`?` when `angle` is not one of them).
+fn below(q: &QualitySummary, angle: f64) -> String {
+    BELOW_ANGLES
+        .iter()
+        .position(|&a| a == angle)
+        .map_or_else(|| "?".to_string(), |i| q.below[i].to_string())
+}
+
 /// The meshed cells by case.
 fn cells_line(s: &mut String, r: &Report) {
     let cases: Vec<String> = CellCase::ALL
@@ -145,8 +197,14 @@ fn output_lines(s: &mut String, r: &Report, report_path: Option<&Path>) {
     let t = &r.timings_seconds;
     let _ = writeln!(
         s,
-        "  time      read {:.3} s, mesh {:.3} s, analysis {:.3} s, write {:.3} s, total {:.3} s",
-        t.read, t.mesh, t.analysis, t.write, t.total
+        "  time      read {:.3} s, mesh {:.3} s, {}analysis {:.3} s, write {:.3} s, total {:.3} s",
+        t.read,
+        t.mesh,
+        t.quality
+            .map_or_else(String::new, |q| format!("quality {q:.3} s, ")),
+        t.analysis,
+        t.write,
+        t.total
     );
     let _ = writeln!(s, "  wrote     {}", r.output);
     if let Some(p) = report_path {
