@@ -60,58 +60,131 @@ pub fn face_key(mut t: [u32; 3]) -> [u32; 3] {
     t
 }
 
-/// What the splice needs to know about the region in global terms.
-pub struct Region {
-    /// Tets of the mesh that belong to the region.
-    in_region: Vec<bool>,
-    /// Local id of every global vertex in the region (`u32::MAX` outside).
-    local_of: Vec<u32>,
+/// No region.
+const NONE: u32 = u32::MAX;
+
+/// Thickness (in voxels, along the grid's longest axis) of the slabs that split the work into
+/// independent regions. Regions of slabs of the same parity are at least a slab apart, so they
+/// share no tet and no vertex and are improved in parallel.
+const SLAB: f64 = 6.0;
+
+/// How the mesh is split into regions, in global terms (what the splice needs).
+pub struct Regions {
+    /// Region of each tet of the mesh (`NONE` outside every region).
+    of_tet: Vec<u32>,
+    /// Per point: the region whose free vertex it is (`NONE` if frozen or outside).
+    free_in: Vec<u32>,
+}
+
+/// The slab of each work vertex along the grid's longest axis (`NONE` for the others).
+fn slabs(mesh: &TetMesh, work: &[bool], field: &Field) -> Vec<u32> {
+    let dims = field.grid().dims;
+    let axis = (0..3).max_by_key(|&a| (dims[a], 3 - a)).unwrap_or(0);
+    (0..mesh.points.len())
+        .into_par_iter()
+        .map(|v| {
+            if !work[v] {
+                return NONE;
+            }
+            let u = field.to_index(mesh.points[v])[axis];
+            (u / SLAB).floor().max(0.0) as u32
+        })
+        .collect()
+}
+
+/// Splits the stars of the work vertices in slabs of parity `phase` into regions, one per
+/// slab. Returns the regions (in slab order) and the global bookkeeping.
+pub fn extract_regions(
+    mesh: &TetMesh,
+    work: &[bool],
+    ctx: &Ctx,
+    phase: u32,
+) -> (Vec<LocalMesh>, Regions) {
+    let slab = slabs(mesh, work, &ctx.field);
+    let of_tet: Vec<u32> = mesh
+        .tets
+        .par_iter()
+        .map(|t| {
+            t.iter()
+                .map(|&v| slab[v as usize])
+                .filter(|&s| s != NONE && s % 2 == phase)
+                .min()
+                .map_or(NONE, |s| s / 2)
+        })
+        .collect();
+    let n_regions = of_tet
+        .iter()
+        .filter(|&&r| r != NONE)
+        .max()
+        .map_or(0, |&r| r + 1);
+    let mut tets_of: Vec<Vec<u32>> = vec![Vec::new(); n_regions as usize];
+    let (mut owner, mut shared) = (
+        vec![NONE; mesh.points.len()],
+        vec![false; mesh.points.len()],
+    );
+    for (t, (&r, tet)) in of_tet.iter().zip(&mesh.tets).enumerate() {
+        if r != NONE {
+            tets_of[r as usize].push(t as u32);
+        }
+        for &v in tet {
+            let o = &mut owner[v as usize];
+            if r == NONE || (*o != NONE && *o != r) {
+                shared[v as usize] = true;
+            } else {
+                *o = r;
+            }
+        }
+    }
+    let free_in: Vec<u32> = owner
+        .iter()
+        .zip(&shared)
+        .map(|(&o, &s)| if s { NONE } else { o })
+        .collect();
+    let regions = tets_of
+        .into_par_iter()
+        .map(|tets| LocalMesh::from_tets(mesh, &tets, &free_in, ctx))
+        .filter(|lm| !lm.tets.is_empty())
+        .collect();
+    (regions, Regions { of_tet, free_in })
 }
 
 impl LocalMesh {
-    /// Copies out the stars of the vertices flagged in `work` (one flag per mesh point).
-    pub fn extract(mesh: &TetMesh, work: &[bool], ctx: &Ctx) -> (Self, Region) {
-        let (field, levels) = (&ctx.field, ctx.levels);
-        let in_region: Vec<bool> = mesh
-            .tets
-            .par_iter()
-            .map(|t| t.iter().any(|&v| work[v as usize]))
+    /// The region made of the mesh tets `tets`; `free_in` tells which points are free (those
+    /// with a region: all their tets are in it).
+    fn from_tets(mesh: &TetMesh, tets: &[u32], free_in: &[u32], ctx: &Ctx) -> Self {
+        let mut global: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
+        global.sort_unstable();
+        global.dedup();
+        let local = |g: u32| global.binary_search(&g).map_or(NONE, |i| i as u32);
+        let frozen: Vec<bool> = global
+            .iter()
+            .map(|&g| free_in[g as usize] == NONE)
             .collect();
-        let n = mesh.points.len();
-        let (used, outside) = vertex_marks(mesh, &in_region, n);
-        let mut local_of = vec![u32::MAX; n];
-        let mut global = Vec::new();
-        for (v, &u) in used.iter().enumerate() {
-            if u {
-                local_of[v] = global.len() as u32;
-                global.push(v as u32);
-            }
-        }
-        let mut lm = LocalMesh::with_vertices(mesh, global, &outside, field);
+        let mut lm = LocalMesh::with_vertices(mesh, global.clone(), frozen, &ctx.field);
         lm.weight = ctx.obtuse_weight;
-        for (t, tet) in mesh.tets.iter().enumerate() {
-            if in_region[t] {
-                lm.add_tet(tet.map(|v| local_of[v as usize]));
+        for &t in tets {
+            lm.add_tet(mesh.tets[t as usize].map(local));
+        }
+        for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
+            // A face with a free vertex of this region lies in one of its tets.
+            if tri.iter().any(|&v| free_in[v as usize] != NONE) {
+                let l = tri.map(local);
+                if l.iter().any(|&v| v != NONE && !lm.frozen[v as usize]) {
+                    lm.faces.insert(face_key(l), BoundaryFace { tri: l, label });
+                }
             }
         }
-        lm.collect_faces(mesh, &local_of);
-        lm.classify(field, levels);
-        (
-            lm,
-            Region {
-                in_region,
-                local_of,
-            },
-        )
+        lm.classify(&ctx.field, ctx.levels);
+        lm
     }
 
-    fn with_vertices(mesh: &TetMesh, global: Vec<u32>, outside: &[bool], field: &Field) -> Self {
+    fn with_vertices(mesh: &TetMesh, global: Vec<u32>, frozen: Vec<bool>, field: &Field) -> Self {
         let x: Vec<[f64; 3]> = global.iter().map(|&g| mesh.points[g as usize]).collect();
         let n = global.len();
         LocalMesh {
             u: x.iter().map(|&p| field.to_index(p)).collect(),
             value: global.iter().map(|&g| mesh.values[g as usize]).collect(),
-            frozen: global.iter().map(|&g| outside[g as usize]).collect(),
+            frozen,
             con: vec![Constraint::default(); n],
             removed: vec![false; n],
             star: vec![Vec::new(); n],
@@ -122,19 +195,6 @@ impl LocalMesh {
             q: Vec::new(),
             weight: 1.0,
             faces: FxHashMap::default(),
-        }
-    }
-
-    /// The boundary faces with at least one free vertex (the others stay in the mesh as
-    /// they are: no operation touches them).
-    fn collect_faces(&mut self, mesh: &TetMesh, local_of: &[u32]) {
-        for (t, tri) in mesh.boundary.iter().enumerate() {
-            let l = tri.map(|v| local_of[v as usize]);
-            if l.iter().any(|&v| v != u32::MAX && !self.frozen[v as usize]) {
-                let label = mesh.boundary_labels[t];
-                self.faces
-                    .insert(face_key(l), BoundaryFace { tri: l, label });
-            }
         }
     }
 
@@ -210,78 +270,71 @@ impl LocalMesh {
     pub fn is_free(&self, v: u32) -> bool {
         !self.frozen[v as usize] && !self.removed[v as usize]
     }
-
-    /// Writes the region back into `mesh`: moved points, the region's tets (after the tets
-    /// outside it, which keep their order) and boundary faces; merged points are dropped and
-    /// the points renumbered in order.
-    pub fn splice(self, mesh: &mut TetMesh, region: Region) {
-        for (l, &g) in self.global.iter().enumerate() {
-            if !self.frozen[l] {
-                mesh.points[g as usize] = self.x[l];
-                mesh.values[g as usize] = self.value[l];
-            }
-        }
-        let to_global = |t: &[u32]| {
-            t.iter()
-                .map(|&v| self.global[v as usize])
-                .collect::<Vec<_>>()
-        };
-        let mut tets: Vec<[u32; 4]> = mesh
-            .tets
-            .iter()
-            .zip(&region.in_region)
-            .filter(|(_, &r)| !r)
-            .map(|(t, _)| *t)
-            .collect();
-        for (t, &a) in self.tets.iter().zip(&self.alive) {
-            if a {
-                let g = to_global(t);
-                tets.push([g[0], g[1], g[2], g[3]]);
-            }
-        }
-        let keep_face = |tri: &[u32; 3]| {
-            !tri.iter().any(|&v| {
-                let l = region.local_of[v as usize];
-                l != u32::MAX && !self.frozen[l as usize]
-            })
-        };
-        let mut boundary = Vec::with_capacity(mesh.boundary.len());
-        let mut labels = Vec::with_capacity(mesh.boundary.len());
-        for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
-            if keep_face(tri) {
-                boundary.push(*tri);
-                labels.push(label);
-            }
-        }
-        let mut local_faces: Vec<&BoundaryFace> = self.faces.values().collect();
-        local_faces.sort_unstable_by_key(|f| face_key(f.tri));
-        for f in local_faces {
-            let g = to_global(&f.tri);
-            boundary.push([g[0], g[1], g[2]]);
-            labels.push(f.label);
-        }
-        mesh.tets = tets;
-        mesh.boundary = boundary;
-        mesh.boundary_labels = labels;
-        let removed: Vec<u32> = (0..self.global.len())
-            .filter(|&l| self.removed[l])
-            .map(|l| self.global[l])
-            .collect();
-        drop_points(mesh, &removed);
-    }
 }
 
-/// Per point: used by a region tet; used by a tet outside the region.
-fn vertex_marks(mesh: &TetMesh, in_region: &[bool], n: usize) -> (Vec<bool>, Vec<bool>) {
-    let mut used = vec![false; n];
-    let mut outside = vec![false; n];
-    for (t, &r) in mesh.tets.iter().zip(in_region) {
-        let m = if r { &mut used } else { &mut outside };
-        for &v in t {
-            m[v as usize] = true;
+/// Writes the regions back into `mesh`: moved points, the regions' tets (after the tets
+/// outside them, which keep their order; regions in order) and boundary faces; merged points
+/// are dropped and the points renumbered in order.
+pub fn splice(mesh: &mut TetMesh, regions: Vec<LocalMesh>, bookkeeping: Regions) {
+    let mut tets: Vec<[u32; 4]> = mesh
+        .tets
+        .iter()
+        .zip(&bookkeeping.of_tet)
+        .filter(|(_, &r)| r == NONE)
+        .map(|(t, _)| *t)
+        .collect();
+    let keep = |tri: &[u32; 3]| tri.iter().all(|&v| bookkeeping.free_in[v as usize] == NONE);
+    let mut boundary = Vec::with_capacity(mesh.boundary.len());
+    let mut labels = Vec::with_capacity(mesh.boundary.len());
+    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
+        if keep(tri) {
+            boundary.push(*tri);
+            labels.push(label);
         }
     }
-    (used, outside)
+    let mut removed = Vec::new();
+    for lm in regions {
+        lm.write_back(mesh, &mut tets, &mut boundary, &mut labels, &mut removed);
+    }
+    mesh.tets = tets;
+    mesh.boundary = boundary;
+    mesh.boundary_labels = labels;
+    removed.sort_unstable();
+    drop_points(mesh, &removed);
+}
+
+impl LocalMesh {
+    /// Appends this region's tets and faces (in global ids), writes its moved points into
+    /// `mesh` and lists its merged points in `removed`.
+    fn write_back(
+        self,
+        mesh: &mut TetMesh,
+        tets: &mut Vec<[u32; 4]>,
+        boundary: &mut Vec<[u32; 3]>,
+        labels: &mut Vec<BoundaryLabel>,
+        removed: &mut Vec<u32>,
+    ) {
+        let g = |v: u32| self.global[v as usize];
+        for (l, &gid) in self.global.iter().enumerate() {
+            if self.removed[l] {
+                removed.push(gid);
+            } else if !self.frozen[l] {
+                mesh.points[gid as usize] = self.x[l];
+                mesh.values[gid as usize] = self.value[l];
+            }
+        }
+        for (t, &a) in self.tets.iter().zip(&self.alive) {
+            if a {
+                tets.push(t.map(g));
+            }
+        }
+        let mut faces: Vec<&BoundaryFace> = self.faces.values().collect();
+        faces.sort_unstable_by_key(|f| face_key(f.tri));
+        for f in faces {
+            boundary.push(f.tri.map(g));
+            labels.push(f.label);
+        }
+    }
 }
 
 /// Removes the points `removed` (sorted ascending, used by no tet) and renumbers the rest.

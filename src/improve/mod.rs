@@ -26,7 +26,6 @@ use serde::Serialize;
 use crate::grid::ScalarGrid;
 use crate::mesh::{BoundaryLabel, TetMesh};
 use field::Field;
-use local::LocalMesh;
 use quality::biased_min_sine;
 
 /// Knobs of the quality pass.
@@ -81,6 +80,17 @@ pub struct ImproveReport {
     pub smoothed: usize,
     /// Seconds spent.
     pub seconds: f64,
+}
+
+impl ImproveReport {
+    /// Adds the operation counts of `o` (a region's) to these.
+    fn add(&mut self, o: &ImproveReport) {
+        self.region_tets += o.region_tets;
+        self.projected += o.projected;
+        self.collapses += o.collapses;
+        self.flips += o.flips;
+        self.smoothed += o.smoothed;
+    }
 }
 
 /// Everything an operation needs besides the local mesh.
@@ -142,11 +152,30 @@ pub fn improve(
         if !work.iter().any(|&w| w) {
             break;
         }
-        let (mut lm, region) = LocalMesh::extract(mesh, &work, &ctx);
         report.rounds += 1;
-        report.region_tets += lm.tets.len();
-        schedule::improve_local(&mut lm, &ctx, &mut report);
-        lm.splice(mesh, region);
+        for phase in 0..2 {
+            let work = if phase == 0 {
+                work.clone()
+            } else {
+                needs_work(mesh, &ctx)
+            };
+            let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, &ctx, phase);
+            let counts: Vec<ImproveReport> = regions
+                .par_iter_mut()
+                .map(|lm| {
+                    let mut r = ImproveReport {
+                        region_tets: lm.tets.len(),
+                        ..Default::default()
+                    };
+                    schedule::improve_local(lm, &ctx, &mut r);
+                    r
+                })
+                .collect();
+            for c in counts {
+                report.add(&c);
+            }
+            local::splice(mesh, regions, bookkeeping);
+        }
     }
     report.seconds = start.elapsed().as_secs_f64();
     report
