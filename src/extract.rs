@@ -789,7 +789,7 @@ mod tests {
                     .filter(|a| corner >> a & 1 == 1)
                     .map(|a| c[a] * len[a])
                     .sum();
-                let sign = if (corner as u32).count_ones() % 2 == 0 {
+                let sign = if (corner as u32).count_ones().is_multiple_of(2) {
                     1.0
                 } else {
                     -1.0

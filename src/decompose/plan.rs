@@ -302,7 +302,7 @@ impl Planner<'_> {
     fn neighbour_full(&self, c: [usize; 3], f: usize) -> bool {
         let axis = f / 2;
         let mut n = c;
-        if f % 2 == 0 {
+        if f.is_multiple_of(2) {
             n[axis] = n[axis].wrapping_sub(1);
         } else {
             n[axis] += 1;
