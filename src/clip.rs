@@ -597,18 +597,7 @@ mod tests {
         let pos = tv.map(|v| v.pos);
         let eff = tv.map(|v| effective(v.val, iv));
         let want = sublevel_volume(&pos, &eff, iv.beta) - sublevel_volume(&pos, &eff, iv.alpha);
-        let mut got = 0.0;
-        let mut faces: std::collections::HashMap<[PointKey; 3], usize> = Default::default();
-        for t in &rec.tets {
-            let v = signed_volume(t[0].pos, t[1].pos, t[2].pos, t[3].pos);
-            assert!(v > 0.0, "{case}: piece volume {v}");
-            got += v;
-            for skip in 0..4 {
-                let k = [0, 1, 2, 3].map(|i| t[i].key);
-                let tri = [k[(skip + 1) % 4], k[(skip + 2) % 4], k[(skip + 3) % 4]];
-                *faces.entry(tri_key(tri)).or_default() += 1;
-            }
-        }
+        let (got, faces) = pieces(&rec, case);
         let scale = signed_volume(pos[0], pos[1], pos[2], pos[3]);
         assert!(
             (got - want).abs() <= 1e-9 * scale,
@@ -649,6 +638,23 @@ mod tests {
             edges.values().all(|&n| n == 2),
             "{case}: boundary not closed"
         );
+    }
+
+    /// Total volume of the pieces (each checked positive) and how often each face occurs.
+    fn pieces(rec: &Record, case: &str) -> (f64, std::collections::HashMap<[PointKey; 3], usize>) {
+        let mut got = 0.0;
+        let mut faces: std::collections::HashMap<[PointKey; 3], usize> = Default::default();
+        for t in &rec.tets {
+            let v = signed_volume(t[0].pos, t[1].pos, t[2].pos, t[3].pos);
+            assert!(v > 0.0, "{case}: piece volume {v}");
+            got += v;
+            for skip in 0..4 {
+                let k = [0, 1, 2, 3].map(|i| t[i].key);
+                let tri = [k[(skip + 1) % 4], k[(skip + 2) % 4], k[(skip + 3) % 4]];
+                *faces.entry(tri_key(tri)).or_default() += 1;
+            }
+        }
+        (got, faces)
     }
 
     /// A boundary triangle lies on its level, or (box) within one face of the tet.

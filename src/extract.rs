@@ -329,11 +329,28 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
     if total_tets > u32::MAX as usize {
         return Err(MeshError::TooLarge("tets"));
     }
-    let maps = &numbering.maps;
-    // A left-handed frame mirrors the mesh: flip every element to keep orientations.
+    let (tets, boundary, boundary_labels) = remap_elements(grid, &slabs, &numbering.maps);
+    drop(slabs);
+    to_physical(grid, &mut points);
+    Ok(TetMesh {
+        points,
+        values,
+        tets,
+        boundary,
+        boundary_labels,
+    })
+}
+
+/// Tets, boundary triangles and their labels of every slab in slab order, in global numbers.
+/// A left-handed frame mirrors the mesh: then every element is flipped to keep orientations.
+fn remap_elements(
+    grid: &ScalarGrid,
+    slabs: &[Slab],
+    maps: &[Vec<u32>],
+) -> (Vec<[u32; 4]>, Vec<[u32; 3]>, Vec<BoundaryLabel>) {
     let flip = grid.affine_determinant() < 0.0;
     let tets = remap(
-        &slabs,
+        slabs,
         maps,
         |s| &s.tets,
         |t, m| {
@@ -346,7 +363,7 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
         },
     );
     let boundary = remap(
-        &slabs,
+        slabs,
         maps,
         |s| &s.tris,
         |t, m| {
@@ -358,19 +375,11 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
             }
         },
     );
-    let boundary_labels: Vec<BoundaryLabel> = slabs
+    let labels = slabs
         .iter()
         .flat_map(|s| s.labels.iter().copied())
         .collect();
-    drop(slabs);
-    to_physical(grid, &mut points);
-    Ok(TetMesh {
-        points,
-        values,
-        tets,
-        boundary,
-        boundary_labels,
-    })
+    (tets, boundary, labels)
 }
 
 /// Maps index-space points to physical coordinates in place.

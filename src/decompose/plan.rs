@@ -409,4 +409,65 @@ mod tests {
         assert!(corners_connected(!0b1000_0001));
         assert!(corners_connected(0xff));
     }
+    fn noise_grid(dims: [usize; 3], seed: u64) -> ScalarGrid {
+        let n = dims[0] * dims[1] * dims[2];
+        let v = (0..n as u64)
+            .map(|i| {
+                let h = (seed ^ i.wrapping_mul(0x2545_F491_4F6C_DD1D))
+                    .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                ((h >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+            })
+            .collect();
+        ScalarGrid::new(dims, v).unwrap()
+    }
+
+    /// The two cells of every interior face agree on whether its saddle is used; a forced
+    /// saddle has a full cell across; `own` and `forced` are disjoint.
+    #[test]
+    fn neighbours_agree_on_every_face() {
+        let grid = noise_grid([9, 8, 7], 3);
+        let cd = grid.cell_dims();
+        let mut forced = 0;
+        for method in [Method::Tptd, Method::Std, Method::Ctd] {
+            for (alpha, beta) in [(-0.2, 0.3), (0.1, f64::INFINITY), (-0.5, 0.6)] {
+                let p = Planner {
+                    grid: &grid,
+                    method,
+                    alpha,
+                    beta,
+                };
+                let plan = |c: [usize; 3]| plan_cell(&p, c, &grid.cell_values(c[0], c[1], c[2]));
+                for c in (0..cd[2])
+                    .flat_map(|k| (0..cd[1]).flat_map(move |j| (0..cd[0]).map(move |i| [i, j, k])))
+                {
+                    let a = plan(c);
+                    assert_eq!(a.own & a.forced, 0);
+                    assert_eq!(a.apex & !a.used(), 0);
+                    for axis in 0..3 {
+                        if c[axis] + 1 == cd[axis] {
+                            continue;
+                        }
+                        let mut n = c;
+                        n[axis] += 1;
+                        let b = plan(n);
+                        if a.layout == Layout::Outside || b.layout == Layout::Outside {
+                            continue;
+                        }
+                        let (fa, fb) = (2 * axis + 1, 2 * axis);
+                        assert_eq!(
+                            (a.used() >> fa) & 1,
+                            (b.used() >> fb) & 1,
+                            "{method:?} {c:?} axis {axis}"
+                        );
+                        if (a.forced >> fa) & 1 == 1 {
+                            assert!(b.full && p.cell_full(n));
+                            forced += 1;
+                        }
+                        assert_eq!(a.full, p.cell_full(c));
+                    }
+                }
+            }
+        }
+        assert!(forced > 0, "no forced saddle seen");
+    }
 }
