@@ -153,19 +153,29 @@ fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, iv: &Interval) -> 
     }
 }
 
+/// The six edges of a tet as vertex pairs `(i, j)`, `i < j`.
 const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
+/// `EDGE_INDEX[i][j]`: the index in [`EDGES`] of edge `{i, j}` (`usize::MAX` on the diagonal).
+const EDGE_INDEX: [[usize; 4]; 4] = edge_index_table();
+
+/// Inverts [`EDGES`] into a symmetric vertex-pair table.
+const fn edge_index_table() -> [[usize; 4]; 4] {
+    let mut t = [[usize::MAX; 4]; 4];
+    let mut e = 0;
+    while e < EDGES.len() {
+        let (a, b) = EDGES[e];
+        t[a][b] = e;
+        t[b][a] = e;
+        e += 1;
+    }
+    t
+}
+
+/// Index in [`EDGES`] of the edge `{i, j}` (`i != j`).
 #[inline]
 fn edge_index(i: usize, j: usize) -> usize {
-    let (a, b) = if i < j { (i, j) } else { (j, i) };
-    match (a, b) {
-        (0, 1) => 0,
-        (0, 2) => 1,
-        (0, 3) => 2,
-        (1, 2) => 3,
-        (1, 3) => 4,
-        _ => 5,
-    }
+    EDGE_INDEX[i][j]
 }
 
 /// Faces of a tet as (opposite vertex, cyclic vertex order).
@@ -193,12 +203,45 @@ impl Poly {
     }
 }
 
+/// The faces of one clipped piece: at most the four tet faces and the two level faces.
+struct Faces {
+    n: usize,
+    polys: [Poly; 6],
+}
+
+impl Faces {
+    fn push(&mut self, poly: Poly) {
+        self.polys[self.n] = poly;
+        self.n += 1;
+    }
+}
+
+/// The points of one clipped piece: its inside tet vertices, then the cuts of its edges.
+struct CutPoints {
+    /// At most 4 vertices + 8 cuts (two levels on the four edges of a 2–2 split).
+    pts: [ClipPoint; 12],
+    np: usize,
+    /// Point index of each inside tet vertex.
+    vid: [usize; 4],
+    /// Point indices of the cuts of each edge by `[alpha, beta]`.
+    cid: [[usize; 2]; 6],
+}
+
+/// A tet vertex as an output point.
+#[inline]
+fn as_point(v: &ClipVertex) -> ClipPoint {
+    ClipPoint {
+        key: vertex_point(v.key),
+        pos: v.pos,
+        val: v.val,
+    }
+}
+
 /// Clips tet `tv` (positively oriented) to `alpha < f < beta` and sends the pieces to `sink`.
 /// `box_planes` selects which bits of [`ClipVertex::box_mask`] are grid-box planes.
 /// `iv.alpha` may be `-inf` and `iv.beta` `+inf`; `alpha < beta`.
 pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut impl ClipSink) {
-    let (alpha, beta) = (iv.alpha, iv.beta);
-    let cls: [u8; 4] = std::array::from_fn(|i| classify(tv[i].val, alpha, beta));
+    let cls: [u8; 4] = std::array::from_fn(|i| classify(tv[i].val, iv.alpha, iv.beta));
     if cls.iter().all(|&c| c == BELOW) || cls.iter().all(|&c| c == ABOVE) {
         return;
     }
@@ -207,95 +250,112 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
         let [a, b, c] = TET_FACES[f];
         tv[a].box_mask & tv[b].box_mask & tv[c].box_mask & box_planes != 0
     });
-    let as_point = |v: &ClipVertex| ClipPoint {
-        key: vertex_point(v.key),
-        pos: v.pos,
-        val: v.val,
-    };
     if cls == [INSIDE; 4] {
-        let pts = [
-            as_point(&tv[0]),
-            as_point(&tv[1]),
-            as_point(&tv[2]),
-            as_point(&tv[3]),
-        ];
-        sink.tet(&pts, [0, 1, 2, 3]);
-        for f in 0..4 {
-            if box_face[f] {
-                let [a, b, c] = TET_FACES[f];
-                sink.triangle(&pts, [a, b, c], BoundaryLabel::Box);
-            }
-        }
+        emit_whole(tv, box_face, sink);
         return;
     }
-    // At most 4 vertices + 8 cuts (two levels on the four edges of a 2–2 split).
-    let mut pts: [ClipPoint; 12] = [ClipPoint {
-        key: 0,
-        pos: [0.0; 3],
-        val: 0.0,
-    }; 12];
-    let mut np = 0;
-    let mut vid = [usize::MAX; 4];
-    for i in 0..4 {
-        if cls[i] == INSIDE {
-            pts[np] = as_point(&tv[i]);
-            vid[i] = np;
-            np += 1;
+    let cuts = cut_points(tv, &cls, iv);
+    let mut faces = Faces {
+        n: 0,
+        polys: [Poly::new(None); 6],
+    };
+    tet_faces(&cls, box_face, &cuts, &mut faces);
+    level_faces(&cls, &cuts, &mut faces);
+    cone_and_fan(&cuts.pts[..cuts.np], &faces.polys[..faces.n], sink);
+}
+
+/// A tet entirely inside: itself, plus its box faces.
+#[inline]
+fn emit_whole(tv: &[ClipVertex; 4], box_face: [bool; 4], sink: &mut impl ClipSink) {
+    let pts = [
+        as_point(&tv[0]),
+        as_point(&tv[1]),
+        as_point(&tv[2]),
+        as_point(&tv[3]),
+    ];
+    sink.tet(&pts, [0, 1, 2, 3]);
+    for f in 0..4 {
+        if box_face[f] {
+            let [a, b, c] = TET_FACES[f];
+            sink.triangle(&pts, [a, b, c], BoundaryLabel::Box);
         }
     }
-    // cut ids per edge: [alpha, beta]
-    let mut cid = [[usize::MAX; 2]; 6];
+}
+
+/// The piece's points: inside vertices in vertex order, then per edge (in [`EDGES`] order)
+/// its alpha cut and its beta cut.
+#[inline]
+fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], iv: &Interval) -> CutPoints {
+    let mut c = CutPoints {
+        pts: [ClipPoint {
+            key: 0,
+            pos: [0.0; 3],
+            val: 0.0,
+        }; 12],
+        np: 0,
+        vid: [usize::MAX; 4],
+        cid: [[usize::MAX; 2]; 6],
+    };
+    for i in 0..4 {
+        if cls[i] == INSIDE {
+            c.pts[c.np] = as_point(&tv[i]);
+            c.vid[i] = c.np;
+            c.np += 1;
+        }
+    }
     for (e, &(i, j)) in EDGES.iter().enumerate() {
         let (ci, cj) = (cls[i], cls[j]);
         if ci == cj {
             continue;
         }
         if ci == BELOW || cj == BELOW {
-            pts[np] = cut(&tv[i], &tv[j], alpha, 0, iv);
-            cid[e][0] = np;
-            np += 1;
+            c.pts[c.np] = cut(&tv[i], &tv[j], iv.alpha, 0, iv);
+            c.cid[e][0] = c.np;
+            c.np += 1;
         }
         if ci == ABOVE || cj == ABOVE {
-            pts[np] = cut(&tv[i], &tv[j], beta, 1, iv);
-            cid[e][1] = np;
-            np += 1;
+            c.pts[c.np] = cut(&tv[i], &tv[j], iv.beta, 1, iv);
+            c.cid[e][1] = c.np;
+            c.np += 1;
         }
     }
-    let pts = &pts[..np];
-    let mut faces: [Poly; 6] = [Poly::new(None); 6];
-    let mut nfaces = 0;
+    c
+}
+
+/// The parts of the tet's four faces inside the interval (boundary faces when on the box).
+#[inline]
+fn tet_faces(cls: &[u8; 4], box_face: [bool; 4], cuts: &CutPoints, faces: &mut Faces) {
     for (f, tri) in TET_FACES.iter().enumerate() {
-        let mut poly = Poly::new(if box_face[f] {
-            Some(BoundaryLabel::Box)
-        } else {
-            None
-        });
+        let mut poly = Poly::new(box_face[f].then_some(BoundaryLabel::Box));
         for s in 0..3 {
             let (p, q) = (tri[s], tri[(s + 1) % 3]);
             if cls[p] == INSIDE {
-                poly.push(vid[p]);
+                poly.push(cuts.vid[p]);
             }
-            let e = edge_index(p, q);
+            let cid = cuts.cid[edge_index(p, q)];
             match (cls[p], cls[q]) {
-                (BELOW, INSIDE) | (INSIDE, BELOW) => poly.push(cid[e][0]),
-                (ABOVE, INSIDE) | (INSIDE, ABOVE) => poly.push(cid[e][1]),
+                (BELOW, INSIDE) | (INSIDE, BELOW) => poly.push(cid[0]),
+                (ABOVE, INSIDE) | (INSIDE, ABOVE) => poly.push(cid[1]),
                 (BELOW, ABOVE) => {
-                    poly.push(cid[e][0]);
-                    poly.push(cid[e][1]);
+                    poly.push(cid[0]);
+                    poly.push(cid[1]);
                 }
                 (ABOVE, BELOW) => {
-                    poly.push(cid[e][1]);
-                    poly.push(cid[e][0]);
+                    poly.push(cid[1]);
+                    poly.push(cid[0]);
                 }
                 _ => {}
             }
         }
         if poly.n >= 3 {
-            faces[nfaces] = poly;
-            nfaces += 1;
+            faces.push(poly);
         }
     }
-    // Level faces: alpha separates BELOW from the rest, beta ABOVE from the rest.
+}
+
+/// The level faces: alpha separates BELOW from the rest, beta ABOVE from the rest.
+#[inline]
+fn level_faces(cls: &[u8; 4], cuts: &CutPoints, faces: &mut Faces) {
     for (which, side, label) in [
         (0usize, BELOW, BoundaryLabel::Alpha),
         (1, ABOVE, BoundaryLabel::Beta),
@@ -316,40 +376,33 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
             continue;
         }
         let mut poly = Poly::new(Some(label));
+        let mut push = |x: usize, y: usize| poly.push(cuts.cid[edge_index(x, y)][which]);
         if ni == 2 {
             let (b1, b2, r1, r2) = (ins[0], ins[1], outs[0], outs[1]);
             for (x, y) in [(b1, r1), (b1, r2), (b2, r2), (b2, r1)] {
-                poly.push(cid[edge_index(x, y)][which]);
+                push(x, y);
             }
         } else {
             for &x in &ins[..ni] {
                 for &y in &outs[..no] {
-                    poly.push(cid[edge_index(x, y)][which]);
+                    push(x, y);
                 }
             }
         }
-        faces[nfaces] = poly;
-        nfaces += 1;
+        faces.push(poly);
     }
-    // Cone from the smallest-key vertex.
-    let v0 = (0..np).min_by_key(|&i| pts[i].key).unwrap_or(0);
-    for poly in &faces[..nfaces] {
+}
+
+/// Cones the piece from its smallest-key point over the faces not containing it, each face
+/// fanned from its own smallest-key point; boundary faces also go out as triangles.
+#[inline]
+fn cone_and_fan(pts: &[ClipPoint], faces: &[Poly], sink: &mut impl ClipSink) {
+    let v0 = (0..pts.len()).min_by_key(|&i| pts[i].key).unwrap_or(0);
+    for poly in faces {
         let verts = &poly.v[..poly.n];
         let r = (0..poly.n).min_by_key(|&i| pts[verts[i]].key).unwrap_or(0);
         let has_v0 = verts.contains(&v0);
-        // For a boundary face: the polytope vertex farthest from the face's plane says which
-        // side is inside (robust even for very thin pieces).
-        let inside_sign = poly.label.map(|_| {
-            let (a, b, c) = (pts[verts[0]].pos, pts[verts[1]].pos, pts[verts[2]].pos);
-            let mut best = 0.0f64;
-            for p in pts {
-                let v = signed_volume(a, b, c, p.pos);
-                if v.abs() > best.abs() {
-                    best = v;
-                }
-            }
-            best
-        });
+        let inside_sign = poly.label.map(|_| inside_side(pts, verts));
         for s in 1..poly.n - 1 {
             let a = verts[r];
             let b = verts[(r + s) % poly.n];
@@ -373,6 +426,22 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
             }
         }
     }
+}
+
+/// For a boundary face: the signed volume over the face's first three points of the piece's
+/// point farthest from the face's plane, whose sign says which side is inside (robust even
+/// for very thin pieces).
+#[inline]
+fn inside_side(pts: &[ClipPoint], verts: &[usize]) -> f64 {
+    let (a, b, c) = (pts[verts[0]].pos, pts[verts[1]].pos, pts[verts[2]].pos);
+    let mut best = 0.0f64;
+    for p in pts {
+        let v = signed_volume(a, b, c, p.pos);
+        if v.abs() > best.abs() {
+            best = v;
+        }
+    }
+    best
 }
 
 #[cfg(test)]
@@ -448,5 +517,229 @@ mod tests {
             let want = cube(b) - cube(a);
             assert!((c.vol - want).abs() < 1e-14, "{a} {b}: {} vs {want}", c.vol);
         }
+    }
+    #[test]
+    fn edge_index_inverts_edges() {
+        let hand = [[9, 0, 1, 2], [0, 9, 3, 4], [1, 3, 9, 5], [2, 4, 5, 9]];
+        for i in 0..4 {
+            for j in 0..4 {
+                if i != j {
+                    assert_eq!(edge_index(i, j), hand[i][j]);
+                    assert_eq!(EDGES[edge_index(i, j)], (i.min(j), i.max(j)));
+                }
+            }
+        }
+    }
+
+    /// Every output tet and boundary triangle of one clip, as point keys.
+    #[derive(Default)]
+    struct Record {
+        tets: Vec<[ClipPoint; 4]>,
+        tris: Vec<([ClipPoint; 3], BoundaryLabel)>,
+    }
+    impl ClipSink for Record {
+        fn tet(&mut self, p: &[ClipPoint], t: [usize; 4]) {
+            self.tets.push(t.map(|i| p[i]));
+        }
+        fn triangle(&mut self, p: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
+            self.tris.push((t.map(|i| p[i]), label));
+        }
+    }
+
+    /// Volume of `{f < s}` in the tet `pos` with linear `f` given by its vertex values,
+    /// computed without the clipper: the cubic closed forms when one or three vertices are
+    /// below `s`, an explicit three-tet split of the wedge when two are.
+    fn sublevel_volume(pos: &[[f64; 3]; 4], val: &[f64; 4], s: f64) -> f64 {
+        let vol = signed_volume(pos[0], pos[1], pos[2], pos[3]);
+        let mut o = [0usize, 1, 2, 3];
+        o.sort_by(|&a, &b| val[a].total_cmp(&val[b]));
+        let f = o.map(|i| val[i]);
+        let p = o.map(|i| pos[i]);
+        let below = f.iter().filter(|&&x| x < s).count();
+        let at = |i: usize, j: usize| {
+            let t = (s - f[i]) / (f[j] - f[i]);
+            [0, 1, 2].map(|r| p[i][r] + t * (p[j][r] - p[i][r]))
+        };
+        match below {
+            0 => 0.0,
+            1 => vol * (s - f[0]).powi(3) / ((f[1] - f[0]) * (f[2] - f[0]) * (f[3] - f[0])),
+            2 => {
+                // prism (p0, c02, c03) – (p1, c12, c13), lateral edges p0p1, c02c12, c03c13
+                let (a, b) = ([p[0], at(0, 2), at(0, 3)], [p[1], at(1, 2), at(1, 3)]);
+                [
+                    [a[0], a[1], a[2], b[2]],
+                    [a[0], a[1], b[1], b[2]],
+                    [a[0], b[0], b[1], b[2]],
+                ]
+                .iter()
+                .map(|t| signed_volume(t[0], t[1], t[2], t[3]).abs())
+                .sum()
+            }
+            3 => vol * (1.0 - (f[3] - s).powi(3) / ((f[3] - f[0]) * (f[3] - f[1]) * (f[3] - f[2]))),
+            _ => vol,
+        }
+    }
+
+    /// Sorted key triple of a triangle.
+    fn tri_key(t: [PointKey; 3]) -> [PointKey; 3] {
+        let mut k = t;
+        k.sort();
+        k
+    }
+
+    /// Checks one clip: positive pieces, the closed-form volume, and a closed boundary (each
+    /// tet face shared by two pieces or emitted as a boundary triangle lying on its level or
+    /// on its tet face, and every boundary edge used twice).
+    fn check_clip(tv: &[ClipVertex; 4], iv: &Interval, case: &str) {
+        let mut rec = Record::default();
+        // each tet face f is on box plane f, so every boundary triangle is emitted
+        clip_tet(tv, iv, 0b1111, &mut rec);
+        let pos = tv.map(|v| v.pos);
+        let eff = tv.map(|v| effective(v.val, iv));
+        let want = sublevel_volume(&pos, &eff, iv.beta) - sublevel_volume(&pos, &eff, iv.alpha);
+        let (got, faces) = pieces(&rec, case);
+        let scale = signed_volume(pos[0], pos[1], pos[2], pos[3]);
+        assert!(
+            (got - want).abs() <= 1e-9 * scale,
+            "{case}: volume {got} vs {want}"
+        );
+        let mut boundary: std::collections::HashMap<[PointKey; 3], BoundaryLabel> =
+            Default::default();
+        let mut edges: std::collections::HashMap<[PointKey; 2], usize> = Default::default();
+        for (t, label) in &rec.tris {
+            check_on_boundary(tv, iv, t, *label, case);
+            let k = t.map(|p| p.key);
+            assert!(
+                boundary.insert(tri_key(k), *label).is_none(),
+                "{case}: twice"
+            );
+            for e in 0..3 {
+                let (a, b) = (k[e], k[(e + 1) % 3]);
+                *edges.entry([a.min(b), a.max(b)]).or_default() += 1;
+            }
+        }
+        for (tri, n) in &faces {
+            match n {
+                1 => assert!(boundary.contains_key(tri), "{case}: open face {tri:?}"),
+                2 => assert!(
+                    !boundary.contains_key(tri),
+                    "{case}: inner face on boundary"
+                ),
+                _ => panic!("{case}: face used {n} times"),
+            }
+        }
+        let once = faces.values().filter(|&&n| n == 1).count();
+        assert_eq!(
+            once,
+            boundary.len(),
+            "{case}: boundary triangle without a tet"
+        );
+        assert!(
+            edges.values().all(|&n| n == 2),
+            "{case}: boundary not closed"
+        );
+    }
+
+    /// Total volume of the pieces (each checked positive) and how often each face occurs.
+    fn pieces(rec: &Record, case: &str) -> (f64, std::collections::HashMap<[PointKey; 3], usize>) {
+        let mut got = 0.0;
+        let mut faces: std::collections::HashMap<[PointKey; 3], usize> = Default::default();
+        for t in &rec.tets {
+            let v = signed_volume(t[0].pos, t[1].pos, t[2].pos, t[3].pos);
+            assert!(v > 0.0, "{case}: piece volume {v}");
+            got += v;
+            for skip in 0..4 {
+                let k = [0, 1, 2, 3].map(|i| t[i].key);
+                let tri = [k[(skip + 1) % 4], k[(skip + 2) % 4], k[(skip + 3) % 4]];
+                *faces.entry(tri_key(tri)).or_default() += 1;
+            }
+        }
+        (got, faces)
+    }
+
+    /// A boundary triangle lies on its level, or (box) within one face of the tet.
+    fn check_on_boundary(
+        tv: &[ClipVertex; 4],
+        iv: &Interval,
+        t: &[ClipPoint; 3],
+        label: BoundaryLabel,
+        case: &str,
+    ) {
+        match label {
+            BoundaryLabel::Alpha => assert!(t.iter().all(|p| p.val == iv.alpha), "{case}"),
+            BoundaryLabel::Beta => assert!(t.iter().all(|p| p.val == iv.beta), "{case}"),
+            _ => {
+                let on = |f: usize| {
+                    let [a, b, c] = TET_FACES[f].map(|i| tv[i].key);
+                    t.iter().all(|p| {
+                        let (x, rest) = crate::keys::split(p.key);
+                        let y = rest.map_or(x, |r| r.0);
+                        [x, y].iter().all(|k| [a, b, c].contains(k))
+                    })
+                };
+                assert!((0..4).any(on), "{case}: box triangle off the tet faces");
+            }
+        }
+    }
+
+    fn rng(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
+    }
+
+    /// Every class pattern of the four vertices (below, equal to alpha, inside, equal to
+    /// beta, above), for a two-sided interval and both one-sided ones, on random tets with
+    /// random key orders.
+    #[test]
+    fn clip_every_class_pattern() {
+        let mut seed = 7u64;
+        let (inf, alpha, beta) = (f64::INFINITY, -0.5, 1.5);
+        for (a, b) in [(alpha, beta), (alpha, inf), (-inf, beta)] {
+            // 0 below, 1 = alpha, 2 inside, 3 = beta, 4 above; skip classes a bound rules out
+            let classes: Vec<usize> = (0..5)
+                .filter(|&c| (a.is_finite() || c > 1) && (b.is_finite() || c < 3))
+                .collect();
+            let n = classes.len();
+            for pattern in 0..n.pow(4) {
+                let cls: [usize; 4] =
+                    std::array::from_fn(|i| classes[pattern / n.pow(i as u32) % n]);
+                for _ in 0..4 {
+                    let tv = random_tet(&mut seed, cls, alpha, beta);
+                    let vals: Vec<f64> = tv.iter().map(|v| v.val).collect();
+                    let iv = Interval::new(a, b, &vals);
+                    check_clip(&tv, &iv, &format!("({a}, {b}) classes {cls:?}"));
+                }
+            }
+        }
+    }
+
+    /// A positively oriented random tet with vertex values of the given classes and shuffled
+    /// keys.
+    fn random_tet(seed: &mut u64, cls: [usize; 4], alpha: f64, beta: f64) -> [ClipVertex; 4] {
+        let mut pos: [[f64; 3]; 4] = std::array::from_fn(|_| [0; 3].map(|_| rng(seed) * 2.0));
+        while signed_volume(pos[0], pos[1], pos[2], pos[3]).abs() < 0.05 {
+            pos = std::array::from_fn(|_| [0; 3].map(|_| rng(seed) * 2.0));
+        }
+        if signed_volume(pos[0], pos[1], pos[2], pos[3]) < 0.0 {
+            pos.swap(2, 3);
+        }
+        let mut keys = [1u64, 2, 3, 4].map(|k| (k << 3) | (rng(seed) * 8.0) as u64);
+        for i in (1..4).rev() {
+            keys.swap(i, (rng(seed) * (i + 1) as f64) as usize);
+        }
+        std::array::from_fn(|i| ClipVertex {
+            key: keys[i] + ((i as u64) << 8),
+            pos: pos[i],
+            val: match cls[i] {
+                0 => alpha - 0.1 - rng(seed),
+                1 => alpha,
+                2 => alpha + (0.05 + 0.9 * rng(seed)) * (beta - alpha),
+                3 => beta,
+                _ => beta + 0.1 + rng(seed),
+            },
+            box_mask: 0b1111 & !(1 << i),
+        })
     }
 }

@@ -11,12 +11,11 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex, Interval};
-use crate::decompose::plan::{corners_connected, face_needed, is_full, CellClasses};
-use crate::decompose::{five, six, tptd, CellCase, CellPoints, BODY0, NUM_LOCAL};
-use crate::grid::{corner_faces, corner_offset, ScalarGrid, LOW_FACES};
-use crate::keys::{on_z_plane, split, vertex_key, vertex_point, PointKey, BODY, CORNER, FACE};
+use crate::decompose::plan::{plan_cell, Layout, Planner};
+use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM_LOCAL};
+use crate::grid::{cell_box_planes, corner_offset, ScalarGrid};
+use crate::keys::{grid_vertex, local_key, on_z_plane, vertex_key, vertex_point, PointKey, CORNER};
 use crate::mesh::{BoundaryLabel, TetMesh};
-use crate::trilinear::{body_saddles, face_saddle, face_saddle_point, BodySaddle};
 
 pub use crate::decompose::plan::Method;
 
@@ -33,15 +32,55 @@ pub struct MeshOptions {
     pub threads: Option<usize>,
 }
 
+impl Default for MeshOptions {
+    /// The whole field (`alpha = -inf`, `beta = +inf`), [`Method::Ctd`], all cores.
+    fn default() -> Self {
+        MeshOptions {
+            alpha: f64::NEG_INFINITY,
+            beta: f64::INFINITY,
+            method: Method::Ctd,
+            threads: None,
+        }
+    }
+}
+
 impl MeshOptions {
-    /// Options with the default thread pool.
+    /// Options for `(alpha, beta)` with `method` and the default thread pool.
     pub fn new(alpha: f64, beta: f64, method: Method) -> Self {
         MeshOptions {
             alpha,
             beta,
             method,
-            threads: None,
+            ..Default::default()
         }
+    }
+
+    /// Sets the lower bound.
+    #[must_use]
+    pub fn alpha(mut self, alpha: f64) -> Self {
+        self.alpha = alpha;
+        self
+    }
+
+    /// Sets the upper bound.
+    #[must_use]
+    pub fn beta(mut self, beta: f64) -> Self {
+        self.beta = beta;
+        self
+    }
+
+    /// Sets the decomposition method.
+    #[must_use]
+    pub fn method(mut self, method: Method) -> Self {
+        self.method = method;
+        self
+    }
+
+    /// Sets the number of worker threads (`None`: rayon's global pool).
+    #[must_use]
+    pub fn threads(mut self, threads: Option<usize>) -> Self {
+        self.threads = threads;
+        self
     }
 }
 
@@ -161,6 +200,17 @@ impl Slab {
         }
     }
 
+    /// Reserves room for `meshed` cells (about 7 tets and 2 new points each) so the slab's
+    /// vectors do not grow by copying.
+    fn reserve(&mut self, meshed: usize) {
+        self.tets.reserve(7 * meshed);
+        self.keys.reserve(2 * meshed);
+        self.pos.reserve(2 * meshed);
+        self.val.reserve(2 * meshed);
+        self.tris.reserve(meshed);
+        self.labels.reserve(meshed);
+    }
+
     #[inline]
     fn push_point(&mut self, key: PointKey, pos: [f64; 3], val: f64) -> u32 {
         let i = self.keys.len() as u32;
@@ -185,9 +235,8 @@ impl Slab {
 
     #[inline]
     fn id(&mut self, p: &ClipPoint) -> u32 {
-        let (vk, rest) = split(p.key);
-        if rest.is_none() && vk & 7 == CORNER {
-            return self.corner_id((vk >> 3) as usize, p.pos, p.val);
+        if let Some(gi) = grid_vertex(p.key) {
+            return self.corner_id(gi, p.pos, p.val);
         }
         let h = ((p.key as u64) ^ ((p.key >> 64) as u64)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56;
         let slot = &mut self.recent[h as usize % RECENT];
@@ -219,43 +268,11 @@ impl ClipSink for Slab {
     }
 }
 
+/// What every cell of one run shares.
 struct Ctx<'a> {
     grid: &'a ScalarGrid,
     interval: Interval,
-    method: Method,
-    /// Box-plane mask of every local id (corners: their three faces; face saddles: their face).
-    local_box: [u8; NUM_LOCAL],
-}
-
-impl Ctx<'_> {
-    /// Whether the cell at `c` is full (uses every saddle), computed from its values when
-    /// asked: only cells with a face saddle ask about the neighbour across it, which is far
-    /// cheaper than a pass over all cells.
-    #[inline]
-    fn cell_full(&self, c: [usize; 3]) -> bool {
-        match self.method {
-            Method::Tptd => true,
-            Method::Ctd | Method::Std => compute_full(
-                self.grid,
-                self.method,
-                self.interval.alpha,
-                self.interval.beta,
-                c,
-            ),
-            Method::Five | Method::Six => false,
-        }
-    }
-}
-
-/// Whether the cell at `c` uses all its saddles (computed from its values).
-fn compute_full(grid: &ScalarGrid, method: Method, alpha: f64, beta: f64, c: [usize; 3]) -> bool {
-    let v = grid.cell_values(c[0], c[1], c[2]);
-    let cls = CellClasses::new(&v, alpha, beta);
-    if !(cls.crosses_alpha() || cls.crosses_beta()) {
-        return false;
-    }
-    let nb = body_saddles(&v).1;
-    is_full(method, cls, nb)
+    planner: Planner<'a>,
 }
 
 fn run(
@@ -263,19 +280,16 @@ fn run(
     opts: &MeshOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<MeshOutput, MeshError> {
-    let mut local_box = [0u8; NUM_LOCAL];
-    for (c, b) in local_box.iter_mut().enumerate().take(8) {
-        *b = corner_faces(c).iter().fold(0, |m, &f| m | (1 << f));
-    }
-    for f in 0..6 {
-        local_box[8 + f] = 1 << f;
-    }
     let [_, _, cz] = grid.cell_dims();
     let ctx = Ctx {
         grid,
         interval: Interval::new(opts.alpha, opts.beta, &grid.values),
-        method: opts.method,
-        local_box,
+        planner: Planner {
+            grid,
+            method: opts.method,
+            alpha: opts.alpha,
+            beta: opts.beta,
+        },
     };
     let done = AtomicUsize::new(0);
     let slabs: Vec<Slab> = (0..cz)
@@ -302,64 +316,10 @@ fn run(
 
 /// Global numbering in slab order; returns the mesh in physical coordinates.
 fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
-    let stride = grid.dims[0] * grid.dims[1];
-    let mut maps: Vec<Vec<u32>> = Vec::with_capacity(slabs.len());
-    // Points of the plane shared with the slab below: grid vertices in a dense array (indexed
-    // by position in the plane), every other point (cuts, saddles of z-faces) in a hash map.
-    let mut prev_corners: Vec<u32> = vec![u32::MAX; stride];
-    let mut top_corners: Vec<u32> = vec![u32::MAX; stride];
-    let mut prev_top: FxHashMap<PointKey, u32> = FxHashMap::default();
-    let mut next = 0u64;
-    let mut new_from: Vec<(usize, Vec<u32>)> = Vec::with_capacity(slabs.len());
-    for (k, s) in slabs.iter().enumerate() {
-        let mut map = Vec::with_capacity(s.keys.len());
-        let mut fresh = Vec::new();
-        let mut top: FxHashMap<PointKey, u32> = FxHashMap::default();
-        top_corners.fill(u32::MAX);
-        for (li, &key) in s.keys.iter().enumerate() {
-            let (vk, rest) = split(key);
-            let corner = rest.is_none() && vk & 7 == CORNER;
-            let gi = (vk >> 3) as usize;
-            let shared = if corner {
-                let g = if gi / stride == k {
-                    prev_corners[gi % stride]
-                } else {
-                    u32::MAX
-                };
-                (g != u32::MAX).then_some(g)
-            } else if on_z_plane(key, k, stride) {
-                prev_top.get(&key).copied()
-            } else {
-                None
-            };
-            let gid = match shared {
-                Some(g) => g,
-                None => {
-                    let g = u32::try_from(next).map_err(|_| MeshError::TooLarge("points"))?;
-                    next += 1;
-                    fresh.push(li as u32);
-                    g
-                }
-            };
-            if corner {
-                if gi / stride == k + 1 {
-                    top_corners[gi % stride] = gid;
-                }
-            } else if on_z_plane(key, k + 1, stride) {
-                top.insert(key, gid);
-            }
-            map.push(gid);
-        }
-        prev_top = top;
-        std::mem::swap(&mut prev_corners, &mut top_corners);
-        maps.push(map);
-        new_from.push((k, fresh));
-    }
-    let n = next as usize;
-    let mut points = Vec::with_capacity(n);
-    let mut values = Vec::with_capacity(n);
-    for (k, fresh) in &new_from {
-        let s = &slabs[*k];
+    let numbering = number_points(grid, &slabs)?;
+    let mut points = Vec::with_capacity(numbering.count);
+    let mut values = Vec::with_capacity(numbering.count);
+    for (s, fresh) in slabs.iter().zip(&numbering.fresh) {
         for &li in fresh {
             points.push(s.pos[li as usize]);
             values.push(s.val[li as usize]);
@@ -369,10 +329,29 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
     if total_tets > u32::MAX as usize {
         return Err(MeshError::TooLarge("tets"));
     }
+    let (tets, boundary, boundary_labels) = remap_elements(grid, &slabs, &numbering.maps);
+    drop(slabs);
+    to_physical(grid, &mut points);
+    Ok(TetMesh {
+        points,
+        values,
+        tets,
+        boundary,
+        boundary_labels,
+    })
+}
+
+/// Tets, boundary triangles and their labels of every slab in slab order, in global numbers.
+/// A left-handed frame mirrors the mesh: then every element is flipped to keep orientations.
+fn remap_elements(
+    grid: &ScalarGrid,
+    slabs: &[Slab],
+    maps: &[Vec<u32>],
+) -> (Vec<[u32; 4]>, Vec<[u32; 3]>, Vec<BoundaryLabel>) {
     let flip = grid.affine_determinant() < 0.0;
     let tets = remap(
-        &slabs,
-        &maps,
+        slabs,
+        maps,
         |s| &s.tets,
         |t, m| {
             let g = t.map(|i| m[i as usize]);
@@ -384,8 +363,8 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
         },
     );
     let boundary = remap(
-        &slabs,
-        &maps,
+        slabs,
+        maps,
         |s| &s.tris,
         |t, m| {
             let g = t.map(|i| m[i as usize]);
@@ -396,11 +375,15 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
             }
         },
     );
-    let boundary_labels: Vec<BoundaryLabel> = slabs
+    let labels = slabs
         .iter()
         .flat_map(|s| s.labels.iter().copied())
         .collect();
-    drop(slabs);
+    (tets, boundary, labels)
+}
+
+/// Maps index-space points to physical coordinates in place.
+fn to_physical(grid: &ScalarGrid, points: &mut [[f64; 3]]) {
     let lin = grid.linear_map();
     let origin = grid.origin;
     points.par_iter_mut().for_each(|p| {
@@ -409,13 +392,98 @@ fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
             p[r] = origin[r] + lin[r][0] * q[0] + lin[r][1] * q[1] + lin[r][2] * q[2];
         }
     });
-    Ok(TetMesh {
-        points,
-        values,
-        tets,
-        boundary,
-        boundary_labels,
+}
+
+/// The global numbering of every slab's points.
+struct Numbering {
+    /// Per slab: global number of each slab-local point.
+    maps: Vec<Vec<u32>>,
+    /// Per slab: the slab-local points numbered first in this slab, in global order.
+    fresh: Vec<Vec<u32>>,
+    /// Number of global points.
+    count: usize,
+}
+
+/// Global numbers of the points of one z-plane shared by two slabs: grid vertices in a dense
+/// array (indexed by position in the plane), every other point (cuts, saddles of z-faces) in
+/// a hash map.
+struct PlanePoints {
+    corners: Vec<u32>,
+    others: FxHashMap<PointKey, u32>,
+}
+
+/// Numbers points globally in slab order; a point on the plane shared with the slab below
+/// takes the number it got there.
+fn number_points(grid: &ScalarGrid, slabs: &[Slab]) -> Result<Numbering, MeshError> {
+    let stride = grid.dims[0] * grid.dims[1];
+    let mut maps: Vec<Vec<u32>> = Vec::with_capacity(slabs.len());
+    let mut fresh: Vec<Vec<u32>> = Vec::with_capacity(slabs.len());
+    let mut prev = PlanePoints {
+        corners: vec![u32::MAX; stride],
+        others: FxHashMap::default(),
+    };
+    let mut top = PlanePoints {
+        corners: vec![u32::MAX; stride],
+        others: FxHashMap::default(),
+    };
+    let mut next = 0u64;
+    for (k, s) in slabs.iter().enumerate() {
+        top.corners.fill(u32::MAX);
+        let (map, new) = number_slab(s, k, stride, &prev, &mut top, &mut next)?;
+        std::mem::swap(&mut prev.corners, &mut top.corners);
+        prev.others = std::mem::take(&mut top.others);
+        maps.push(map);
+        fresh.push(new);
+    }
+    Ok(Numbering {
+        maps,
+        fresh,
+        count: next as usize,
     })
+}
+
+/// Numbers the points of slab `k`: returns its local-to-global map and its new points; fills
+/// `top` with the points on its upper plane.
+fn number_slab(
+    s: &Slab,
+    k: usize,
+    stride: usize,
+    prev: &PlanePoints,
+    top: &mut PlanePoints,
+    next: &mut u64,
+) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
+    let mut map = Vec::with_capacity(s.keys.len());
+    let mut fresh = Vec::new();
+    for (li, &key) in s.keys.iter().enumerate() {
+        let corner = grid_vertex(key);
+        let shared = match corner {
+            Some(gi) if gi / stride == k => {
+                Some(prev.corners[gi % stride]).filter(|&g| g != u32::MAX)
+            }
+            Some(_) => None,
+            None if on_z_plane(key, k, stride) => prev.others.get(&key).copied(),
+            None => None,
+        };
+        let gid = match shared {
+            Some(g) => g,
+            None => {
+                let g = u32::try_from(*next).map_err(|_| MeshError::TooLarge("points"))?;
+                *next += 1;
+                fresh.push(li as u32);
+                g
+            }
+        };
+        match corner {
+            Some(gi) if gi / stride == k + 1 => top.corners[gi % stride] = gid,
+            Some(_) => {}
+            None if on_z_plane(key, k + 1, stride) => {
+                top.others.insert(key, gid);
+            }
+            None => {}
+        }
+        map.push(gid);
+    }
+    Ok((map, fresh))
 }
 
 /// Concatenates one per-slab list in slab order, renumbering each element through its slab's
@@ -447,59 +515,15 @@ fn remap<T: Copy + Default + Send + Sync>(
     out
 }
 
+/// Meshes the cells of layer `k` into a new slab.
 fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     let [cx, cy, _] = ctx.grid.cell_dims();
     let mut slab = Slab::new(ctx.grid.dims[0] * ctx.grid.dims[1], k);
     let mut tets: Vec<[u8; 4]> = Vec::with_capacity(64);
-    // Skip cells entirely below alpha or above beta 64 at a time: bit i of a row word is set
-    // when vertex i of that grid row is below (resp. above); a cell is outside when its eight
-    // corners are, i.e. when the AND of its four rows has bits i and i + 1 set.
-    let nx = ctx.grid.dims[0];
-    let words = nx.div_ceil(64);
-    let ny = ctx.grid.dims[1];
-    // plane_bits[p][side][j * words + w]: plane z = k + p, side 0 below / 1 above
-    let mut plane_bits = [
-        [vec![0u64; ny * words], vec![0u64; ny * words]],
-        [vec![0u64; ny * words], vec![0u64; ny * words]],
-    ];
-    for (p, bits) in plane_bits.iter_mut().enumerate() {
-        let base = ctx.grid.index(0, 0, k + p);
-        for (jj, row) in ctx.grid.values[base..base + nx * ny]
-            .chunks_exact(nx)
-            .enumerate()
-        {
-            for (i, &v) in row.iter().enumerate() {
-                bits[0][jj * words + i / 64] |= ((v <= ctx.interval.alpha) as u64) << (i % 64);
-                bits[1][jj * words + i / 64] |= ((v >= ctx.interval.beta) as u64) << (i % 64);
-            }
-        }
-    }
-    let mut outside = vec![0u64; words * cy];
-    for j in 0..cy {
-        let out = &mut outside[j * words..(j + 1) * words];
-        for side in 0..2 {
-            let row = |p: usize, jj: usize, w: usize| plane_bits[p][side][jj * words + w];
-            let all = |w: usize| row(0, j, w) & row(0, j + 1, w) & row(1, j, w) & row(1, j + 1, w);
-            for (w, o) in out.iter_mut().enumerate() {
-                let here = all(w);
-                let next = if w + 1 < words { all(w + 1) } else { 0 };
-                *o |= here & ((here >> 1) | (next << 63));
-            }
-        }
-    }
-    // Reserve for the cells to be meshed (about 7 tets and 2 new points each) so the slab's
-    // vectors do not grow by copying.
-    let meshed = cx * cy
-        - outside
-            .iter()
-            .map(|w| w.count_ones() as usize)
-            .sum::<usize>();
-    slab.tets.reserve(7 * meshed);
-    slab.keys.reserve(2 * meshed);
-    slab.pos.reserve(2 * meshed);
-    slab.val.reserve(2 * meshed);
-    slab.tris.reserve(meshed);
-    slab.labels.reserve(meshed);
+    let words = ctx.grid.dims[0].div_ceil(64);
+    let outside = outside_cells(ctx, k);
+    let skipped: usize = outside.iter().map(|w| w.count_ones() as usize).sum();
+    slab.reserve(cx * cy - skipped);
     for j in 0..cy {
         for i in 0..cx {
             if (outside[j * words + i / 64] >> (i % 64)) & 1 == 1 {
@@ -514,142 +538,102 @@ fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     slab
 }
 
+/// Bit rows of the cells of layer `k` entirely below alpha or entirely above beta: bit `i`
+/// of word `j * words + i / 64` for cell `(i, j)` (`words` = `ceil(nx / 64)`).
+///
+/// Bit i of a vertex-row word is set when vertex i of that grid row is below (resp. above);
+/// a cell is outside when its eight corners are, i.e. when the AND of its four rows has bits
+/// i and i + 1 set. Skips such cells 64 at a time.
+fn outside_cells(ctx: &Ctx, k: usize) -> Vec<u64> {
+    let cy = ctx.grid.dims[1] - 1;
+    let words = ctx.grid.dims[0].div_ceil(64);
+    let planes = [plane_bits(ctx, k), plane_bits(ctx, k + 1)];
+    let mut outside = vec![0u64; words * cy];
+    for j in 0..cy {
+        let out = &mut outside[j * words..(j + 1) * words];
+        for side in 0..2 {
+            let row = |p: usize, jj: usize, w: usize| planes[p][side][jj * words + w];
+            let all = |w: usize| row(0, j, w) & row(0, j + 1, w) & row(1, j, w) & row(1, j + 1, w);
+            for (w, o) in out.iter_mut().enumerate() {
+                let here = all(w);
+                let next = if w + 1 < words { all(w + 1) } else { 0 };
+                *o |= here & ((here >> 1) | (next << 63));
+            }
+        }
+    }
+    outside
+}
+
+/// Class bits of grid plane `z`: `[below, above][j * words + i / 64]` bit `i % 64` for vertex
+/// `(i, j)`.
+fn plane_bits(ctx: &Ctx, z: usize) -> [Vec<u64>; 2] {
+    let [nx, ny, _] = ctx.grid.dims;
+    let words = nx.div_ceil(64);
+    let mut bits = [vec![0u64; ny * words], vec![0u64; ny * words]];
+    let base = ctx.grid.index(0, 0, z);
+    for (jj, row) in ctx.grid.values[base..base + nx * ny]
+        .chunks_exact(nx)
+        .enumerate()
+    {
+        for (i, &v) in row.iter().enumerate() {
+            bits[0][jj * words + i / 64] |= ((v <= ctx.interval.alpha) as u64) << (i % 64);
+            bits[1][jj * words + i / 64] |= ((v >= ctx.interval.beta) as u64) << (i % 64);
+        }
+    }
+    bits
+}
+
+/// One cell: plan → decompose → clip (→ weld, in the slab's sink).
+#[inline]
 fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Slab) {
-    let grid = ctx.grid;
-    let [i, j, k] = c;
-    let v = grid.cell_values(i, j, k);
-    let cls = CellClasses::new(&v, ctx.interval.alpha, ctx.interval.beta);
-    if cls.all_outside() {
+    let v = ctx.grid.cell_values(c[0], c[1], c[2]);
+    let plan = plan_cell(&ctx.planner, c, &v);
+    if plan.layout == Layout::Outside {
         return;
     }
-    let cd = grid.cell_dims();
-    let mut pts = CellPoints::from_corners(&v);
-    tets.clear();
-    let case = match ctx.method {
-        Method::Six => {
-            if cls.all_inside() && !on_box(c, cd) {
-                emit_six_inside(grid, c, &v, slab);
-                slab.cases[CellCase::I as usize] += 1;
-                return;
-            }
-            six::decompose_six(tets);
-            CellCase::I
-        }
-        Method::Five => {
-            five::decompose_five((i + j + k) % 2 == 1, tets);
-            CellCase::I
-        }
-        method => {
-            let crosses = cls.crosses_alpha() || cls.crosses_beta();
-            let (bodies, nb): ([BodySaddle; 2], usize) = if crosses || method == Method::Tptd {
-                body_saddles(&v)
-            } else {
-                (bs_none(), 0)
-            };
-            // A cell crossing a level with a body saddle is full (so non-full cells use none).
-            let full = method == Method::Tptd || (crosses && is_full(method, cls, nb));
-            let mut used = 0u8;
-            let mut own = 0u8;
-            let mut fv = [0.0; 6];
-            for f in 0..6 {
-                let axis = f / 2;
-                let Some(s) = face_saddle(&v, f) else {
-                    continue;
-                };
-                let mine = full || face_needed(cls, f);
-                let need = mine || {
-                    let mut n = c;
-                    if f % 2 == 0 {
-                        n[axis] = n[axis].wrapping_sub(1);
-                    } else {
-                        n[axis] += 1;
-                    }
-                    n[axis] < cd[axis] && ctx.cell_full(n)
-                };
-                if !need {
-                    continue;
-                }
-                if mine {
-                    own |= 1 << f;
-                }
-                used |= 1 << f;
-                fv[f] = s.value;
-                pts.pos[8 + f] = face_saddle_point(f, s.uv);
-                pts.val[8 + f] = s.value;
-            }
-            if used == 0 && nb == 0 && cls.all_inside() && !on_box(c, cd) {
-                // By far the most common cell: six whole tets over the eight corners.
-                emit_six_inside(grid, c, &v, slab);
-                slab.cases[CellCase::I as usize] += 1;
-                return;
-            }
-            if !full && own == 0 && used & LOW_FACES != 0 && used & !LOW_FACES != 0 {
-                // Saddles used only for full neighbours, on faces of both parities: no corner
-                // apex fits, so one of them must be the apex. Safe are those on the side of
-                // the level whose corners are edge-connected (the apex joins all of them).
-                own = if crosses {
-                    safe_apexes(ctx, cls, used, &fv)
-                } else {
-                    used
-                };
-            }
-            tptd::decompose_tptd(used, own, &fv, &bodies[..nb], &mut pts, tets)
-        }
-    };
-    slab.cases[case as usize] += 1;
-
-    // Keys and clip vertices of the local ids.
-    let base = grid.index(i, j, k);
-    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
-    let key_of = |id: usize| -> u64 {
-        match id {
-            0..=7 => {
-                let o = corner_offset(id);
-                vertex_key(
-                    base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2],
-                    CORNER,
-                )
-            }
-            8..=13 => {
-                let f = id - 8;
-                let axis = f / 2;
-                vertex_key(base + (f % 2) * stride[axis], FACE + axis as u64)
-            }
-            _ => vertex_key(base, BODY + (id as u64 - BODY0 as u64)),
-        }
-    };
-    let mut box_planes = 0u8;
-    for axis in 0..3 {
-        if c[axis] == 0 {
-            box_planes |= 1 << (2 * axis);
-        }
-        if c[axis] + 1 == cd[axis] {
-            box_planes |= 1 << (2 * axis + 1);
-        }
+    let box_planes = cell_box_planes(c, ctx.grid.cell_dims());
+    if plan.whole_six() && box_planes == 0 {
+        // By far the most common cell: six whole tets over the eight corners.
+        emit_six_inside(ctx.grid, c, &v, slab);
+        slab.cases[CellCase::I as usize] += 1;
+        return;
     }
+    tets.clear();
+    let (case, pts) = decompose_cell(&plan, &v, tets);
+    slab.cases[case as usize] += 1;
+    clip_cell(ctx, c, box_planes, &pts, tets, slab);
+}
+
+/// Clips the tets (over local ids with points `pts`) of cell `c` into `slab`.
+#[inline]
+fn clip_cell(
+    ctx: &Ctx,
+    c: [usize; 3],
+    box_planes: u8,
+    pts: &CellPoints,
+    tets: &[[u8; 4]],
+    slab: &mut Slab,
+) {
+    let grid = ctx.grid;
+    let base = grid.index(c[0], c[1], c[2]);
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let base_f = c.map(|x| x as f64);
     let mut cv: [Option<ClipVertex>; NUM_LOCAL] = [None; NUM_LOCAL];
-    let base_f = [i as f64, j as f64, k as f64];
-    for t in tets.iter() {
+    for t in tets {
         let tv = t.map(|id| {
             let id = id as usize;
             *cv[id].get_or_insert_with(|| {
                 let p = pts.pos[id];
                 ClipVertex {
-                    key: key_of(id),
+                    key: local_key(base, stride, id),
                     pos: [base_f[0] + p[0], base_f[1] + p[1], base_f[2] + p[2]],
                     val: pts.val[id],
-                    box_mask: ctx.local_box[id],
+                    box_mask: LOCAL_BOX[id],
                 }
             })
         });
         clip_tet(&tv, &ctx.interval, box_planes, slab);
     }
-}
-
-/// Whether cell `c` touches the grid box (its faces may carry `box` triangles).
-#[inline]
-fn on_box(c: [usize; 3], cd: [usize; 3]) -> bool {
-    (0..3).any(|a| c[a] == 0 || c[a] + 1 == cd[a])
 }
 
 /// Emits the 6-fold split of a cell whose corners are all inside, straight from the corner
@@ -673,35 +657,194 @@ fn emit_six_inside(grid: &ScalarGrid, c: [usize; 3], v: &[f64; 8], slab: &mut Sl
     }
 }
 
-/// The used faces whose saddle lies on a side of the (single) level crossing the cell whose
-/// corners are edge-connected.
-fn safe_apexes(ctx: &Ctx, cls: CellClasses, used: u8, fv: &[f64; 6]) -> u8 {
-    let mut safe = 0u8;
-    for f in 0..6 {
-        if used & (1 << f) == 0 {
-            continue;
-        }
-        let m = if cls.crosses_alpha() {
-            if fv[f] <= ctx.interval.alpha {
-                cls.below
-            } else {
-                !cls.below
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::signed_volume;
+
+    const ALL: [Method; 5] = [
+        Method::Five,
+        Method::Six,
+        Method::Tptd,
+        Method::Std,
+        Method::Ctd,
+    ];
+
+    fn grid(dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f64) -> ScalarGrid {
+        let mut v = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    v.push(f(i, j, k));
+                }
             }
-        } else if fv[f] >= ctx.interval.beta {
-            cls.above
-        } else {
-            !cls.above
-        };
-        if corners_connected(m) {
-            safe |= 1 << f;
+        }
+        ScalarGrid::new(dims, v).unwrap()
+    }
+
+    fn noise(dims: [usize; 3], seed: u64) -> ScalarGrid {
+        grid(dims, |i, j, k| {
+            let h = (seed ^ (i + 97 * j + 9973 * k) as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            ((h >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+        })
+    }
+
+    fn volume(m: &TetMesh) -> f64 {
+        m.tets
+            .iter()
+            .map(|t| {
+                let p = t.map(|i| m.points[i as usize]);
+                let v = signed_volume(p[0], p[1], p[2], p[3]);
+                assert!(v > 0.0, "tet volume {v}");
+                v
+            })
+            .sum()
+    }
+
+    /// A 2×2×2-cell grid entirely inside: whole cells, corners welded, box boundary only.
+    #[test]
+    fn all_inside_grid() {
+        let g = grid([3, 3, 3], |i, j, k| (i + j + k) as f64);
+        for m in ALL {
+            let out = mesh_interval(&g, &MeshOptions::new(-1.0, 7.0, m)).unwrap();
+            let per_cell = if m == Method::Five { 5 } else { 6 };
+            assert_eq!(out.mesh.tets.len(), 8 * per_cell, "{m:?}");
+            assert_eq!(
+                out.mesh.points.len(),
+                27,
+                "{m:?}: corners welded across cells"
+            );
+            assert_eq!(out.mesh.boundary.len(), 6 * 4 * 2, "{m:?}");
+            assert!(out
+                .mesh
+                .boundary_labels
+                .iter()
+                .all(|&l| l == BoundaryLabel::Box));
+            assert!((volume(&out.mesh) - 8.0).abs() < 1e-12);
+            assert_eq!(out.stats.cells_by_case[CellCase::I as usize], 8);
+            assert_eq!(out.stats.cells_total, 8);
         }
     }
-    safe
-}
 
-fn bs_none() -> [BodySaddle; 2] {
-    [BodySaddle {
-        pos: [0.0; 3],
-        value: 0.0,
-    }; 2]
+    /// Every point appears once (no two points at the same place, every point in a tet), and
+    /// every tet face is shared by two tets or is a boundary triangle.
+    #[test]
+    fn welding_shares_points_between_cells() {
+        let g = noise([5, 4, 6], 3);
+        for m in ALL {
+            let mesh = mesh_interval(&g, &MeshOptions::new(-0.3, 0.4, m))
+                .unwrap()
+                .mesh;
+            let mut pos: Vec<[u64; 3]> = mesh.points.iter().map(|p| p.map(f64::to_bits)).collect();
+            pos.sort();
+            pos.dedup();
+            assert_eq!(pos.len(), mesh.points.len(), "{m:?}: duplicate points");
+            let mut used = vec![false; mesh.points.len()];
+            let mut faces: FxHashMap<[u32; 3], usize> = FxHashMap::default();
+            for t in &mesh.tets {
+                for skip in 0..4 {
+                    let mut f = [t[(skip + 1) % 4], t[(skip + 2) % 4], t[(skip + 3) % 4]];
+                    f.sort();
+                    *faces.entry(f).or_default() += 1;
+                }
+                t.iter().for_each(|&i| used[i as usize] = true);
+            }
+            assert!(used.iter().all(|&u| u), "{m:?}: unused point");
+            let once = faces.values().filter(|&&n| n == 1).count();
+            assert!(faces.values().all(|&n| n <= 2), "{m:?}");
+            assert_eq!(once, mesh.boundary.len(), "{m:?}: open faces");
+        }
+    }
+
+    /// The same mesh for one and several worker threads (rayon pools).
+    #[test]
+    fn same_mesh_for_any_thread_count() {
+        let g = noise([13, 11, 17], 5);
+        for m in ALL {
+            let opts = MeshOptions::new(-0.2, 0.5, m);
+            let run = |n: usize| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .unwrap();
+                pool.install(|| mesh_interval(&g, &opts).unwrap())
+            };
+            let (a, b) = (run(1), run(3));
+            assert_eq!(a.mesh.points, b.mesh.points, "{m:?}");
+            assert_eq!(a.mesh.values, b.mesh.values, "{m:?}");
+            assert_eq!(a.mesh.tets, b.mesh.tets, "{m:?}");
+            assert_eq!(a.mesh.boundary, b.mesh.boundary, "{m:?}");
+            assert_eq!(a.mesh.boundary_labels, b.mesh.boundary_labels, "{m:?}");
+            assert_eq!(a.stats, b.stats, "{m:?}");
+            let c = mesh_interval(&g, &opts.clone().threads(Some(2))).unwrap();
+            assert_eq!(a.mesh.tets, c.mesh.tets, "{m:?}");
+        }
+    }
+
+    /// A linear field is its own trilinear interpolant: the mesh volume is exact.
+    #[test]
+    fn volume_of_a_linear_field() {
+        let c = [1.0, 2.0, 0.5];
+        let g = grid([6, 5, 4], |i, j, k| {
+            c[0] * i as f64 + c[1] * j as f64 + c[2] * k as f64
+        });
+        let len = [5.0, 4.0, 3.0];
+        // volume of {c·x < s} in the box, by inclusion–exclusion over the box's corners (bounds
+        // avoid the data values, which are multiples of 0.5, so no tie moves a cut)
+        let below = |s: f64| -> f64 {
+            let mut v = 0.0;
+            for corner in 0..8 {
+                let shift: f64 = (0..3)
+                    .filter(|a| corner >> a & 1 == 1)
+                    .map(|a| c[a] * len[a])
+                    .sum();
+                let sign = if (corner as u32).count_ones().is_multiple_of(2) {
+                    1.0
+                } else {
+                    -1.0
+                };
+                v += sign * (s - shift).max(0.0).powi(3);
+            }
+            v / (6.0 * c[0] * c[1] * c[2])
+        };
+        for (a, b) in [
+            (2.7, 9.3),
+            (f64::NEG_INFINITY, 3.1),
+            (4.2, f64::INFINITY),
+            (3.3, 6.1),
+        ] {
+            let want = below(b.min(100.0)) - below(a.max(-100.0));
+            for m in ALL {
+                let got = volume(&mesh_interval(&g, &MeshOptions::new(a, b, m)).unwrap().mesh);
+                assert!(
+                    (got - want).abs() < 1e-9,
+                    "{m:?} ({a}, {b}): {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn options_default_and_builder() {
+        let d = MeshOptions::default();
+        assert_eq!((d.alpha, d.beta), (f64::NEG_INFINITY, f64::INFINITY));
+        assert_eq!((d.method, d.threads), (Method::Ctd, None));
+        let o = MeshOptions::default()
+            .alpha(1.0)
+            .beta(2.0)
+            .method(Method::Tptd)
+            .threads(Some(3));
+        assert_eq!(
+            o,
+            MeshOptions {
+                threads: Some(3),
+                ..MeshOptions::new(1.0, 2.0, Method::Tptd)
+            }
+        );
+        let g = noise([3, 3, 3], 1);
+        for (a, b) in [(1.0, 1.0), (2.0, 1.0), (f64::NAN, 1.0)] {
+            let e = mesh_interval(&g, &MeshOptions::default().alpha(a).beta(b));
+            assert!(matches!(e, Err(MeshError::InvalidInterval { .. })));
+        }
+    }
 }

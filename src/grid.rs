@@ -85,6 +85,22 @@ pub const fn corner_faces(c: usize) -> [usize; 3] {
     [o[0], 2 + o[1], 4 + o[2]]
 }
 
+/// Bit mask of the grid-box planes that cell `c` lies on (bit `f` for box face `f`, same
+/// numbering as cell faces), in a grid of `cell_dims` cells. Zero for interior cells.
+#[inline]
+pub fn cell_box_planes(c: [usize; 3], cell_dims: [usize; 3]) -> u8 {
+    let mut planes = 0u8;
+    for axis in 0..3 {
+        if c[axis] == 0 {
+            planes |= 1 << (2 * axis);
+        }
+        if c[axis] + 1 == cell_dims[axis] {
+            planes |= 1 << (2 * axis + 1);
+        }
+    }
+    planes
+}
+
 impl ScalarGrid {
     /// Builds a grid with unit spacing, zero origin and identity direction.
     ///

@@ -52,6 +52,35 @@ pub fn split(p: PointKey) -> (VertexKey, Option<(VertexKey, u8)>) {
     }
 }
 
+/// Grid index of output point `p` if it is a grid vertex (not a saddle, not a cut).
+#[inline]
+pub fn grid_vertex(p: PointKey) -> Option<usize> {
+    let (vk, rest) = split(p);
+    (rest.is_none() && vk & 7 == CORNER).then_some((vk >> 3) as usize)
+}
+
+/// Key of cell-local id `id` (`0..8` corners, `8 + f` face saddles, `14 + n` body points, as
+/// in [`crate::decompose`]) of the cell whose smallest corner is grid vertex `base`;
+/// `stride` is the grid-index step along each axis (`[1, nx, nx·ny]`).
+#[inline]
+pub fn local_key(base: usize, stride: [usize; 3], id: usize) -> VertexKey {
+    match id {
+        0..=7 => {
+            let o = crate::grid::corner_offset(id);
+            vertex_key(
+                base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2],
+                CORNER,
+            )
+        }
+        8..=13 => {
+            let f = id - 8;
+            let axis = f / 2;
+            vertex_key(base + (f % 2) * stride[axis], FACE + axis as u64)
+        }
+        _ => vertex_key(base, BODY + (id as u64 - crate::decompose::BODY0 as u64)),
+    }
+}
+
 /// z index of the grid vertex a vertex key is attached to, and whether the vertex lies
 /// in the plane z = that index (grid vertices and saddles of faces normal to z do).
 #[inline]
@@ -105,5 +134,30 @@ mod tests {
         assert!(on_z_plane(cut_point(c0, c1, 0), 3, stride));
         assert!(!on_z_plane(cut_point(c0, c2, 0), 3, stride));
         assert!(!on_z_plane(cut_point(c0, fx, 0), 3, stride));
+    }
+    #[test]
+    fn local_keys_and_grid_vertices() {
+        let (nx, ny) = (5, 4);
+        let stride = [1, nx, nx * ny];
+        let base = 1 + nx * (2 + ny * 3);
+        assert_eq!(local_key(base, stride, 0), vertex_key(base, CORNER));
+        assert_eq!(
+            local_key(base, stride, 7),
+            vertex_key(base + 1 + nx + nx * ny, CORNER)
+        );
+        // +y face (3) of this cell is the -y face (2) of the cell above in y
+        assert_eq!(
+            local_key(base, stride, 11),
+            local_key(base + nx, stride, 10)
+        );
+        assert_eq!(local_key(base, stride, 11), vertex_key(base + nx, FACE + 1));
+        assert_eq!(local_key(base, stride, 15), vertex_key(base, BODY + 1));
+        assert_eq!(
+            grid_vertex(vertex_point(local_key(base, stride, 6))),
+            Some(base + nx + nx * ny)
+        );
+        assert_eq!(grid_vertex(vertex_point(local_key(base, stride, 8))), None);
+        let c = cut_point(vertex_key(base, CORNER), vertex_key(base + 1, CORNER), 0);
+        assert_eq!(grid_vertex(c), None);
     }
 }

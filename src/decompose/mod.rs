@@ -15,7 +15,9 @@ pub mod six;
 pub mod tptd;
 
 use crate::geom::signed_volume;
-use crate::grid::{corner_offset, face_corners};
+use crate::grid::{corner_faces, corner_offset, face_corners};
+use crate::trilinear::face_saddle_point;
+use plan::{CellPlan, Layout};
 
 /// Local id of the lower-valued body saddle.
 pub const BODY0: u8 = 14;
@@ -94,6 +96,61 @@ impl CellPoints {
         }
         CellPoints { pos, val }
     }
+}
+
+/// Box-plane mask of every local id: a corner lies on its three faces, a face saddle on its
+/// face, body points on none (bit `f` = cell face `f`).
+pub const LOCAL_BOX: [u8; NUM_LOCAL] = local_box();
+
+const fn local_box() -> [u8; NUM_LOCAL] {
+    let mut m = [0u8; NUM_LOCAL];
+    let mut c = 0;
+    while c < 8 {
+        let f = corner_faces(c);
+        m[c] = (1 << f[0]) | (1 << f[1]) | (1 << f[2]);
+        c += 1;
+    }
+    let mut f = 0;
+    while f < 6 {
+        m[8 + f] = 1 << f;
+        f += 1;
+    }
+    m
+}
+
+/// Decomposes one cell (corner values `v`) as `plan` says: appends tets over local ids to
+/// `out` (which the caller clears) and returns the case and the local ids' points.
+/// `plan.layout` must not be [`plan::Layout::Outside`].
+#[inline]
+pub fn decompose_cell(
+    plan: &CellPlan,
+    v: &[f64; 8],
+    out: &mut Vec<[u8; 4]>,
+) -> (CellCase, CellPoints) {
+    let mut pts = CellPoints::from_corners(v);
+    let case = match plan.layout {
+        Layout::Outside | Layout::Six => {
+            six::decompose_six(out);
+            CellCase::I
+        }
+        Layout::Five { odd } => {
+            five::decompose_five(odd, out);
+            CellCase::I
+        }
+        Layout::Tptd => {
+            let used = plan.used();
+            for f in 0..6 {
+                if used & (1 << f) != 0 {
+                    let s = plan.saddles[f];
+                    pts.pos[8 + f] = face_saddle_point(f, s.uv);
+                    pts.val[8 + f] = s.value;
+                }
+            }
+            let fv = plan.face_values();
+            tptd::decompose_tptd(used, plan.apex, &fv, plan.bodies(), &mut pts, out)
+        }
+    };
+    (case, pts)
 }
 
 /// Appends the tets of the pyramid with apex `apex` over cell face `f`: four tets around the

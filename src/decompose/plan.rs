@@ -15,6 +15,9 @@
 //!   saddle (TPTD); other cells use no body saddle (STD cases i, ii, iv over the used faces).
 //!   Both cells of a face evaluate the same rule on the same data, so they agree.
 
+use crate::grid::{ScalarGrid, LOW_FACES};
+use crate::trilinear::{body_saddles, face_saddle, BodySaddle, FaceSaddle};
+
 /// Decomposition method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -158,6 +161,240 @@ pub fn corners_connected(mask: u8) -> bool {
     seen == mask
 }
 
+/// How a cell is split (before clipping).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// Entirely below alpha or above beta: nothing to mesh.
+    Outside,
+    /// The 6-fold split (method `six`).
+    Six,
+    /// The 5-fold split of the given parity (method `five`).
+    Five {
+        /// Whether `i + j + k` is odd.
+        odd: bool,
+    },
+    /// TPTD over the plan's used saddles (methods `tptd`, `std`, `ctd`).
+    Tptd,
+}
+
+/// Which saddles one cell uses, and why.
+///
+/// The used face saddles are `own | forced`. `apex` are the used faces whose saddle may be the
+/// case-(ii) apex of [`crate::decompose::tptd::decompose_tptd`].
+#[derive(Clone, Copy, Debug)]
+pub struct CellPlan {
+    /// How the cell is split.
+    pub layout: Layout,
+    /// Corner classes.
+    pub classes: CellClasses,
+    /// Whether the cell uses every saddle it has (TPTD).
+    pub full: bool,
+    /// Faces whose saddle the cell uses on its own account (the cell is full, or the face is
+    /// ambiguous for one of its levels).
+    pub own: u8,
+    /// Faces whose saddle is used only because the cell across the face is full.
+    pub forced: u8,
+    /// Used faces whose saddle may be the case-(ii) apex: `own`, except for a non-full cell
+    /// with only forced saddles on faces of both parities (no corner apex fits), where it is
+    /// the forced saddles that join nothing the cell keeps apart.
+    pub apex: u8,
+    /// The saddles of the used faces (entries of other faces are unspecified).
+    pub saddles: [FaceSaddle; 6],
+    /// The used body saddles in increasing value order (the first `num_body`).
+    pub bodies: [BodySaddle; 2],
+    /// Number of used body saddles.
+    pub num_body: usize,
+}
+
+impl CellPlan {
+    /// A plan with no saddle.
+    fn bare(layout: Layout, classes: CellClasses) -> Self {
+        CellPlan {
+            layout,
+            classes,
+            full: false,
+            own: 0,
+            forced: 0,
+            apex: 0,
+            saddles: [FaceSaddle {
+                uv: [0.0; 2],
+                value: 0.0,
+            }; 6],
+            bodies: [BodySaddle {
+                pos: [0.0; 3],
+                value: 0.0,
+            }; 2],
+            num_body: 0,
+        }
+    }
+
+    /// Faces whose saddle the cell uses.
+    #[inline]
+    pub fn used(&self) -> u8 {
+        self.own | self.forced
+    }
+
+    /// The used body saddles, in increasing value order.
+    #[inline]
+    pub fn bodies(&self) -> &[BodySaddle] {
+        &self.bodies[..self.num_body]
+    }
+
+    /// Saddle value of each used face (0 for the others).
+    #[inline]
+    pub fn face_values(&self) -> [f64; 6] {
+        let used = self.used();
+        std::array::from_fn(|f| {
+            if used & (1 << f) != 0 {
+                self.saddles[f].value
+            } else {
+                0.0
+            }
+        })
+    }
+
+    /// Whether the cell is all inside and split 6-fold over its corners alone (no saddle, no
+    /// clipping needed away from the grid box).
+    #[inline]
+    pub fn whole_six(&self) -> bool {
+        matches!(self.layout, Layout::Six | Layout::Tptd)
+            && self.used() == 0
+            && self.num_body == 0
+            && self.classes.all_inside()
+    }
+}
+
+/// The levels and method a plan is made for, and the grid the neighbours are read from.
+#[derive(Clone, Copy, Debug)]
+pub struct Planner<'a> {
+    /// The grid.
+    pub grid: &'a ScalarGrid,
+    /// Decomposition method.
+    pub method: Method,
+    /// Lower level (may be `-inf`).
+    pub alpha: f64,
+    /// Upper level (may be `+inf`).
+    pub beta: f64,
+}
+
+impl Planner<'_> {
+    /// Whether the cell at `c` is full (uses every saddle), computed from its values when
+    /// asked: only cells with a face saddle ask about the neighbour across it, which is far
+    /// cheaper than a pass over all cells.
+    #[inline]
+    pub fn cell_full(&self, c: [usize; 3]) -> bool {
+        match self.method {
+            Method::Tptd => true,
+            Method::Ctd | Method::Std => {
+                let v = self.grid.cell_values(c[0], c[1], c[2]);
+                let cls = CellClasses::new(&v, self.alpha, self.beta);
+                if !(cls.crosses_alpha() || cls.crosses_beta()) {
+                    return false;
+                }
+                is_full(self.method, cls, body_saddles(&v).1)
+            }
+            Method::Five | Method::Six => false,
+        }
+    }
+
+    /// Whether the neighbour of cell `c` across face `f` exists and is full.
+    #[inline]
+    fn neighbour_full(&self, c: [usize; 3], f: usize) -> bool {
+        let axis = f / 2;
+        let mut n = c;
+        if f.is_multiple_of(2) {
+            n[axis] = n[axis].wrapping_sub(1);
+        } else {
+            n[axis] += 1;
+        }
+        n[axis] < self.grid.cell_dims()[axis] && self.cell_full(n)
+    }
+}
+
+/// Plans cell `c` (corner values `v`): its layout and, for the TPTD family, which face and
+/// body saddles it uses (looking at the neighbours across its saddle faces when needed).
+#[inline]
+pub fn plan_cell(p: &Planner, c: [usize; 3], v: &[f64; 8]) -> CellPlan {
+    let cls = CellClasses::new(v, p.alpha, p.beta);
+    if cls.all_outside() {
+        return CellPlan::bare(Layout::Outside, cls);
+    }
+    match p.method {
+        Method::Six => CellPlan::bare(Layout::Six, cls),
+        Method::Five => CellPlan::bare(
+            Layout::Five {
+                odd: (c[0] + c[1] + c[2]) % 2 == 1,
+            },
+            cls,
+        ),
+        Method::Tptd | Method::Std | Method::Ctd => plan_tptd(p, c, v, cls),
+    }
+}
+
+/// [`plan_cell`] for the TPTD family.
+#[inline]
+fn plan_tptd(p: &Planner, c: [usize; 3], v: &[f64; 8], cls: CellClasses) -> CellPlan {
+    let mut plan = CellPlan::bare(Layout::Tptd, cls);
+    let crosses = cls.crosses_alpha() || cls.crosses_beta();
+    if crosses || p.method == Method::Tptd {
+        (plan.bodies, plan.num_body) = body_saddles(v);
+    }
+    // A cell crossing a level with a body saddle is full (so non-full cells use none).
+    plan.full = p.method == Method::Tptd || (crosses && is_full(p.method, cls, plan.num_body));
+    for f in 0..6 {
+        let Some(s) = face_saddle(v, f) else {
+            continue;
+        };
+        if plan.full || face_needed(cls, f) {
+            plan.own |= 1 << f;
+        } else if p.neighbour_full(c, f) {
+            plan.forced |= 1 << f;
+        } else {
+            continue;
+        }
+        plan.saddles[f] = s;
+    }
+    plan.apex = plan.own;
+    let used = plan.used();
+    if !plan.full && plan.own == 0 && used & LOW_FACES != 0 && used & !LOW_FACES != 0 {
+        // Saddles used only for full neighbours, on faces of both parities: no corner apex
+        // fits, so one of them must be the apex. Safe are those on the side of the level
+        // whose corners are edge-connected (the apex joins all of them).
+        plan.apex = if crosses {
+            safe_apexes(p, cls, used, &plan.face_values())
+        } else {
+            used
+        };
+    }
+    plan
+}
+
+/// The used faces whose saddle lies on a side of the (single) level crossing the cell whose
+/// corners are edge-connected.
+fn safe_apexes(p: &Planner, cls: CellClasses, used: u8, fv: &[f64; 6]) -> u8 {
+    let mut safe = 0u8;
+    for f in 0..6 {
+        if used & (1 << f) == 0 {
+            continue;
+        }
+        let m = if cls.crosses_alpha() {
+            if fv[f] <= p.alpha {
+                cls.below
+            } else {
+                !cls.below
+            }
+        } else if fv[f] >= p.beta {
+            cls.above
+        } else {
+            !cls.above
+        };
+        if corners_connected(m) {
+            safe |= 1 << f;
+        }
+    }
+    safe
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,5 +408,66 @@ mod tests {
         assert!(corners_connected(0b0000_0111));
         assert!(corners_connected(!0b1000_0001));
         assert!(corners_connected(0xff));
+    }
+    fn noise_grid(dims: [usize; 3], seed: u64) -> ScalarGrid {
+        let n = dims[0] * dims[1] * dims[2];
+        let v = (0..n as u64)
+            .map(|i| {
+                let h = (seed ^ i.wrapping_mul(0x2545_F491_4F6C_DD1D))
+                    .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                ((h >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+            })
+            .collect();
+        ScalarGrid::new(dims, v).unwrap()
+    }
+
+    /// The two cells of every interior face agree on whether its saddle is used; a forced
+    /// saddle has a full cell across; `own` and `forced` are disjoint.
+    #[test]
+    fn neighbours_agree_on_every_face() {
+        let grid = noise_grid([9, 8, 7], 3);
+        let cd = grid.cell_dims();
+        let mut forced = 0;
+        for method in [Method::Tptd, Method::Std, Method::Ctd] {
+            for (alpha, beta) in [(-0.2, 0.3), (0.1, f64::INFINITY), (-0.5, 0.6)] {
+                let p = Planner {
+                    grid: &grid,
+                    method,
+                    alpha,
+                    beta,
+                };
+                let plan = |c: [usize; 3]| plan_cell(&p, c, &grid.cell_values(c[0], c[1], c[2]));
+                for c in (0..cd[2])
+                    .flat_map(|k| (0..cd[1]).flat_map(move |j| (0..cd[0]).map(move |i| [i, j, k])))
+                {
+                    let a = plan(c);
+                    assert_eq!(a.own & a.forced, 0);
+                    assert_eq!(a.apex & !a.used(), 0);
+                    for axis in 0..3 {
+                        if c[axis] + 1 == cd[axis] {
+                            continue;
+                        }
+                        let mut n = c;
+                        n[axis] += 1;
+                        let b = plan(n);
+                        if a.layout == Layout::Outside || b.layout == Layout::Outside {
+                            continue;
+                        }
+                        let (fa, fb) = (2 * axis + 1, 2 * axis);
+                        assert_eq!(
+                            (a.used() >> fa) & 1,
+                            (b.used() >> fb) & 1,
+                            "{method:?} {c:?} axis {axis}"
+                        );
+                        if (a.forced >> fa) & 1 == 1 {
+                            assert!(b.full && p.cell_full(n));
+                            forced += 1;
+                        }
+                        assert_eq!(a.full, p.cell_full(c));
+                    }
+                }
+            }
+        }
+        assert!(forced > 0, "no forced saddle seen");
     }
 }

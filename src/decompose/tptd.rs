@@ -53,36 +53,7 @@ pub fn decompose_tptd(
             }
             CellCase::Fallback
         }
-        (0, _) => {
-            let eligible = apex_faces & used_faces;
-            if eligible == 0 && used_faces & LOW_FACES == 0 {
-                // Only faces away from corner 0 are split: the 6-fold split seen as three
-                // pyramids from corner 0, with the split faces in four.
-                for f in [1, 3, 5] {
-                    push_pyramid(out, 0, f, used_faces);
-                }
-                return CellCase::I;
-            }
-            if eligible == 0 && used_faces & HIGH_FACES == 0 {
-                for f in [0, 2, 4] {
-                    push_pyramid(out, 7, f, used_faces);
-                }
-                return CellCase::I;
-            }
-            let from = if eligible != 0 { eligible } else { used_faces };
-            let apex = face_id(second_biggest(from, face_value));
-            for f in 0..6 {
-                if face_id(f) != apex {
-                    push_pyramid(out, apex, f, used_faces);
-                }
-            }
-            // push_pyramid orients every tet (apex on another face); tests check it
-            return if eligible != 0 {
-                CellCase::II
-            } else {
-                CellCase::Fallback
-            };
-        }
+        (0, _) => return face_pyramids(used_faces, apex_faces, face_value, out),
         (1, 6) | (2, 6) => {
             if prisms(face_value, bodies, pts, out) {
                 return CellCase::V;
@@ -94,7 +65,57 @@ pub fn decompose_tptd(
     };
     out.truncate(start);
     // Case (iii), and the fallback for layouts that failed: six pyramids around a body point.
-    let b = match bodies.first() {
+    body_pyramids(bodies.first(), used_faces, pts, out);
+    case
+}
+
+/// Case (ii) and its STD variants (face saddles only, not all six or none): pyramids from a
+/// corner or around a face saddle (see [`decompose_tptd`] for `apex_faces`).
+fn face_pyramids(
+    used_faces: u8,
+    apex_faces: u8,
+    face_value: &[f64; 6],
+    out: &mut Vec<[u8; 4]>,
+) -> CellCase {
+    let eligible = apex_faces & used_faces;
+    if eligible == 0 && used_faces & LOW_FACES == 0 {
+        // Only faces away from corner 0 are split: the 6-fold split seen as three
+        // pyramids from corner 0, with the split faces in four.
+        for f in [1, 3, 5] {
+            push_pyramid(out, 0, f, used_faces);
+        }
+        return CellCase::I;
+    }
+    if eligible == 0 && used_faces & HIGH_FACES == 0 {
+        for f in [0, 2, 4] {
+            push_pyramid(out, 7, f, used_faces);
+        }
+        return CellCase::I;
+    }
+    let from = if eligible != 0 { eligible } else { used_faces };
+    let apex = face_id(second_biggest(from, face_value));
+    for f in 0..6 {
+        if face_id(f) != apex {
+            push_pyramid(out, apex, f, used_faces);
+        }
+    }
+    // push_pyramid orients every tet (apex on another face); tests check it
+    if eligible != 0 {
+        CellCase::II
+    } else {
+        CellCase::Fallback
+    }
+}
+
+/// Six pyramids around body saddle `body` (clamped into the cell), or around the cell centre
+/// when there is none: valid and positively oriented by construction.
+fn body_pyramids(
+    body: Option<&BodySaddle>,
+    used_faces: u8,
+    pts: &mut CellPoints,
+    out: &mut Vec<[u8; 4]>,
+) {
+    let b = match body {
         Some(b) => *b,
         None => {
             let p = [0.5; 3];
@@ -109,8 +130,6 @@ pub fn decompose_tptd(
     for f in 0..6 {
         push_pyramid(out, BODY0, f, used_faces);
     }
-    // pyramids around an interior point: valid and positively oriented by construction
-    case
 }
 
 fn corner_values(pts: &CellPoints) -> [f64; 8] {
@@ -191,38 +210,10 @@ fn prisms(
     let start = out.len();
     let mut order: [usize; 6] = [0, 1, 2, 3, 4, 5];
     order.sort_by(|&a, &b| face_value[a].total_cmp(&face_value[b]).then(a.cmp(&b)));
-    // The three small face saddles must lie on faces meeting at one corner (one per axis).
-    let mut side = [usize::MAX; 3];
-    for &f in &order[..3] {
-        if side[f / 2] != usize::MAX {
-            return false;
-        }
-        side[f / 2] = f % 2;
-    }
-    let c_small = side[0] | (side[1] << 1) | (side[2] << 2);
-    let c_big = 7 ^ c_small;
-    // Axis of the two pyramids, and the small/big apexes.
-    let (axis, b_small, b_big) = if bodies.len() == 2 {
-        let axis = 2;
-        for (id, b) in [(BODY0, &bodies[0]), (BODY1, &bodies[1])] {
-            pts.val[id as usize] = b.value;
-        }
-        (axis, BODY0, BODY1)
-    } else {
-        // One body saddle: it plays the small role when its value is nearer the small face
-        // saddles, the big one otherwise; the other pyramid collapses onto the face saddle
-        // nearest in rank (the third-smallest or third-biggest: never the smallest nor the
-        // biggest).
-        pts.val[BODY0 as usize] = bodies[0].value;
-        let mid = 0.5 * (face_value[order[2]] + face_value[order[3]]);
-        if bodies[0].value < mid {
-            let fc = order[3];
-            (fc / 2, BODY0, face_id(fc))
-        } else {
-            let fc = order[2];
-            (fc / 2, face_id(fc), BODY0)
-        }
+    let Some(side) = small_sides(&order) else {
+        return false;
     };
+    let (axis, b_small, b_big) = prism_apexes(face_value, &order, bodies, pts);
     let small_face = 2 * axis + side[axis];
     let big_face = 2 * axis + 1 - side[axis];
     // Case-(v) apexes sit on the cell's centre line, 0.3 of the way in from their own face.
@@ -239,9 +230,76 @@ fn prisms(
             push_pyramid(out, apex, face, all);
         }
     }
-    // The four edges parallel to `axis`: c_lo on the small face, c_hi on the big face.
-    // Each is shared by two side regions, which must split the quad (b_small, c_lo, c_hi,
-    // b_big) the same way.
+    let c_small = side[0] | (side[1] << 1) | (side[2] << 2);
+    for f in 0..6 {
+        if f / 2 != axis {
+            side_region(f, axis, side[axis], (b_small, b_big), 7 ^ c_small, out);
+        }
+    }
+    if !orient_tiling(&mut out[start..], pts, 1.0) {
+        out.truncate(start);
+        return false;
+    }
+    true
+}
+
+/// The side (0 low, 1 high) per axis of the faces of the three smallest face saddles, when
+/// they lie on faces meeting at one corner (one per axis); `order` sorts faces by value.
+fn small_sides(order: &[usize; 6]) -> Option<[usize; 3]> {
+    let mut side = [usize::MAX; 3];
+    for &f in &order[..3] {
+        if side[f / 2] != usize::MAX {
+            return None;
+        }
+        side[f / 2] = f % 2;
+    }
+    Some(side)
+}
+
+/// Axis of the two case-(v) pyramids and their small and big apexes (local ids); sets the
+/// body saddles' values in `pts`.
+fn prism_apexes(
+    face_value: &[f64; 6],
+    order: &[usize; 6],
+    bodies: &[BodySaddle],
+    pts: &mut CellPoints,
+) -> (usize, u8, u8) {
+    if bodies.len() == 2 {
+        for (id, b) in [(BODY0, &bodies[0]), (BODY1, &bodies[1])] {
+            pts.val[id as usize] = b.value;
+        }
+        return (2, BODY0, BODY1);
+    }
+    // One body saddle: it plays the small role when its value is nearer the small face
+    // saddles, the big one otherwise; the other pyramid collapses onto the face saddle
+    // nearest in rank (the third-smallest or third-biggest: never the smallest nor the
+    // biggest).
+    pts.val[BODY0 as usize] = bodies[0].value;
+    let mid = 0.5 * (face_value[order[2]] + face_value[order[3]]);
+    if bodies[0].value < mid {
+        let fc = order[3];
+        (fc / 2, BODY0, face_id(fc))
+    } else {
+        let fc = order[2];
+        (fc / 2, face_id(fc), BODY0)
+    }
+}
+
+/// The tets of the prism between side face `f` (not normal to `axis`) and the two apexes
+/// `(b_small, b_big)`; `low_side` is the side along `axis` of the small pyramid's face and
+/// `c_big` the corner of the three big face saddles.
+///
+/// The four edges parallel to `axis` run from c_lo on the small face to c_hi on the big face.
+/// Each is shared by two side regions, which must split the quad (b_small, c_lo, c_hi, b_big)
+/// the same way.
+fn side_region(
+    f: usize,
+    axis: usize,
+    low_side: usize,
+    (b_small, b_big): (u8, u8),
+    c_big: usize,
+    out: &mut Vec<[u8; 4]>,
+) {
     let interface = |c_lo: u8| -> [[u8; 3]; 2] {
         let c_hi = c_lo ^ (1 << axis);
         if c_hi as usize == c_big {
@@ -251,34 +309,24 @@ fn prisms(
             [[b_small, c_lo, c_hi], [b_small, c_hi, b_big]]
         }
     };
-    for f in 0..6 {
-        if f / 2 == axis {
-            continue;
-        }
-        let s = face_id(f);
-        let fa = f / 2;
-        let on_face: Vec<u8> = (0..8u8)
-            .filter(|&c| ((c as usize >> fa) & 1) == f % 2)
-            .collect();
-        let lo: Vec<u8> = on_face
-            .iter()
-            .copied()
-            .filter(|&c| ((c as usize >> axis) & 1) == side[axis])
-            .collect();
-        let hi: Vec<u8> = lo.iter().map(|&c| c ^ (1 << axis)).collect();
-        out.push([s, b_small, lo[0], lo[1]]);
-        out.push([s, b_big, hi[0], hi[1]]);
-        for &c_lo in &lo {
-            for tri in interface(c_lo) {
-                out.push([s, tri[0], tri[1], tri[2]]);
-            }
+    let s = face_id(f);
+    let fa = f / 2;
+    let on_face: Vec<u8> = (0..8u8)
+        .filter(|&c| ((c as usize >> fa) & 1) == f % 2)
+        .collect();
+    let lo: Vec<u8> = on_face
+        .iter()
+        .copied()
+        .filter(|&c| ((c as usize >> axis) & 1) == low_side)
+        .collect();
+    let hi: Vec<u8> = lo.iter().map(|&c| c ^ (1 << axis)).collect();
+    out.push([s, b_small, lo[0], lo[1]]);
+    out.push([s, b_big, hi[0], hi[1]]);
+    for &c_lo in &lo {
+        for tri in interface(c_lo) {
+            out.push([s, tri[0], tri[1], tri[2]]);
         }
     }
-    if !orient_tiling(&mut out[start..], pts, 1.0) {
-        out.truncate(start);
-        return false;
-    }
-    true
 }
 
 #[cfg(test)]
