@@ -115,8 +115,8 @@ def dom_genus3(n):
     big, small = 0.12 * n, 0.06 * n
     d = sdf_torus_z(x, y, z, big, small, -2 * big)
     for cx in (0.0, 2 * big):
-        d = smooth_min(d, sdf_torus_z(x, y, z, big, small, cx), 0.03 * n)
-    return d, [(None, 0.0)], "smooth union (k = 0.03 N) of 3 tori R = 0.12 N, r = 0.06 N, tangent rings (genus 3)"
+        d = smooth_min(d, sdf_torus_z(x, y, z, big, small, cx), 0.04 * n)
+    return d, [(None, 0.0)], "smooth union (k = 0.04 N) of 3 tori R = 0.12 N, r = 0.06 N, tangent rings (genus 3)"
 
 
 def dom_shell(n, t=0.6):
@@ -190,6 +190,12 @@ def make_domain(name, n, crop, force=False):
     if force or not os.path.exists(path):
         os.makedirs(DATA, exist_ok=True)
         np.save(path, np.ascontiguousarray(f, dtype="<f4"))
+    f32 = np.asarray(f, dtype=np.float32)
+    for b in (b for iv in intervals for b in iv if b is not None):
+        hits = int((f32 == np.float32(b)).sum())
+        if hits:   # a bound on a grid value pinches the surface through that vertex (coincident nodes)
+            print(f"[quality] WARNING {name}: {hits} grid values equal the bound {b:g}", flush=True)
+            note += f"; {hits} grid values equal the bound {b:g}"
     return {"name": name, "path": path, "shape": list(f.shape), "intervals": intervals, "note": note}
 
 
@@ -449,7 +455,9 @@ def run_tetgen(args, smesh, switches, tag):
     os.makedirs(d)
     shutil.copy(smesh, os.path.join(d, "surf.smesh"))
     cmd = [args.tetgen, switches, "surf.smesh"]
-    r = run_child(cmd, os.path.join(d, "log"), args.timeout, args.mem_limit_gb, cwd=d)
+    # line-buffered stdout so TetGen's last message survives an abort (SIGABRT)
+    line_buf = ["stdbuf", "-oL"] if shutil.which("stdbuf") else []
+    r = run_child(line_buf + cmd, os.path.join(d, "log"), args.timeout, args.mem_limit_gb, cwd=d)
     row = {"tool": f"tetgen {switches}", "command": " ".join(cmd), **r}
     if r["status"] == "ok":
         try:
