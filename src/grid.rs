@@ -30,18 +30,26 @@ pub struct ScalarGrid {
 /// Why a grid could not be built.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum GridError {
+    /// Some dimension is below 2 (a grid needs at least one cell along each axis).
     #[error("grid dimensions {0:?} must each be at least 2")]
     TooSmall([usize; 3]),
+    /// The number of values does not match the dimensions.
     #[error("grid has {got} values but dimensions {dims:?} need {want}")]
     WrongLength {
+        /// The grid dimensions.
         dims: [usize; 3],
+        /// `dims[0] * dims[1] * dims[2]`.
         want: usize,
+        /// The number of values given.
         got: usize,
     },
+    /// A value is NaN or infinite; the vertex `(i, j, k)` and the value.
     #[error("value at grid vertex ({0}, {1}, {2}) is not finite ({3})")]
     NotFinite(usize, usize, usize, f64),
+    /// A spacing is zero, NaN or infinite.
     #[error("spacing {0:?} must be finite and non-zero")]
     BadSpacing([f64; 3]),
+    /// The direction matrix (or the origin) is singular or not finite.
     #[error("direction matrix is singular or not finite")]
     BadDirection,
 }

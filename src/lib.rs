@@ -1,30 +1,32 @@
 //! tptd: topology-preserving tetrahedral meshing of interval volumes
 //! `{alpha <= f <= beta}` of piecewise-trilinear scalar fields.
 //!
-//! Pipeline (see `docs/ARCHITECTURE.md`): a [`grid::ScalarGrid`] is read by [`io`];
-//! [`extract::mesh_interval`] decomposes every cell into tetrahedra ([`decompose`], using the
-//! saddles of [`trilinear`]), clips each tetrahedron to the interval ([`clip`]), welds points by
-//! identity and returns a [`mesh::TetMesh`]; [`topology`] and [`quality`] analyse it and the
-//! writers in [`io`] export it.
+//! Pipeline (see `docs/ARCHITECTURE.md`), read → decompose → clip → weld → improve → write:
+//! a [`ScalarGrid`] is read by [`io::read_volume`]; [`mesh_interval`] splits every cell into
+//! tetrahedra through the saddles of the trilinear interpolant, clips each tetrahedron to the
+//! interval, welds points by identity and returns a [`TetMesh`]; [`improve::improve`] raises
+//! the element quality without changing the topology; [`topology`] and [`improve::quality`]
+//! analyse the mesh and [`io::write_mesh`] writes it.
 
+#![warn(missing_docs)]
 // Index loops over small fixed arrays (corners, faces, axes) read better than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
-pub mod clip;
-pub mod decompose;
+pub(crate) mod clip;
+pub(crate) mod decompose;
 pub mod demo;
-pub mod extract;
-pub mod geom;
+pub(crate) mod extract;
+pub(crate) mod geom;
 pub mod grid;
 pub mod improve;
 pub mod io;
-pub mod keys;
+pub(crate) mod keys;
 pub mod mesh;
-pub mod quality;
 pub mod report;
 pub mod topology;
-pub mod trilinear;
+pub(crate) mod trilinear;
 
+pub use decompose::CellCase;
 pub use extract::{
     mesh_interval, mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput, MeshStats,
     Method,

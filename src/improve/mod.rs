@@ -3,20 +3,20 @@
 //!
 //! Pipeline position: `extract` → **improve** → write. Work is proportional to what needs
 //! work: each round marks the vertices of tets below the target quality and the level
-//! vertices off the trilinear level set, copies their stars out ([`local`]), improves them
+//! vertices off the trilinear level set, copies their stars out (`local`), improves them
 //! there (projection, edge collapse, flips, smoothing; one operation per file) and splices the
 //! result back. Everything runs in a fixed order, so the output does not depend on the number
 //! of threads.
 
-pub mod collapse;
-pub mod constraint;
+pub(crate) mod collapse;
+pub(crate) mod constraint;
 pub mod field;
-pub mod flip;
-pub mod local;
-pub mod project;
+pub(crate) mod flip;
+pub(crate) mod local;
+pub(crate) mod project;
 pub mod quality;
 mod schedule;
-pub mod smooth;
+pub(crate) mod smooth;
 
 use std::time::{Duration, Instant};
 

@@ -165,6 +165,22 @@ pub fn gamma(p: [[f64; 3]; 4]) -> f64 {
     2.0 * 6.0_f64.sqrt() * r_in / l_max
 }
 
+/// Smallest and largest dihedral angle over all tets, in degrees (`None` for an empty mesh).
+/// Works on cosines and takes two arc cosines at the end.
+pub fn dihedral_range(mesh: &TetMesh) -> Option<(f64, f64)> {
+    mesh.tets
+        .par_iter()
+        .map(|t| {
+            dihedral_cosines(t.map(|i| mesh.points[i as usize]))
+                .iter()
+                .fold((f64::NEG_INFINITY, f64::INFINITY), |(hi, lo), &c| {
+                    (hi.max(c), lo.min(c))
+                })
+        })
+        .reduce_with(|a, b| (a.0.max(b.0), a.1.min(b.1)))
+        .map(|(cos_max, cos_min)| (cos_max.acos().to_degrees(), cos_min.acos().to_degrees()))
+}
+
 /// Number of histogram bins of dihedral angles (one per degree, 0° to 180°).
 pub const HISTOGRAM_BINS: usize = 180;
 
@@ -273,6 +289,36 @@ mod tests {
             p.swap(0, 1);
         }
         p
+    }
+
+    #[test]
+    fn range_matches_per_tet_angles() {
+        let mesh = TetMesh {
+            points: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 1.0, 1.0],
+            ],
+            values: vec![0.0; 5],
+            tets: vec![[0, 1, 2, 3], [1, 2, 3, 4]],
+            ..Default::default()
+        };
+        let all: Vec<f64> = mesh
+            .tets
+            .iter()
+            .flat_map(|t| dihedral_angles(t.map(|i| mesh.points[i as usize])))
+            .collect();
+        let (lo, hi) = dihedral_range(&mesh).unwrap();
+        let want_lo = all.iter().cloned().fold(f64::INFINITY, f64::min);
+        let want_hi = all.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            (lo - want_lo).abs() < 1e-9 && (hi - want_hi).abs() < 1e-9,
+            "{lo} {hi} vs {want_lo} {want_hi}"
+        );
+        assert!((lo - 54.735_610_317_245_35).abs() < 1e-9, "{lo}"); // corner tet: arctan(sqrt 2)
+        assert!((hi - 90.0).abs() < 1e-9, "{hi}");
     }
 
     #[test]

@@ -259,7 +259,7 @@ fn analyse(out: &MeshOutput, skip: bool, quality: bool) -> Analysis {
     }
     Analysis {
         betti: Some(tptd::topology::betti(&out.mesh)),
-        dihedral: tptd::quality::dihedral_range(&out.mesh),
+        dihedral: tptd::improve::quality::dihedral_range(&out.mesh),
         quality: quality.then(|| summarize(&out.mesh)),
     }
 }

@@ -3,9 +3,9 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use tptd::decompose::CellCase;
 use tptd::improve::quality::{QualitySummary, BELOW_ANGLES};
 use tptd::report::Report;
+use tptd::CellCase;
 use tptd::Method;
 
 /// What the demo shows: the same interval meshed with a method of the other kind.
