@@ -37,7 +37,8 @@ pub struct QualityOptions {
     pub max_angle: f64,
     /// Improvement rounds at most (each re-marks what still needs work).
     pub max_rounds: usize,
-    /// Stop starting new rounds after this much time.
+    /// Stop improving after this much time (checked between sweeps over a region and between
+    /// rounds; the mesh is valid whenever it stops).
     pub time_budget: Option<Duration>,
     /// Boundary vertices are projected until `|f - level| <= level_tolerance · (data range)`.
     pub level_tolerance: f64,
@@ -80,6 +81,8 @@ pub struct ImproveReport {
     pub smoothed: usize,
     /// Seconds spent.
     pub seconds: f64,
+    /// The time budget ran out before the pass was done.
+    pub out_of_time: bool,
 }
 
 impl ImproveReport {
@@ -90,6 +93,7 @@ impl ImproveReport {
         self.collapses += o.collapses;
         self.flips += o.flips;
         self.smoothed += o.smoothed;
+        self.out_of_time |= o.out_of_time;
     }
 }
 
@@ -107,9 +111,16 @@ pub struct Ctx<'a> {
     pub target: f64,
     /// [`QualityOptions::boundary_collapse_ratio`].
     pub boundary_collapse_ratio: f64,
+    /// When the time budget runs out.
+    pub deadline: Option<Instant>,
 }
 
 impl Ctx<'_> {
+    /// Whether the time budget has run out.
+    pub fn out_of_time(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+
     /// The quality the pass maximises (biased minimum sine).
     #[inline]
     pub fn quality(&self, p: [[f64; 3]; 4]) -> f64 {
@@ -139,10 +150,12 @@ pub fn improve(
     opts: &QualityOptions,
 ) -> ImproveReport {
     let start = Instant::now();
-    let ctx = context(grid, alpha, beta, opts);
+    let mut ctx = context(grid, alpha, beta, opts);
+    ctx.deadline = opts.time_budget.map(|b| start + b);
     let mut report = ImproveReport::default();
     for _ in 0..opts.max_rounds {
-        if opts.time_budget.is_some_and(|b| start.elapsed() > b) {
+        if ctx.out_of_time() {
+            report.out_of_time = true;
             break;
         }
         let (moved, off) = project::project_mesh(mesh, &ctx);
@@ -194,6 +207,7 @@ fn context<'a>(grid: &'a ScalarGrid, alpha: f64, beta: f64, opts: &QualityOption
         obtuse_weight,
         target: lo_s.min(obtuse_weight * hi_s),
         boundary_collapse_ratio: opts.boundary_collapse_ratio,
+        deadline: None,
     }
 }
 

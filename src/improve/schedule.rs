@@ -16,6 +16,10 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
     let (moved, _) = project_levels(lm, ctx);
     report.projected += moved;
     for _ in 0..SWEEPS {
+        if ctx.out_of_time() {
+            report.out_of_time = true;
+            break;
+        }
         // Collapse first: most bad tets have a short edge, and removing it does more than
         // any move (measured on analytic tori: 15.0° after collapse–flip–smooth sweeps,
         // 9.9° after smooth–flip–collapse).
@@ -46,7 +50,10 @@ fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
 /// Collapses the shortest edges of bad tets where that helps.
 fn collapse_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
     let mut n = 0;
-    for t in bad_tets(lm, ctx) {
+    for (i, t) in bad_tets(lm, ctx).into_iter().enumerate() {
+        if i % 64 == 63 && ctx.out_of_time() {
+            break;
+        }
         if !lm.alive[t as usize] {
             continue;
         }
@@ -80,7 +87,10 @@ fn collapse_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> u
 /// 2-3 flips of the faces and 3-2 flips of the edges of bad tets.
 fn flip_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
     let mut n = 0;
-    for t in bad_tets(lm, ctx) {
+    for (i, t) in bad_tets(lm, ctx).into_iter().enumerate() {
+        if i % 64 == 63 && ctx.out_of_time() {
+            break;
+        }
         if !lm.alive[t as usize] {
             continue;
         }
@@ -113,7 +123,10 @@ fn smooth_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usi
     verts.sort_unstable();
     verts.dedup();
     let mut n = 0;
-    for v in verts {
+    for (i, v) in verts.into_iter().enumerate() {
+        if i % 64 == 63 && ctx.out_of_time() {
+            break;
+        }
         if smooth_vertex(lm, ctx, v) {
             n += 1;
         }

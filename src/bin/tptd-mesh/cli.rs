@@ -69,7 +69,8 @@ pub(crate) struct Cli {
     #[arg(long, value_name = "DEG", default_value_t = 155.0, value_parser = parse_max_angle)]
     pub(crate) max_angle: f64,
 
-    /// Time budget of --quality in seconds: no improvement round starts after it
+    /// Time budget of --quality in seconds: the pass stops when it runs out (the mesh is valid
+    /// then, but how far it got depends on the machine)
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub(crate) quality_time: Option<f64>,
 

@@ -133,7 +133,7 @@ fn quality_lines(s: &mut String, r: &Report) {
     let _ = writeln!(
         s,
         "  quality   target [{}, {}] deg: {} collapses, {} flips, {} moves, {} nodes onto the \
-         level sets ({} left off) in {} rounds",
+         level sets ({} left off) in {} rounds{}",
         q.target_degrees[0],
         q.target_degrees[1],
         p.collapses,
@@ -141,7 +141,12 @@ fn quality_lines(s: &mut String, r: &Report) {
         p.smoothed,
         p.projected,
         p.unprojected,
-        p.rounds
+        p.rounds,
+        if p.out_of_time {
+            " (stopped by --quality-time)"
+        } else {
+            ""
+        }
     );
     if let (Some(b), Some(a)) = (&q.before, &q.after) {
         let _ = writeln!(
