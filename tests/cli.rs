@@ -383,3 +383,73 @@ fn rejects_nan_and_bad_arguments_without_output() {
     );
     assert_ok(&o);
 }
+
+#[test]
+fn quality_improves_the_demo_and_reports_before_and_after() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = run_in(
+        dir.path(),
+        &["--demo", "-o", "q.msh", "--quality", "--report", "q.json"],
+    );
+    assert_ok(&o);
+    let out = stdout(&o);
+    assert!(out.contains("quality   target [15, 155] deg"), "{out}");
+    assert!(out.contains("b0 = 2"), "the vessels stay apart: {out}");
+    let r: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("q.json")).unwrap()).unwrap();
+    let q = &r["quality"];
+    let (before, after) = (&q["before"], &q["after"]);
+    let min = |s: &Value| s["min_dihedral"].as_f64().unwrap();
+    let max = |s: &Value| s["max_dihedral"].as_f64().unwrap();
+    assert!(min(after) > min(before) && max(after) < max(before), "{q}");
+    assert!(min(after) >= 10.0 && max(after) <= 165.0, "{q}");
+    assert_eq!(after["tets"].as_u64(), r["tets"].as_u64());
+    assert_eq!(after["histogram"].as_array().unwrap().len(), 180);
+    assert!(r["timings_seconds"]["quality"].as_f64().unwrap() > 0.0);
+    assert_eq!(r["betti"], serde_json::json!([2, 0, 0]));
+}
+
+#[test]
+fn quality_output_is_identical_for_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let vol = dir.path().join("big.npy");
+    write_npy(&vol, [17, 15, 13], |i, j, k| blob(i, j, k) * 0.6);
+    let vol = vol.to_str().unwrap();
+    let mut outs = Vec::new();
+    for j in ["1", "2"] {
+        let out = format!("q{j}.msh");
+        let args = [
+            vol,
+            "-o",
+            &out,
+            "--alpha",
+            "1.55",
+            "--beta",
+            "3.9",
+            "-j",
+            j,
+            "-q",
+            "--quality",
+        ];
+        assert_ok(&run_in(dir.path(), &args));
+        outs.push(fs::read(dir.path().join(&out)).unwrap());
+    }
+    assert!(outs[0] == outs[1], "--quality: -j 1 and -j 2 differ");
+}
+
+#[test]
+fn quality_rejects_impossible_angles() {
+    let dir = tempfile::tempdir().unwrap();
+    for args in [
+        ["--min-angle", "75"],
+        ["--max-angle", "60"],
+        ["--quality-time", "0"],
+    ] {
+        let mut all = vec!["--demo", "-o", "x.vtu", "--quality"];
+        all.extend(args);
+        let o = run_in(dir.path(), &all);
+        assert_eq!(o.status.code(), Some(2), "{all:?}");
+        assert!(stderr(&o).contains(args[0]), "{}", stderr(&o));
+        assert!(listing(dir.path()).is_empty());
+    }
+}
