@@ -47,71 +47,79 @@ fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
     bad.into_iter().map(|(_, t)| t).collect()
 }
 
-/// Collapses the shortest edges of bad tets where that helps.
-fn collapse_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
+/// Calls `op` on every alive bad tet (worst first) until the time budget runs out; returns
+/// how many calls changed something.
+fn for_each_bad_tet(
+    lm: &mut LocalMesh,
+    ctx: &Ctx,
+    mut op: impl FnMut(&mut LocalMesh, u32) -> bool,
+) -> usize {
     let mut n = 0;
     for (i, t) in bad_tets(lm, ctx).into_iter().enumerate() {
         if i % 64 == 63 && ctx.out_of_time() {
             break;
         }
-        if !lm.alive[t as usize] {
-            continue;
-        }
-        let tet = lm.tets[t as usize];
-        let mut edges: Vec<(f64, u32, u32)> = Vec::with_capacity(6);
-        for i in 0..4 {
-            for j in i + 1..4 {
-                let d = crate::geom::sub(lm.x[tet[i] as usize], lm.x[tet[j] as usize]);
-                edges.push((crate::geom::dot(d, d), tet[i], tet[j]));
-            }
-        }
-        edges.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
-        for (_, a, b) in edges {
-            let ab = evaluate_collapse(lm, ctx, a, b).map(|q| (q, a, b));
-            let ba = evaluate_collapse(lm, ctx, b, a).map(|q| (q, b, a));
-            let best = match (ab, ba) {
-                (Some(x), Some(y)) => Some(if y.0 > x.0 { y } else { x }),
-                (x, y) => x.or(y),
-            };
-            if let Some((_, from, to)) = best {
-                apply_collapse(lm, from, to);
-                report.collapses += 1;
-                n += 1;
-                break;
-            }
+        if lm.alive[t as usize] && op(lm, t) {
+            n += 1;
         }
     }
     n
 }
 
-/// 2-3 flips of the faces and 3-2 flips of the edges of bad tets.
-fn flip_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
-    let mut n = 0;
-    for (i, t) in bad_tets(lm, ctx).into_iter().enumerate() {
-        if i % 64 == 63 && ctx.out_of_time() {
-            break;
-        }
-        if !lm.alive[t as usize] {
-            continue;
-        }
-        let tet = lm.tets[t as usize];
-        let mut done = (0..4).any(|i| try_flip23(lm, ctx, t, i));
-        if !done {
-            'edges: for i in 0..4 {
-                for j in i + 1..4 {
-                    if try_flip32(lm, ctx, t, tet[i], tet[j]) {
-                        done = true;
-                        break 'edges;
-                    }
-                }
-            }
-        }
-        if done {
-            report.flips += 1;
-            n += 1;
+/// Collapses the shortest edges of bad tets where that helps.
+fn collapse_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
+    let n = for_each_bad_tet(lm, ctx, |lm, t| collapse_shortest(lm, ctx, t));
+    report.collapses += n;
+    n
+}
+
+/// Collapses the shortest edge of tet `t` (either way) that can be collapsed with a gain.
+fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
+    let tet = lm.tets[t as usize];
+    let mut edges: Vec<(f64, u32, u32)> = Vec::with_capacity(6);
+    for i in 0..4 {
+        for j in i + 1..4 {
+            let d = crate::geom::sub(lm.x[tet[i] as usize], lm.x[tet[j] as usize]);
+            edges.push((crate::geom::dot(d, d), tet[i], tet[j]));
         }
     }
+    edges.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
+    for (_, a, b) in edges {
+        let ab = evaluate_collapse(lm, ctx, a, b).map(|q| (q, a, b));
+        let ba = evaluate_collapse(lm, ctx, b, a).map(|q| (q, b, a));
+        let best = match (ab, ba) {
+            (Some(x), Some(y)) => Some(if y.0 > x.0 { y } else { x }),
+            (x, y) => x.or(y),
+        };
+        if let Some((_, from, to)) = best {
+            apply_collapse(lm, from, to);
+            return true;
+        }
+    }
+    false
+}
+
+/// 2-3 flips of the faces and 3-2 flips of the edges of bad tets.
+fn flip_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
+    let n = for_each_bad_tet(lm, ctx, |lm, t| flip_tet(lm, ctx, t));
+    report.flips += n;
     n
+}
+
+/// The first improving 2-3 flip of a face of `t`, else 3-2 flip of an edge of `t`.
+fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
+    let tet = lm.tets[t as usize];
+    if (0..4).any(|i| try_flip23(lm, ctx, t, i)) {
+        return true;
+    }
+    for i in 0..4 {
+        for j in i + 1..4 {
+            if try_flip32(lm, ctx, t, tet[i], tet[j]) {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// Smooths every free vertex of a bad tet once, in vertex order.

@@ -149,24 +149,17 @@ fn quality_lines(s: &mut String, r: &Report) {
         }
     );
     if let (Some(b), Some(a)) = (&q.before, &q.after) {
-        let _ = writeln!(
-            s,
-            "            before: {} tets, dihedral [{}, {}] deg, {} tets below {} deg",
-            b.tets,
-            fmt_angle(b.min_dihedral),
-            fmt_angle(b.max_dihedral),
-            below(b, q.target_degrees[0]),
-            q.target_degrees[0]
-        );
-        let _ = writeln!(
-            s,
-            "            after:  {} tets, dihedral [{}, {}] deg, {} tets below {} deg",
-            a.tets,
-            fmt_angle(a.min_dihedral),
-            fmt_angle(a.max_dihedral),
-            below(a, q.target_degrees[0]),
-            q.target_degrees[0]
-        );
+        for (label, summary) in [("before:", b), ("after: ", a)] {
+            let _ = writeln!(
+                s,
+                "            {label} {} tets, dihedral [{}, {}] deg, {} tets below {} deg",
+                summary.tets,
+                fmt_angle(summary.min_dihedral),
+                fmt_angle(summary.max_dihedral),
+                below(summary, q.target_degrees[0]),
+                q.target_degrees[0]
+            );
+        }
     }
 }
 
