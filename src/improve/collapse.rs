@@ -13,6 +13,20 @@ use super::Ctx;
 /// The collapse of `a` into `b`, if legal and improving: the smallest quality of the changed
 /// tets afterwards.
 pub fn evaluate_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
+    let (old, new, shared) = collapse_qualities(lm, ctx, a, b)?;
+    (new > 0.0 && new > old && link_condition(lm, a, b, &shared)).then_some(new)
+}
+
+/// The collapse of `a` into `b`, if legal and every remaining tet stays positive (no gain
+/// needed: used to remove vertices that cannot reach their level set).
+pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
+    let (_, new, shared) = collapse_qualities(lm, ctx, a, b)?;
+    (new > 0.0 && link_condition(lm, a, b, &shared)).then_some(new)
+}
+
+/// For a collapse of `a` into `b` that the constraints allow: the smallest quality of the
+/// star of `a` before, of the changed tets after, and the tets around the edge.
+fn collapse_qualities(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<(f64, f64, Vec<u32>)> {
     if !lm.is_free(a) || !lm.is_free(b) {
         return None;
     }
@@ -43,8 +57,7 @@ pub fn evaluate_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f6
             new = new.min(ctx.quality(q));
         }
     }
-    let gain = new > 0.0 && new > old;
-    (gain && link_condition(lm, a, b, &shared)).then_some(new)
+    Some((old, new, shared))
 }
 
 /// Whether edge `ab` is short against the other edges at `a`: boundary collapses are kept to

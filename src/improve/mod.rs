@@ -71,8 +71,11 @@ pub struct ImproveReport {
     pub region_tets: usize,
     /// Boundary vertices moved onto their level set.
     pub projected: usize,
-    /// Boundary vertices that could not be moved onto their level set.
+    /// Boundary vertices left off their level set at the end (farther than the tolerance).
     pub unprojected: usize,
+    /// Boundary vertices that could not be moved onto their level set and were merged into a
+    /// neighbour on it instead.
+    pub merged_off_level: usize,
     /// Edge collapses.
     pub collapses: usize,
     /// 2-3 and 3-2 flips.
@@ -93,6 +96,7 @@ impl ImproveReport {
         self.collapses += o.collapses;
         self.flips += o.flips;
         self.smoothed += o.smoothed;
+        self.merged_off_level += o.merged_off_level;
         self.out_of_time |= o.out_of_time;
     }
 }
@@ -158,9 +162,8 @@ pub fn improve(
             report.out_of_time = true;
             break;
         }
-        let (moved, off) = project::project_mesh(mesh, &ctx);
+        let (moved, _) = project::project_mesh(mesh, &ctx);
         report.projected += moved;
-        report.unprojected = off;
         let work = needs_work(mesh, &ctx);
         if !work.iter().any(|&w| w) {
             break;
@@ -190,6 +193,7 @@ pub fn improve(
             local::splice(mesh, regions, bookkeeping);
         }
     }
+    report.unprojected = project::count_off_level(mesh, &ctx);
     report.seconds = start.elapsed().as_secs_f64();
     report
 }

@@ -72,6 +72,21 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> (usize, usize) {
     (count, off)
 }
 
+/// Level vertices of `mesh` farther than the tolerance from their level (pinned ones, on both
+/// levels or on a level and a box edge, included).
+pub fn count_off_level(mesh: &TetMesh, ctx: &Ctx) -> usize {
+    let labels = vertex_labels(mesh);
+    (0..mesh.points.len())
+        .into_par_iter()
+        .filter(|&v| {
+            let u = ctx.field.to_index(mesh.points[v]);
+            let f = ctx.field.value(u);
+            let on = |l: usize| (f - ctx.levels[l]).abs() <= ctx.tol;
+            (labels[v] & 1 != 0 && !on(0)) || (labels[v] & 2 != 0 && !on(1))
+        })
+        .count()
+}
+
 /// Per point: bits `1 << label` of the boundary triangles around it.
 fn vertex_labels(mesh: &TetMesh) -> Vec<u8> {
     let mut bits = vec![0u8; mesh.points.len()];

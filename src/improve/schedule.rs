@@ -1,7 +1,7 @@
 //! The order in which the operations run on a region (after Stellar: cheap, safe moves first,
 //! topology changes where moves are not enough, then smoothing again).
 
-use super::collapse::{apply_collapse, evaluate_collapse};
+use super::collapse::{apply_collapse, evaluate_collapse, evaluate_merge};
 use super::flip::{try_flip23, try_flip32};
 use super::local::LocalMesh;
 use super::project::project_levels;
@@ -33,7 +33,49 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
             break;
         }
     }
-    let _ = project_levels(lm, ctx);
+    let (moved, _) = project_levels(lm, ctx);
+    report.projected += moved;
+    report.merged_off_level += merge_off_level(lm, ctx);
+}
+
+/// Level vertices that could not be moved onto their level (a tet around them would invert)
+/// are merged into a neighbour on the same surfaces, when the link condition allows and every
+/// remaining tet stays positive, so that every boundary node ends on its level set. Returns
+/// how many were merged.
+fn merge_off_level(lm: &mut LocalMesh, ctx: &Ctx) -> usize {
+    let mut n = 0;
+    for v in 0..lm.u.len() as u32 {
+        if !off_level(lm, ctx, v) {
+            continue;
+        }
+        let mut nbrs: Vec<u32> = lm.star[v as usize]
+            .iter()
+            .flat_map(|&t| lm.tets[t as usize])
+            .filter(|&w| w != v && !off_level(lm, ctx, w))
+            .collect();
+        nbrs.sort_unstable();
+        nbrs.dedup();
+        let best = nbrs
+            .into_iter()
+            .filter_map(|b| evaluate_merge(lm, ctx, v, b).map(|q| (q, b)))
+            .max_by(|x, y| x.0.total_cmp(&y.0).then(y.1.cmp(&x.1)));
+        if let Some((_, b)) = best {
+            apply_collapse(lm, v, b);
+            n += 1;
+        }
+    }
+    n
+}
+
+/// Whether `v` is a free level vertex away from its level.
+fn off_level(lm: &LocalMesh, ctx: &Ctx, v: u32) -> bool {
+    let c = lm.con[v as usize];
+    match c.level {
+        Some(l) if lm.is_free(v) && !c.pinned => {
+            (ctx.field.value(lm.u[v as usize]) - ctx.levels[l as usize]).abs() > ctx.tol
+        }
+        _ => false,
+    }
 }
 
 /// Alive tets below the target, worst first (ties by id).
