@@ -44,17 +44,9 @@ fn collapse_qualities(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<(f64,
     let mut new = f64::INFINITY;
     let xb = lm.x[b as usize];
     for &t in &lm.star[a as usize] {
-        let tet = lm.tets[t as usize];
-        let p = lm.corners(tet);
         old = old.min(lm.q[t as usize]);
         if !shared.contains(&t) {
-            let mut q = p;
-            for (i, &w) in tet.iter().enumerate() {
-                if w == a {
-                    q[i] = xb;
-                }
-            }
-            new = new.min(ctx.quality(q));
+            new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
         }
     }
     Some((old, new, shared))

@@ -156,23 +156,37 @@ impl LocalMesh {
         global.sort_unstable();
         global.dedup();
         let local = |g: u32| global.binary_search(&g).map_or(NONE, |i| i as u32);
+        let local_tets: Vec<[u32; 4]> = tets
+            .iter()
+            .map(|&t| mesh.tets[t as usize].map(local))
+            .collect();
+        // A face with a free vertex of this region lies in one of its tets.
+        let faces: Vec<BoundaryFace> = mesh
+            .boundary
+            .iter()
+            .zip(&mesh.boundary_labels)
+            .filter(|(tri, _)| tri.iter().any(|&v| free_in[v as usize] != NONE))
+            .map(|(tri, &label)| BoundaryFace {
+                tri: tri.map(local),
+                label,
+            })
+            .filter(|f| {
+                f.tri
+                    .iter()
+                    .any(|&v| v != NONE && free_in[global[v as usize] as usize] != NONE)
+            })
+            .collect();
         let frozen: Vec<bool> = global
             .iter()
             .map(|&g| free_in[g as usize] == NONE)
             .collect();
-        let mut lm = LocalMesh::with_vertices(mesh, global.clone(), frozen, &ctx.field);
+        let mut lm = LocalMesh::with_vertices(mesh, global, frozen, &ctx.field);
         lm.weight = ctx.obtuse_weight;
-        for &t in tets {
-            lm.add_tet(mesh.tets[t as usize].map(local));
+        for t in local_tets {
+            lm.add_tet(t);
         }
-        for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
-            // A face with a free vertex of this region lies in one of its tets.
-            if tri.iter().any(|&v| free_in[v as usize] != NONE) {
-                let l = tri.map(local);
-                if l.iter().any(|&v| v != NONE && !lm.frozen[v as usize]) {
-                    lm.faces.insert(face_key(l), BoundaryFace { tri: l, label });
-                }
-            }
+        for f in faces {
+            lm.faces.insert(face_key(f.tri), f);
         }
         lm.classify(&ctx.field, ctx.levels);
         lm
@@ -249,6 +263,51 @@ impl LocalMesh {
     #[inline]
     pub fn corners(&self, t: [u32; 4]) -> [[f64; 3]; 4] {
         t.map(|v| self.x[v as usize])
+    }
+
+    /// Corner positions of tet `t` with vertex `v` (if a corner) at physical point `x`.
+    #[inline]
+    pub fn corners_with(&self, t: u32, v: u32, x: [f64; 3]) -> [[f64; 3]; 4] {
+        let tet = self.tets[t as usize];
+        let mut p = self.corners(tet);
+        for (i, &w) in tet.iter().enumerate() {
+            if w == v {
+                p[i] = x;
+            }
+        }
+        p
+    }
+
+    /// Smallest quality over the star of `v` if `v` stood at index point `u`.
+    pub fn star_quality_at(&self, v: u32, u: [f64; 3], ctx: &Ctx) -> f64 {
+        let x = ctx.field.to_physical(u);
+        self.star[v as usize]
+            .iter()
+            .map(|&t| ctx.quality(self.corners_with(t, v, x)))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Whether every tet of the star of `v` would have quality above `floor` with `v` at
+    /// index point `u` (stops at the first that does not).
+    pub fn star_above_at(&self, v: u32, u: [f64; 3], ctx: &Ctx, floor: f64) -> bool {
+        let x = ctx.field.to_physical(u);
+        self.star[v as usize]
+            .iter()
+            .all(|&t| ctx.quality(self.corners_with(t, v, x)) > floor)
+    }
+
+    /// Puts `v` at index point `u` and updates its physical position, its value (a level
+    /// vertex carries its level exactly, other vertices the trilinear value) and the quality
+    /// of its star.
+    pub fn set_position(&mut self, v: u32, u: [f64; 3], ctx: &Ctx) {
+        let i = v as usize;
+        self.u[i] = u;
+        self.x[i] = ctx.field.to_physical(u);
+        self.value[i] = match self.con[i].level {
+            Some(l) => ctx.levels[l as usize],
+            None => ctx.field.value(u),
+        };
+        self.update_star_quality(v);
     }
 
     /// Recomputes the quality of the tets around `v` (after `v` moved).

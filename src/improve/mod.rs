@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::grid::ScalarGrid;
-use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::mesh::TetMesh;
 use field::Field;
 use quality::biased_min_sine;
 
@@ -154,27 +154,23 @@ pub fn improve(
     opts: &QualityOptions,
 ) -> ImproveReport {
     let start = Instant::now();
-    let mut ctx = context(grid, alpha, beta, opts);
-    ctx.deadline = opts.time_budget.map(|b| start + b);
+    let ctx = context(grid, alpha, beta, opts, start);
     let mut report = ImproveReport::default();
     for _ in 0..opts.max_rounds {
         if ctx.out_of_time() {
             report.out_of_time = true;
             break;
         }
-        let (moved, _) = project::project_mesh(mesh, &ctx);
-        report.projected += moved;
-        let work = needs_work(mesh, &ctx);
+        report.projected += project::project_mesh(mesh, &ctx);
+        let mut work = needs_work(mesh, &ctx);
         if !work.iter().any(|&w| w) {
             break;
         }
         report.rounds += 1;
         for phase in 0..2 {
-            let work = if phase == 0 {
-                work.clone()
-            } else {
-                needs_work(mesh, &ctx)
-            };
+            if phase == 1 {
+                work = needs_work(mesh, &ctx);
+            }
             let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, &ctx, phase);
             let counts: Vec<ImproveReport> = regions
                 .par_iter_mut()
@@ -193,12 +189,21 @@ pub fn improve(
             local::splice(mesh, regions, bookkeeping);
         }
     }
-    report.unprojected = project::count_off_level(mesh, &ctx);
+    report.unprojected = project::off_level_points(mesh, &ctx)
+        .iter()
+        .filter(|&&o| o)
+        .count();
     report.seconds = start.elapsed().as_secs_f64();
     report
 }
 
-fn context<'a>(grid: &'a ScalarGrid, alpha: f64, beta: f64, opts: &QualityOptions) -> Ctx<'a> {
+fn context<'a>(
+    grid: &'a ScalarGrid,
+    alpha: f64,
+    beta: f64,
+    opts: &QualityOptions,
+    start: Instant,
+) -> Ctx<'a> {
     let (lo, hi) = grid.value_range();
     let range = (hi - lo).max(f64::MIN_POSITIVE);
     let lo_s = opts.min_angle.to_radians().sin();
@@ -211,7 +216,7 @@ fn context<'a>(grid: &'a ScalarGrid, alpha: f64, beta: f64, opts: &QualityOption
         obtuse_weight,
         target: lo_s.min(obtuse_weight * hi_s),
         boundary_collapse_ratio: opts.boundary_collapse_ratio,
-        deadline: None,
+        deadline: opts.time_budget.map(|b| start + b),
     }
 }
 
@@ -222,23 +227,10 @@ fn needs_work(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
         .par_iter()
         .map(|t| ctx.quality(t.map(|v| mesh.points[v as usize])) < ctx.target)
         .collect();
-    let mut work = vec![false; mesh.points.len()];
+    let mut work = project::off_level_points(mesh, ctx);
     for (t, &b) in mesh.tets.iter().zip(&bad) {
         if b {
             for &v in t {
-                work[v as usize] = true;
-            }
-        }
-    }
-    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
-        let level = match label {
-            BoundaryLabel::Alpha => ctx.levels[0],
-            BoundaryLabel::Beta => ctx.levels[1],
-            BoundaryLabel::Box => continue,
-        };
-        for &v in tri {
-            let u = ctx.field.to_index(mesh.points[v as usize]);
-            if (ctx.field.value(u) - level).abs() > ctx.tol {
                 work[v as usize] = true;
             }
         }

@@ -18,33 +18,24 @@ const REVERT_ROUNDS: usize = 8;
 /// Projects every level vertex of `mesh` at once (in parallel, independent of the thread
 /// count): all moves are computed from the old positions, then the moves of vertices of tets
 /// that would not stay positive are reverted until no tet is inverted. Returns the number of
-/// moved vertices and of level vertices left off their level.
-pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> (usize, usize) {
+/// moved vertices.
+pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> usize {
     let labels = vertex_labels(mesh);
     let dims = ctx.field.grid().dims;
-    // Per point: is it a level vertex off its level, and where it would go.
-    let (off_level, target): (Vec<bool>, Vec<Option<[f64; 3]>>) = (0..mesh.points.len())
+    // Per point: where a level vertex off its level would go.
+    let target: Vec<Option<[f64; 3]>> = (0..mesh.points.len())
         .into_par_iter()
         .map(|v| {
-            let bits = labels[v];
-            if bits & 3 == 0 {
-                return (false, None);
-            }
             let mut u = ctx.field.to_index(mesh.points[v]);
-            let c = Constraint::classify(bits, &mut u, dims);
-            let Some(level) = c.level.map(|l| ctx.levels[l as usize]) else {
-                return (false, None);
-            };
-            if (ctx.field.value(u) - level).abs() <= ctx.tol {
-                return (false, None);
+            let c = Constraint::classify(labels[v], &mut u, dims);
+            let level = ctx.levels[c.level? as usize];
+            if c.pinned || (ctx.field.value(u) - level).abs() <= ctx.tol {
+                return None;
             }
-            if c.pinned {
-                return (true, None);
-            }
-            let p = ctx.field.project(u, level, c.free_axes(), ctx.tol);
-            (true, p.map(|p| ctx.field.to_physical(p)))
+            let p = ctx.field.project(u, level, c.free_axes(), ctx.tol)?;
+            Some(ctx.field.to_physical(p))
         })
-        .unzip();
+        .collect();
     let mut moved: Vec<bool> = target.iter().map(Option::is_some).collect();
     for round in 0..=REVERT_ROUNDS {
         let bad = inverted_moves(mesh, &target, &moved, ctx);
@@ -64,27 +55,24 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> (usize, usize) {
             mesh.points[v] = t.expect("moved vertices have a target");
         }
     }
-    let off = off_level
-        .iter()
-        .zip(&moved)
-        .filter(|(&o, &m)| o && !m)
-        .count();
-    (count, off)
+    count
 }
 
-/// Level vertices of `mesh` farther than the tolerance from their level (pinned ones, on both
-/// levels or on a level and a box edge, included).
-pub fn count_off_level(mesh: &TetMesh, ctx: &Ctx) -> usize {
+/// Per point: is it on an `alpha` (`beta`) face but farther than the tolerance from that
+/// level set (pinned vertices included)?
+pub fn off_level_points(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
     let labels = vertex_labels(mesh);
     (0..mesh.points.len())
         .into_par_iter()
-        .filter(|&v| {
-            let u = ctx.field.to_index(mesh.points[v]);
-            let f = ctx.field.value(u);
+        .map(|v| {
+            if labels[v] & 3 == 0 {
+                return false;
+            }
+            let f = ctx.field.value(ctx.field.to_index(mesh.points[v]));
             let on = |l: usize| (f - ctx.levels[l]).abs() <= ctx.tol;
             (labels[v] & 1 != 0 && !on(0)) || (labels[v] & 2 != 0 && !on(1))
         })
-        .count()
+        .collect()
 }
 
 /// Per point: bits `1 << label` of the boundary triangles around it.
@@ -123,91 +111,34 @@ fn inverted_moves(
     bad
 }
 
-/// Projects every free level vertex that is not yet within the tolerance of its level.
-/// Returns (moved, still off the level).
-pub fn project_levels(lm: &mut LocalMesh, ctx: &Ctx) -> (usize, usize) {
-    let (mut moved, mut failed) = (0, 0);
-    for v in 0..lm.u.len() as u32 {
-        match project_vertex(lm, ctx, v) {
-            Some(true) => moved += 1,
-            Some(false) => failed += 1,
-            None => {}
-        }
-    }
-    (moved, failed)
+/// Projects every free level vertex of the region that is not yet within the tolerance of
+/// its level, where every tet around it stays positive. Returns how many moved.
+pub fn project_levels(lm: &mut LocalMesh, ctx: &Ctx) -> usize {
+    (0..lm.u.len() as u32)
+        .filter(|&v| project_vertex(lm, ctx, v))
+        .count()
 }
 
-/// Projects `v` onto its level if it is a free level vertex off its level. `None` when there
-/// is nothing to do, `Some(moved)` otherwise.
-pub fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> Option<bool> {
+/// Projects `v` onto its level if it is a free level vertex off its level and the move keeps
+/// its star positive. Returns whether it moved.
+fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     let c = lm.con[v as usize];
-    let level = c.level?;
+    let Some(level) = c.level else {
+        return false;
+    };
     if !lm.is_free(v) || c.pinned {
-        return None;
+        return false;
     }
     let target = ctx.levels[level as usize];
     let u = lm.u[v as usize];
     if (ctx.field.value(u) - target).abs() <= ctx.tol {
-        return None;
+        return false;
     }
-    let Some(p) = ctx.field.project(u, target, c.free_axes(), ctx.tol) else {
-        return Some(false);
-    };
-    Some(lm.try_move(v, p, ctx, f64::MIN_POSITIVE))
-}
-
-impl LocalMesh {
-    /// Smallest quality over the star of `v` if `v` stood at index point `u`.
-    pub fn star_quality_at(&self, v: u32, u: [f64; 3], ctx: &Ctx) -> f64 {
-        let x = ctx.field.to_physical(u);
-        let mut q = f64::INFINITY;
-        for &t in &self.star[v as usize] {
-            let mut p = self.corners(self.tets[t as usize]);
-            for (i, &w) in self.tets[t as usize].iter().enumerate() {
-                if w == v {
-                    p[i] = x;
-                }
-            }
-            q = q.min(ctx.quality(p));
+    match ctx.field.project(u, target, c.free_axes(), ctx.tol) {
+        Some(p) if lm.star_above_at(v, p, ctx, 0.0) => {
+            lm.set_position(v, p, ctx);
+            true
         }
-        q
-    }
-
-    /// Whether every tet of the star of `v` would have quality above `floor` with `v` at
-    /// index point `u` (stops at the first that does not).
-    pub fn star_above_at(&self, v: u32, u: [f64; 3], ctx: &Ctx, floor: f64) -> bool {
-        let x = ctx.field.to_physical(u);
-        self.star[v as usize].iter().all(|&t| {
-            let mut p = self.corners(self.tets[t as usize]);
-            for (i, &w) in self.tets[t as usize].iter().enumerate() {
-                if w == v {
-                    p[i] = x;
-                }
-            }
-            ctx.quality(p) > floor
-        })
-    }
-
-    /// Moves `v` to index point `u` if the smallest quality of its star is then at least
-    /// `floor`. Returns whether it moved.
-    pub fn try_move(&mut self, v: u32, u: [f64; 3], ctx: &Ctx, floor: f64) -> bool {
-        if self.star_quality_at(v, u, ctx) < floor {
-            return false;
-        }
-        self.set_position(v, u, ctx);
-        true
-    }
-
-    /// Puts `v` at index point `u` and updates its physical position and value (a level
-    /// vertex carries its level exactly, other vertices the trilinear value).
-    pub fn set_position(&mut self, v: u32, u: [f64; 3], ctx: &Ctx) {
-        let i = v as usize;
-        self.u[i] = u;
-        self.x[i] = ctx.field.to_physical(u);
-        self.value[i] = match self.con[i].level {
-            Some(l) => ctx.levels[l as usize],
-            None => ctx.field.value(u),
-        };
-        self.update_star_quality(v);
+        _ => false,
     }
 }

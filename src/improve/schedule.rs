@@ -13,8 +13,7 @@ const SWEEPS: usize = 6;
 
 /// Improves the region `lm` in place.
 pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
-    let (moved, _) = project_levels(lm, ctx);
-    report.projected += moved;
+    report.projected += project_levels(lm, ctx);
     for _ in 0..SWEEPS {
         if ctx.out_of_time() {
             report.out_of_time = true;
@@ -26,15 +25,14 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
         let mut changed = collapse_pass(lm, ctx, report);
         changed += flip_pass(lm, ctx, report);
         changed += smooth_pass(lm, ctx, report);
-        let (moved, _) = project_levels(lm, ctx);
+        let moved = project_levels(lm, ctx);
         report.projected += moved;
         changed += moved;
         if changed == 0 {
             break;
         }
     }
-    let (moved, _) = project_levels(lm, ctx);
-    report.projected += moved;
+    report.projected += project_levels(lm, ctx);
     report.merged_off_level += merge_off_level(lm, ctx);
 }
 

@@ -24,7 +24,10 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         return false;
     }
     let mut moved = false;
-    let mut q0 = lm.star_quality_at(v, lm.u[v as usize], ctx);
+    let mut q0 = lm.star[v as usize]
+        .iter()
+        .map(|&t| lm.q[t as usize])
+        .fold(f64::INFINITY, f64::min);
     for _ in 0..ITERATIONS {
         let Some(d) = ascent_direction(lm, ctx, v, q0) else {
             break;
@@ -49,7 +52,7 @@ fn ascent_direction(lm: &LocalMesh, ctx: &Ctx, v: u32, q0: f64) -> Option<[f64; 
     let h = 1e-7 * local_scale(lm, v).max(1e-12);
     let mut sum = [0.0; 3];
     for &t in &lm.star[v as usize] {
-        let q = tet_quality_with(lm, ctx, t, v, u);
+        let q = lm.q[t as usize];
         if q > q0 + ACTIVE_BAND * q0.abs().max(1e-3) {
             continue;
         }
@@ -117,15 +120,7 @@ fn line_search(lm: &LocalMesh, ctx: &Ctx, v: u32, d: [f64; 3], q0: f64) -> Optio
 
 /// Quality of tet `t` with vertex `v` at index point `u`.
 fn tet_quality_with(lm: &LocalMesh, ctx: &Ctx, t: u32, v: u32, u: [f64; 3]) -> f64 {
-    let tet = lm.tets[t as usize];
-    let mut p = lm.corners(tet);
-    let x = ctx.field.to_physical(u);
-    for (i, &w) in tet.iter().enumerate() {
-        if w == v {
-            p[i] = x;
-        }
-    }
-    ctx.quality(p)
+    ctx.quality(lm.corners_with(t, v, ctx.field.to_physical(u)))
 }
 
 /// Mean index-space length of the edges at `v` (each counted once per tet).
