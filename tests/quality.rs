@@ -194,7 +194,7 @@ fn check_on_level(name: &str, field: &Field, alpha: f64, beta: f64, mesh: &TetMe
 }
 
 /// Regression floor of the relative volume change (the target is 0.5 %; boundary collapses
-/// on these small domains still shrink them by up to 0.8 %).
+/// on these small domains still shrink them by up to 0.93 %).
 const VOLUME_FLOOR: f64 = 1e-2;
 
 /// Regression floor of the angles reached on smooth closed domains (the target is 15° / 155°;

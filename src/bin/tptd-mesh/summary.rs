@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use tptd::improve::quality::{QualitySummary, BELOW_ANGLES};
+use tptd::improve::quality::BELOW_ANGLES;
 use tptd::report::Report;
 use tptd::CellCase;
 use tptd::Method;
@@ -152,24 +152,18 @@ fn quality_lines(s: &mut String, r: &Report) {
         for (label, summary) in [("before:", b), ("after: ", a)] {
             let _ = writeln!(
                 s,
-                "            {label} {} tets, dihedral [{}, {}] deg, {} tets below {} deg",
+                "            {label} {} tets, dihedral [{}, {}] deg, {} tets below {} deg, {} below {} \
+                 deg",
                 summary.tets,
                 fmt_angle(summary.min_dihedral),
                 fmt_angle(summary.max_dihedral),
-                below(summary, q.target_degrees[0]),
-                q.target_degrees[0]
+                summary.below[2],
+                BELOW_ANGLES[2],
+                summary.below[0],
+                BELOW_ANGLES[0]
             );
         }
     }
-}
-
-/// Tets whose smallest dihedral angle is below `angle`, from the summary's thresholds
-/// (`?` when `angle` is not one of them).
-fn below(q: &QualitySummary, angle: f64) -> String {
-    BELOW_ANGLES
-        .iter()
-        .position(|&a| a == angle)
-        .map_or_else(|| "?".to_string(), |i| q.below[i].to_string())
 }
 
 /// The meshed cells by case.
