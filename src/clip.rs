@@ -85,7 +85,19 @@ pub struct ClipVertex {
     pub val: f64,
     /// Bit mask of the grid-box planes the vertex lies on (used to label box faces).
     pub box_mask: u8,
+    /// [`SNAP_NONE`], or the level the vertex was moved onto before clipping
+    /// ([`SNAP_ALPHA`], [`SNAP_BETA`]; see `crate::warp`). A snapped vertex has `val` equal
+    /// to its level and counts as inside: it is a point of the piece, and the cuts of its
+    /// edges by its own level are the vertex itself.
+    pub snap: u8,
 }
+
+/// [`ClipVertex::snap`]: not moved onto a level.
+pub const SNAP_NONE: u8 = 0;
+/// [`ClipVertex::snap`]: moved onto alpha.
+pub const SNAP_ALPHA: u8 = 1;
+/// [`ClipVertex::snap`]: moved onto beta.
+pub const SNAP_BETA: u8 = 2;
 
 /// An output point of the clipper.
 #[derive(Clone, Copy, Debug)]
@@ -134,13 +146,24 @@ fn effective(v: f64, iv: &Interval) -> f64 {
     }
 }
 
+/// Value of a tet vertex for cut placement: a snapped vertex is exactly on its level, a tied
+/// one is moved outward.
+#[inline]
+fn placed(v: &ClipVertex, iv: &Interval) -> f64 {
+    if v.snap == SNAP_NONE {
+        effective(v.val, iv)
+    } else {
+        v.val
+    }
+}
+
 /// Cut of edge (a, b) by `level`, computed from the key-ordered ends so that every tet
 /// sharing the edge gets the bit-identical point.
 #[inline]
 fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, iv: &Interval) -> ClipPoint {
     let (p, q) = if a.key < b.key { (a, b) } else { (b, a) };
-    let fp = effective(p.val, iv);
-    let fq = effective(q.val, iv);
+    let fp = placed(p, iv);
+    let fq = placed(q, iv);
     let t = (level - fp) / (fq - fp);
     ClipPoint {
         key: cut_point(p.key, q.key, which),
@@ -197,9 +220,20 @@ impl Poly {
             label,
         }
     }
+    /// Appends `x` unless it repeats the previous point (a cut that is a snapped vertex).
     fn push(&mut self, x: usize) {
+        if self.n > 0 && self.v[self.n - 1] == x {
+            return;
+        }
         self.v[self.n] = x;
         self.n += 1;
+    }
+
+    /// Drops a last point that repeats the first (closing the cycle).
+    fn close(&mut self) {
+        if self.n > 1 && self.v[self.n - 1] == self.v[0] {
+            self.n -= 1;
+        }
     }
 }
 
@@ -241,7 +275,10 @@ fn as_point(v: &ClipVertex) -> ClipPoint {
 /// `box_planes` selects which bits of [`ClipVertex::box_mask`] are grid-box planes.
 /// `iv.alpha` may be `-inf` and `iv.beta` `+inf`; `alpha < beta`.
 pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut impl ClipSink) {
-    let cls: [u8; 4] = std::array::from_fn(|i| classify(tv[i].val, iv.alpha, iv.beta));
+    let cls: [u8; 4] = std::array::from_fn(|i| match tv[i].snap {
+        SNAP_NONE => classify(tv[i].val, iv.alpha, iv.beta),
+        _ => INSIDE,
+    });
     if cls.iter().all(|&c| c == BELOW) || cls.iter().all(|&c| c == ABOVE) {
         return;
     }
@@ -255,6 +292,9 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
         return;
     }
     let cuts = cut_points(tv, &cls, iv);
+    if flat(&cuts.pts[..cuts.np], iv) {
+        return;
+    }
     let mut faces = Faces {
         n: 0,
         polys: [Poly::new(None); 6],
@@ -308,15 +348,22 @@ fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], iv: &Interval) -> CutPoints {
         if ci == cj {
             continue;
         }
-        if ci == BELOW || cj == BELOW {
-            c.pts[c.np] = cut(&tv[i], &tv[j], iv.alpha, 0, iv);
-            c.cid[e][0] = c.np;
-            c.np += 1;
-        }
-        if ci == ABOVE || cj == ABOVE {
-            c.pts[c.np] = cut(&tv[i], &tv[j], iv.beta, 1, iv);
-            c.cid[e][1] = c.np;
-            c.np += 1;
+        for (which, side, level, snap) in [
+            (0, BELOW, iv.alpha, SNAP_ALPHA),
+            (1, ABOVE, iv.beta, SNAP_BETA),
+        ] {
+            if ci != side && cj != side {
+                continue;
+            }
+            c.cid[e][which] = if tv[i].snap == snap {
+                c.vid[i]
+            } else if tv[j].snap == snap {
+                c.vid[j]
+            } else {
+                c.pts[c.np] = cut(&tv[i], &tv[j], level, which as u8, iv);
+                c.np += 1;
+                c.np - 1
+            };
         }
     }
     c
@@ -347,6 +394,7 @@ fn tet_faces(cls: &[u8; 4], box_face: [bool; 4], cuts: &CutPoints, faces: &mut F
                 _ => {}
             }
         }
+        poly.close();
         if poly.n >= 3 {
             faces.push(poly);
         }
@@ -389,8 +437,19 @@ fn level_faces(cls: &[u8; 4], cuts: &CutPoints, faces: &mut Faces) {
                 }
             }
         }
-        faces.push(poly);
+        poly.close();
+        if poly.n >= 3 {
+            faces.push(poly);
+        }
     }
+}
+
+/// Whether every point of a piece lies on one level (a piece reduced to snapped vertices and
+/// their level's cuts: it has no volume and emits nothing).
+#[inline]
+fn flat(pts: &[ClipPoint], iv: &Interval) -> bool {
+    let on = |level: f64| pts.iter().all(|p| p.val == level);
+    on(iv.alpha) || on(iv.beta)
 }
 
 /// Cones the piece from its smallest-key point over the faces not containing it, each face
@@ -480,24 +539,28 @@ mod tests {
                 pos: [0.0, 0.0, 0.0],
                 val: 0.0,
                 box_mask: 0,
+                snap: SNAP_NONE,
             },
             ClipVertex {
                 key: 2 << 3,
                 pos: [1.0, 0.0, 0.0],
                 val: 1.0,
                 box_mask: 0,
+                snap: SNAP_NONE,
             },
             ClipVertex {
                 key: 3 << 3,
                 pos: [0.0, 1.0, 0.0],
                 val: 1.0,
                 box_mask: 0,
+                snap: SNAP_NONE,
             },
             ClipVertex {
                 key: 4 << 3,
                 pos: [0.0, 0.0, 1.0],
                 val: 1.0,
                 box_mask: 0,
+                snap: SNAP_NONE,
             },
         ];
         // volume of {x+y+z <= s} in the corner is s^3/6
@@ -595,7 +658,7 @@ mod tests {
         // each tet face f is on box plane f, so every boundary triangle is emitted
         clip_tet(tv, iv, 0b1111, &mut rec);
         let pos = tv.map(|v| v.pos);
-        let eff = tv.map(|v| effective(v.val, iv));
+        let eff = tv.map(|v| placed(&v, iv));
         let want = sublevel_volume(&pos, &eff, iv.beta) - sublevel_volume(&pos, &eff, iv.alpha);
         let (got, faces) = pieces(&rec, case);
         let scale = signed_volume(pos[0], pos[1], pos[2], pos[3]);
@@ -697,14 +760,19 @@ mod tests {
         let mut seed = 7u64;
         let (inf, alpha, beta) = (f64::INFINITY, -0.5, 1.5);
         for (a, b) in [(alpha, beta), (alpha, inf), (-inf, beta)] {
-            // 0 below, 1 = alpha, 2 inside, 3 = beta, 4 above; skip classes a bound rules out
-            let classes: Vec<usize> = (0..5)
-                .filter(|&c| (a.is_finite() || c > 1) && (b.is_finite() || c < 3))
+            // 0 below, 1 = alpha, 2 inside, 3 = beta, 4 above, 5 snapped to alpha, 6 snapped
+            // to beta; skip classes a bound rules out
+            let classes: Vec<usize> = (0..7)
+                .filter(|&c| (a.is_finite() || !matches!(c, 0 | 1 | 5)))
+                .filter(|&c| (b.is_finite() || !matches!(c, 3 | 4 | 6)))
                 .collect();
             let n = classes.len();
             for pattern in 0..n.pow(4) {
                 let cls: [usize; 4] =
                     std::array::from_fn(|i| classes[pattern / n.pow(i as u32) % n]);
+                if !snaps_possible(&cls) {
+                    continue;
+                }
                 for _ in 0..4 {
                     let tv = random_tet(&mut seed, cls, alpha, beta);
                     let vals: Vec<f64> = tv.iter().map(|v| v.val).collect();
@@ -717,6 +785,16 @@ mod tests {
 
     /// A positively oriented random tet with vertex values of the given classes and shuffled
     /// keys.
+    /// Whether `warp` can make these classes: at most two snapped corners, all on one level,
+    /// and none at or beyond the other level.
+    fn snaps_possible(cls: &[usize; 4]) -> bool {
+        let count = |c: usize| cls.iter().filter(|&&x| x == c).count();
+        let (sa, sb) = (count(5), count(6));
+        sa + sb <= 2
+            && (sa == 0 || cls.iter().all(|&c| !matches!(c, 3 | 4 | 6)))
+            && (sb == 0 || cls.iter().all(|&c| !matches!(c, 0 | 1 | 5)))
+    }
+
     fn random_tet(seed: &mut u64, cls: [usize; 4], alpha: f64, beta: f64) -> [ClipVertex; 4] {
         let mut pos: [[f64; 3]; 4] = std::array::from_fn(|_| [0; 3].map(|_| rng(seed) * 2.0));
         while signed_volume(pos[0], pos[1], pos[2], pos[3]).abs() < 0.05 {
@@ -736,10 +814,16 @@ mod tests {
                 0 => alpha - 0.1 - rng(seed),
                 1 => alpha,
                 2 => alpha + (0.05 + 0.9 * rng(seed)) * (beta - alpha),
-                3 => beta,
+                3 | 6 => beta,
+                5 => alpha,
                 _ => beta + 0.1 + rng(seed),
             },
             box_mask: 0b1111 & !(1 << i),
+            snap: match cls[i] {
+                5 => SNAP_ALPHA,
+                6 => SNAP_BETA,
+                _ => SNAP_NONE,
+            },
         })
     }
 }

@@ -10,12 +10,15 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use crate::clip::{clip_tet, ClipPoint, ClipSink, ClipVertex, Interval};
+use crate::clip::{
+    clip_tet, ClipPoint, ClipSink, ClipVertex, Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE,
+};
 use crate::decompose::plan::{plan_cell, Layout, Planner};
 use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM_LOCAL};
 use crate::grid::{cell_box_planes, corner_offset, ScalarGrid};
 use crate::keys::{grid_vertex, local_key, on_z_plane, vertex_key, vertex_point, PointKey, CORNER};
 use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::warp::snap_vertices;
 
 pub use crate::decompose::plan::Method;
 
@@ -30,6 +33,12 @@ pub struct MeshOptions {
     pub method: Method,
     /// Worker threads; `None` uses rayon's global pool (all cores).
     pub threads: Option<usize>,
+    /// Warping threshold (`0`: off): a grid vertex that a level cuts one of its edges within
+    /// this fraction of the edge's length from is moved onto the level before clipping, when
+    /// that provably keeps the topology (see `warp`). Its position stays the grid vertex, so
+    /// it lies off the trilinear level set until the quality pass projects it; use it with
+    /// [`crate::improve::improve`].
+    pub warp: f64,
 }
 
 impl Default for MeshOptions {
@@ -40,6 +49,7 @@ impl Default for MeshOptions {
             beta: f64::INFINITY,
             method: Method::Ctd,
             threads: None,
+            warp: 0.0,
         }
     }
 }
@@ -73,6 +83,13 @@ impl MeshOptions {
     #[must_use]
     pub fn method(mut self, method: Method) -> Self {
         self.method = method;
+        self
+    }
+
+    /// Sets the warping threshold (see [`MeshOptions::warp`]).
+    #[must_use]
+    pub fn warp(mut self, warp: f64) -> Self {
+        self.warp = warp;
         self
     }
 
@@ -273,6 +290,20 @@ struct Ctx<'a> {
     grid: &'a ScalarGrid,
     interval: Interval,
     planner: Planner<'a>,
+    /// Per grid vertex, the level it is snapped to (empty: no warping).
+    snaps: Vec<u8>,
+}
+
+impl Ctx<'_> {
+    /// Snap state and clipping value of grid vertex `gi` with data value `val`.
+    #[inline]
+    fn corner(&self, gi: usize, val: f64) -> (u8, f64) {
+        match self.snaps.get(gi).copied().unwrap_or(SNAP_NONE) {
+            SNAP_ALPHA => (SNAP_ALPHA, self.interval.alpha),
+            SNAP_BETA => (SNAP_BETA, self.interval.beta),
+            _ => (SNAP_NONE, val),
+        }
+    }
 }
 
 fn run(
@@ -281,7 +312,7 @@ fn run(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<MeshOutput, MeshError> {
     let [_, _, cz] = grid.cell_dims();
-    let ctx = Ctx {
+    let mut ctx = Ctx {
         grid,
         interval: Interval::new(opts.alpha, opts.beta, &grid.values),
         planner: Planner {
@@ -290,7 +321,9 @@ fn run(
             alpha: opts.alpha,
             beta: opts.beta,
         },
+        snaps: Vec::new(),
     };
+    ctx.snaps = snap_vertices(grid, &ctx.planner, &ctx.interval, opts.warp);
     let done = AtomicUsize::new(0);
     let slabs: Vec<Slab> = (0..cz)
         .into_par_iter()
@@ -594,7 +627,7 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
     let box_planes = cell_box_planes(c, ctx.grid.cell_dims());
     if plan.whole_six() && box_planes == 0 {
         // By far the most common cell: six whole tets over the eight corners.
-        emit_six_inside(ctx.grid, c, &v, slab);
+        emit_six_inside(ctx, c, &v, slab);
         slab.cases[CellCase::I as usize] += 1;
         return;
     }
@@ -624,11 +657,17 @@ fn clip_cell(
             let id = id as usize;
             *cv[id].get_or_insert_with(|| {
                 let p = pts.pos[id];
+                let key = local_key(base, stride, id);
+                let (snap, val) = match id {
+                    0..=7 => ctx.corner((key >> 3) as usize, pts.val[id]),
+                    _ => (SNAP_NONE, pts.val[id]),
+                };
                 ClipVertex {
-                    key: local_key(base, stride, id),
+                    key,
                     pos: [base_f[0] + p[0], base_f[1] + p[1], base_f[2] + p[2]],
-                    val: pts.val[id],
+                    val,
                     box_mask: LOCAL_BOX[id],
+                    snap,
                 }
             })
         });
@@ -639,7 +678,8 @@ fn clip_cell(
 /// Emits the 6-fold split of a cell whose corners are all inside, straight from the corner
 /// ids (what clipping would produce, without clipping).
 #[inline]
-fn emit_six_inside(grid: &ScalarGrid, c: [usize; 3], v: &[f64; 8], slab: &mut Slab) {
+fn emit_six_inside(ctx: &Ctx, c: [usize; 3], v: &[f64; 8], slab: &mut Slab) {
+    let grid = ctx.grid;
     let base = grid.index(c[0], c[1], c[2]);
     let (sy, sz) = (grid.dims[0], grid.dims[0] * grid.dims[1]);
     let mut ids = [0u32; 8];
@@ -650,7 +690,8 @@ fn emit_six_inside(grid: &ScalarGrid, c: [usize; 3], v: &[f64; 8], slab: &mut Sl
             (c[1] + o[1]) as f64,
             (c[2] + o[2]) as f64,
         ];
-        *id = slab.corner_id(base + o[0] + o[1] * sy + o[2] * sz, pos, v[corner]);
+        let gi = base + o[0] + o[1] * sy + o[2] * sz;
+        *id = slab.corner_id(gi, pos, ctx.corner(gi, v[corner]).1);
     }
     for t in six::SIX {
         slab.tets.push(t.map(|l| ids[l as usize]));

@@ -25,6 +25,7 @@ pub mod mesh;
 pub mod report;
 pub mod topology;
 pub(crate) mod trilinear;
+pub(crate) mod warp;
 
 pub use decompose::CellCase;
 pub use extract::{

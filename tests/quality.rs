@@ -9,7 +9,7 @@ use common::invariants::{check_labels, check_mesh, mesh_betti, total_volume};
 use common::reference::{self, Field};
 use common::{extent, Rng};
 use tptd::improve::quality::summarize;
-use tptd::improve::{improve, QualityOptions};
+use tptd::improve::{improve, QualityOptions, DEFAULT_WARP};
 use tptd::{mesh_interval, MeshOptions, Method, ScalarGrid, TetMesh};
 
 /// A field sampled from `f(x, y, z)` on an `n`³ grid.
@@ -99,10 +99,10 @@ fn improve_with_threads(grid: &ScalarGrid, mesh: &mut TetMesh, a: f64, b: f64, t
 
 fn mesh_and_improve(field: &Field, alpha: f64, beta: f64) -> Outcome {
     let grid = ScalarGrid::new(field.dims, field.values.clone()).unwrap();
-    let before = mesh_interval(&grid, &MeshOptions::new(alpha, beta, Method::Ctd))
-        .unwrap()
-        .mesh;
-    let mut after = before.clone();
+    let opts = MeshOptions::new(alpha, beta, Method::Ctd);
+    let before = mesh_interval(&grid, &opts).unwrap().mesh;
+    // As `tptd-mesh --quality` does: warped clipping, then the quality pass.
+    let mut after = mesh_interval(&grid, &opts.warp(DEFAULT_WARP)).unwrap().mesh;
     let r = improve(&mut after, &grid, alpha, beta, &QualityOptions::default());
     let (b, a) = (summarize(&before), summarize(&after));
     eprintln!(
@@ -261,9 +261,15 @@ fn ties_with_integer_data() {
 fn output_does_not_depend_on_the_thread_count() {
     let f = random_smooth(14, 7);
     let grid = ScalarGrid::new(f.dims, f.values.clone()).unwrap();
-    let mesh = mesh_interval(&grid, &MeshOptions::new(-0.3, 0.6, Method::Ctd))
+    let opts = MeshOptions::new(-0.3, 0.6, Method::Ctd).warp(DEFAULT_WARP);
+    let mesh = mesh_interval(&grid, &opts.clone().threads(Some(1)))
         .unwrap()
         .mesh;
+    let mesh2 = mesh_interval(&grid, &opts.threads(Some(2))).unwrap().mesh;
+    assert!(
+        mesh == mesh2,
+        "warped meshes differ between 1 and 2 threads"
+    );
     let (mut one, mut two) = (mesh.clone(), mesh);
     improve_with_threads(&grid, &mut one, -0.3, 0.6, 1);
     improve_with_threads(&grid, &mut two, -0.3, 0.6, 2);

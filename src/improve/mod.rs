@@ -28,6 +28,11 @@ use crate::mesh::TetMesh;
 use field::Field;
 use quality::biased_min_sine;
 
+/// The warping threshold ([`crate::MeshOptions::warp`]) to mesh with before improving: grid
+/// vertices that a level passes within this fraction of an edge from are put on the level
+/// while clipping (when that keeps the topology), so most slivers never appear.
+pub const DEFAULT_WARP: f64 = 0.3;
+
 /// Knobs of the quality pass.
 #[derive(Clone, Debug, PartialEq)]
 pub struct QualityOptions {

@@ -113,6 +113,11 @@ fn check_args(cli: &Cli) -> Result<Job> {
         beta,
         method: cli.method.method(),
         threads: cli.threads.map(|n| n as usize),
+        warp: if cli.quality {
+            tptd::improve::DEFAULT_WARP
+        } else {
+            0.0
+        },
     };
     let write = WriteOptions::default().with_msh_version(cli.msh_version.version());
     Ok(Job {
@@ -307,6 +312,7 @@ fn compare_demo(cli: &Cli, grid: &ScalarGrid, job: &Job) -> Result<Option<DemoCo
         grid,
         &MeshOptions {
             method: other,
+            warp: 0.0,
             ..job.opts.clone()
         },
     )

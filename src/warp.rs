@@ -1,0 +1,686 @@
+//! Warping before clipping: which grid vertices move onto a level.
+//!
+//! A level that passes very close to a grid vertex cuts the vertex's edges right next to it,
+//! and clipping then makes slivers. Isosurface stuffing and lattice cleaving avoid them by
+//! *warping*: the vertex itself is put on the level, so those cuts never appear. Here an
+//! interior grid vertex `v` is snapped to level `λ` when
+//!
+//! 1. **close:** some edge of the tetrahedral complex from `v` crosses `λ` at a fraction
+//!    `t < eps` of its length from `v` (`t = |f(v) − λ| / |f(u) − f(v)|`);
+//! 2. **regular:** in the link of `v` in the complex (the decomposition of its eight cells),
+//!    the closed set `S` where the field is at least the level (on the domain side) is a
+//!    disk. Then the domain's part in the star of `v` is a ball glued to the rest along `S`
+//!    both before the snap and after it (then it is the cone from `v` over `S`), so the
+//!    domain stays homeomorphic: the vertex test of seed 002 §3.2 in the TPTD complex. On the
+//!    link (a triangulated 2-sphere) with up / on-level / down nodes, `S` is a disk when up
+//!    and on-level nodes (joined through up ones) are one connected set and down nodes
+//!    another, every on-level node touches an up node, no two on-level nodes are joined (so
+//!    no mesh face ever has three snapped corners), and around each on-level node the down
+//!    neighbours form one run (the level passes through the node, so each down neighbour
+//!    cuts `S` there). Coming from below, on-level nodes must lie on `∂S`: the domain in the
+//!    star is then a collar of `S` that thins out to nothing only along `∂S`. Vertices on the
+//!    grid box (half-sphere links) are not snapped, and the interval's other level must not
+//!    reach the link;
+//! 3. **in rounds:** each round snaps, among the vertices that pass in the current state
+//!    (earlier snaps are on-level nodes), those with the smallest `t` among the passing grid
+//!    vertices of their link (ties: smaller index). Vertices snapped in one round are never
+//!    adjacent, so the round is a sequence of single snaps, each of which keeps the topology.
+//!
+//! Cells whose corners all lie outside the interval are not decomposed; their part of the
+//! link is a disk on one side of `λ`, so all the link nodes in such a cell are joined (and a
+//! snapped node there stops the test). The clipper then treats a snapped vertex as a point
+//! on its level (`clip::SNAP_ALPHA`, `clip::SNAP_BETA`). Its position stays the grid vertex;
+//! the quality pass moves it onto the trilinear level set.
+
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+use crate::clip::{Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
+use crate::decompose::decompose_cell;
+use crate::decompose::plan::{plan_cell, Layout, Planner};
+use crate::grid::{corner_offset, ScalarGrid};
+use crate::keys::{local_key, vertex_key, VertexKey, CORNER};
+
+/// A link vertex: key, index-space position, value.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    key: VertexKey,
+    pos: [f64; 3],
+    val: f64,
+}
+
+/// Rounds of snapping (each snaps an independent set of the vertices that pass).
+const ROUNDS: usize = 6;
+
+/// Per grid vertex: [`SNAP_NONE`], [`SNAP_ALPHA`] or [`SNAP_BETA`]. Empty when `eps <= 0`.
+pub(crate) fn snap_vertices(
+    grid: &ScalarGrid,
+    planner: &Planner,
+    iv: &Interval,
+    eps: f64,
+) -> Vec<u8> {
+    if eps <= 0.0 || grid.dims.iter().any(|&n| n < 3) {
+        return Vec::new();
+    }
+    let cand = candidates(grid, iv, eps);
+    let listed: Vec<(usize, u8)> = cand
+        .par_iter()
+        .enumerate()
+        .filter(|(_, &c)| c != SNAP_NONE)
+        .map(|(v, &c)| (v, c))
+        .collect();
+    drop(cand);
+    let stars: Vec<Star> = listed
+        .par_iter()
+        .filter_map(|&(v, snap)| Star::new(grid, planner, iv, v, snap, eps))
+        .collect();
+    let mut snaps = vec![SNAP_NONE; grid.num_vertices()];
+    let mut open: Vec<usize> = (0..stars.len()).collect();
+    for _ in 0..ROUNDS {
+        let chosen = snap_round(&stars, &open, &snaps, iv);
+        if chosen.is_empty() {
+            break;
+        }
+        for &s in &chosen {
+            snaps[stars[s].v] = stars[s].snap;
+        }
+        open.retain(|&s| snaps[stars[s].v] == SNAP_NONE);
+    }
+    snaps
+}
+
+/// One round: the stars that pass the test in the current state and have the smallest `t`
+/// among the passing grid vertices of their link.
+fn snap_round(stars: &[Star], open: &[usize], snaps: &[u8], iv: &Interval) -> Vec<usize> {
+    let passing: Vec<usize> = open
+        .par_iter()
+        .copied()
+        .filter(|&s| stars[s].regular(snaps, iv))
+        .collect();
+    let best: FxHashMap<usize, f64> = passing.iter().map(|&s| (stars[s].v, stars[s].t)).collect();
+    passing
+        .par_iter()
+        .copied()
+        .filter(|&s| {
+            let (v, t) = (stars[s].v, stars[s].t);
+            stars[s]
+                .link
+                .grid_nodes()
+                .all(|n| best.get(&n).is_none_or(|&tn| (t, v) < (tn, n)))
+        })
+        .collect()
+}
+
+/// The value used for cut placement (ties moved outward, as the clipper does).
+fn effective(v: f64, iv: &Interval) -> f64 {
+    if v == iv.alpha {
+        iv.alpha_tie
+    } else if v == iv.beta {
+        iv.beta_tie
+    } else {
+        v
+    }
+}
+
+/// Whether value `u` lies on the domain side of level `snap` (ties count as outside).
+fn domain_side(u: f64, snap: u8, iv: &Interval) -> bool {
+    if snap == SNAP_ALPHA {
+        u > iv.alpha
+    } else {
+        u < iv.beta
+    }
+}
+
+fn level_of(snap: u8, iv: &Interval) -> f64 {
+    if snap == SNAP_ALPHA {
+        iv.alpha
+    } else {
+        iv.beta
+    }
+}
+
+/// Offsets of the 26-neighbourhood as `[di, dj, dk]`.
+fn neighbours26() -> impl Iterator<Item = [isize; 3]> {
+    (0..27)
+        .map(|n| [n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1])
+        .filter(|d| *d != [0, 0, 0])
+}
+
+/// Grid index of the neighbour of interior vertex `(i, j, k)` at offset `d`.
+fn neighbour(grid: &ScalarGrid, ijk: [usize; 3], d: [isize; 3]) -> usize {
+    grid.index(
+        (ijk[0] as isize + d[0]) as usize,
+        (ijk[1] as isize + d[1]) as usize,
+        (ijk[2] as isize + d[2]) as usize,
+    )
+}
+
+/// Per grid vertex, the level it is a candidate for (step 1, on the 26-neighbourhood, which
+/// holds every link vertex's value range: a superset of the close vertices). Only vertices
+/// with a neighbour on the other side of a level are examined (found 64 at a time).
+fn candidates(grid: &ScalarGrid, iv: &Interval, eps: f64) -> Vec<u8> {
+    let [nx, ny, nz] = grid.dims;
+    let mut cand = vec![SNAP_NONE; grid.num_vertices()];
+    cand.par_chunks_mut(nx * ny)
+        .enumerate()
+        .filter(|(k, _)| *k > 0 && *k + 1 < nz)
+        .for_each(|(k, plane)| {
+            let sides = [k - 1, k, k + 1].map(|z| side_bits(grid, iv, z));
+            let words = nx.div_ceil(64);
+            for j in 1..ny - 1 {
+                let mixed = mixed_row(&sides, j, words);
+                for (w, &bits) in mixed.iter().enumerate() {
+                    let mut b = bits;
+                    while b != 0 {
+                        let i = 64 * w + b.trailing_zeros() as usize;
+                        b &= b - 1;
+                        if i > 0 && i + 1 < nx {
+                            plane[j * nx + i] = candidate_level(grid, iv, [i, j, k], eps);
+                        }
+                    }
+                }
+            }
+        });
+    cand
+}
+
+/// Side bits of grid plane `z` for both levels: `[alpha, beta][j * words + i / 64]` bit
+/// `i % 64` set when vertex `(i, j)` lies on the domain side of that level.
+fn side_bits(grid: &ScalarGrid, iv: &Interval, z: usize) -> [Vec<u64>; 2] {
+    let [nx, ny, _] = grid.dims;
+    let words = nx.div_ceil(64);
+    let mut bits = [vec![0u64; ny * words], vec![0u64; ny * words]];
+    let base = grid.index(0, 0, z);
+    for (j, row) in grid.values[base..base + nx * ny]
+        .chunks_exact(nx)
+        .enumerate()
+    {
+        for (i, &v) in row.iter().enumerate() {
+            bits[0][j * words + i / 64] |= ((v > iv.alpha) as u64) << (i % 64);
+            bits[1][j * words + i / 64] |= ((v < iv.beta) as u64) << (i % 64);
+        }
+    }
+    bits
+}
+
+/// Bits of the vertices of row `j` (middle plane) whose 26-neighbourhood has both sides of
+/// some level.
+fn mixed_row(sides: &[[Vec<u64>; 2]; 3], j: usize, words: usize) -> Vec<u64> {
+    let mut mixed = vec![0u64; words];
+    for level in 0..2 {
+        let mut or9 = vec![0u64; words];
+        let mut and9 = vec![u64::MAX; words];
+        for plane in sides {
+            for jj in j - 1..=j + 1 {
+                let row = &plane[level][jj * words..(jj + 1) * words];
+                for w in 0..words {
+                    or9[w] |= row[w];
+                    and9[w] &= row[w];
+                }
+            }
+        }
+        for w in 0..words {
+            let spread = |x: &[u64], fill: u64| {
+                let lo = if w > 0 { x[w - 1] >> 63 } else { fill & 1 };
+                let hi = if w + 1 < words {
+                    x[w + 1] << 63
+                } else {
+                    fill << 63
+                };
+                [x[w], (x[w] << 1) | lo, (x[w] >> 1) | hi]
+            };
+            let o = spread(&or9, 0);
+            let a = spread(&and9, u64::MAX);
+            mixed[w] |= (o[0] | o[1] | o[2]) & !(a[0] & a[1] & a[2]);
+        }
+    }
+    mixed
+}
+
+fn candidate_level(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], eps: f64) -> u8 {
+    let f = grid.value(ijk[0], ijk[1], ijk[2]);
+    let e = effective(f, iv);
+    let mut found = SNAP_NONE;
+    for snap in [SNAP_ALPHA, SNAP_BETA] {
+        let level = level_of(snap, iv);
+        if !level.is_finite() {
+            continue;
+        }
+        let d = (e - level).abs();
+        let side = domain_side(f, snap, iv);
+        let close = neighbours26().any(|o| {
+            let u = grid.values[neighbour(grid, ijk, o)];
+            domain_side(u, snap, iv) != side && d < eps * (u - e).abs()
+        });
+        if close {
+            if found != SNAP_NONE {
+                return SNAP_NONE;
+            }
+            found = snap;
+        }
+    }
+    found
+}
+
+/// Step 2: the link of candidate `v` (interior), from the decomposition of the cells
+/// around it that are not entirely outside, in cell order.
+fn star_link(grid: &ScalarGrid, planner: &Planner, v: usize, link: &mut Link) {
+    let ijk = grid.vertex_ijk(v);
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let mut tets = Vec::with_capacity(64);
+    for corner in (0..8).rev() {
+        // The cell in which `v` is corner `corner`.
+        let o = corner_offset(corner);
+        let c = [0, 1, 2].map(|a| ijk[a] - o[a]);
+        let vals = grid.cell_values(c[0], c[1], c[2]);
+        let plan = plan_cell(planner, c, &vals);
+        if plan.layout == Layout::Outside {
+            continue;
+        }
+        tets.clear();
+        let (_, pts) = decompose_cell(&plan, &vals, &mut tets);
+        let base = grid.index(c[0], c[1], c[2]);
+        let base_f = c.map(|x| x as f64);
+        let corner = corner as u8;
+        for t in tets.iter().filter(|t| t.contains(&corner)) {
+            let mut ids = [0usize; 3];
+            for (slot, &x) in ids.iter_mut().zip(t.iter().filter(|&&x| x != corner)) {
+                let p = pts.pos[x as usize];
+                *slot = link.node(Node {
+                    key: local_key(base, stride, x as usize),
+                    pos: [base_f[0] + p[0], base_f[1] + p[1], base_f[2] + p[2]],
+                    val: pts.val[x as usize],
+                });
+            }
+            link.tris.push(ids);
+        }
+    }
+}
+
+/// A close candidate and its link.
+struct Star {
+    v: usize,
+    snap: u8,
+    /// Whether the vertex lies off the domain side of its level.
+    from_down: bool,
+    /// Fraction of its closest crossing.
+    t: f64,
+    link: Link,
+}
+
+impl Star {
+    /// The star of candidate `v` (for level `snap`), if it is close
+    /// (step 1 exactly, on the link).
+    fn new(
+        grid: &ScalarGrid,
+        planner: &Planner,
+        iv: &Interval,
+        v: usize,
+        snap: u8,
+        eps: f64,
+    ) -> Option<Star> {
+        let mut link = Link::default();
+        star_link(grid, planner, v, &mut link);
+        link.add_outside_octants(grid, iv, v);
+        let f = grid.values[v];
+        let side = domain_side(f, snap, iv);
+        let (e, level) = (effective(f, iv), level_of(snap, iv));
+        let t = link
+            .nodes
+            .iter()
+            .filter(|n| domain_side(n.val, snap, iv) != side)
+            .map(|n| (e - level).abs() / (n.val - e).abs())
+            .fold(f64::INFINITY, f64::min);
+        let from_down = !side;
+        (t < eps).then_some(Star {
+            v,
+            snap,
+            from_down,
+            t,
+            link,
+        })
+    }
+
+    fn regular(&self, snaps: &[u8], iv: &Interval) -> bool {
+        self.link.regular(self.snap, self.from_down, snaps, iv)
+    }
+}
+
+/// Class of a link node in the current state.
+const UP: u8 = 0;
+const ON: u8 = 1;
+const DOWN: u8 = 2;
+
+/// The link of one vertex: a triangulated 2-sphere, less the cells that lie entirely
+/// outside the interval, which are kept as groups of nodes.
+#[derive(Default)]
+struct Link {
+    nodes: Vec<Node>,
+    tris: Vec<[usize; 3]>,
+    /// Groups of nodes that lie in one outside cell (each all on one side, joined).
+    groups: Vec<Vec<usize>>,
+}
+
+impl Link {
+    fn node(&mut self, n: Node) -> usize {
+        match self.nodes.iter().position(|m| m.key == n.key) {
+            Some(i) => i,
+            None => {
+                self.nodes.push(n);
+                self.nodes.len() - 1
+            }
+        }
+    }
+
+    /// Grid indices of the grid-vertex nodes.
+    fn grid_nodes(&self) -> impl Iterator<Item = usize> + '_ {
+        self.nodes
+            .iter()
+            .filter(|n| n.key & 7 == CORNER)
+            .map(|n| (n.key >> 3) as usize)
+    }
+
+    /// Joins, for each of the eight cells around `v` that lies entirely outside the
+    /// interval, its other corners and every link node in its closed box.
+    fn add_outside_octants(&mut self, grid: &ScalarGrid, iv: &Interval, v: usize) {
+        let ijk = grid.vertex_ijk(v);
+        for corner in 0..8 {
+            let o = corner_offset(corner);
+            let cell = [0, 1, 2].map(|a| ijk[a] + o[a] - 1);
+            let vals = grid.cell_values(cell[0], cell[1], cell[2]);
+            let outside = vals.iter().all(|&x| x <= iv.alpha) || vals.iter().all(|&x| x >= iv.beta);
+            if !outside {
+                continue;
+            }
+            let lo = cell.map(|x| x as f64);
+            let in_box = |p: [f64; 3]| (0..3).all(|a| p[a] >= lo[a] && p[a] <= lo[a] + 1.0);
+            let mut group: Vec<usize> = (0..self.nodes.len())
+                .filter(|&i| in_box(self.nodes[i].pos))
+                .collect();
+            for (c2, &val) in vals.iter().enumerate() {
+                let o2 = corner_offset(c2);
+                let p = [0, 1, 2].map(|a| cell[a] + o2[a]);
+                let gi = grid.index(p[0], p[1], p[2]);
+                if gi != v {
+                    let pos = p.map(|x| x as f64);
+                    let key = vertex_key(gi, CORNER);
+                    group.push(self.node(Node { key, pos, val }));
+                }
+            }
+            self.groups.push(group);
+        }
+    }
+
+    /// Classes of the nodes for a snap to `snap` in state `snaps`; `None` when a node lies
+    /// at or beyond the interval's other level.
+    fn classes(&self, snap: u8, snaps: &[u8], iv: &Interval) -> Option<Vec<u8>> {
+        self.nodes
+            .iter()
+            .map(|n| {
+                let state = if n.key & 7 == CORNER {
+                    snaps[(n.key >> 3) as usize]
+                } else {
+                    SNAP_NONE
+                };
+                let beyond = match snap {
+                    SNAP_ALPHA => n.val >= iv.beta,
+                    _ => n.val <= iv.alpha,
+                };
+                if state == snap {
+                    Some(ON)
+                } else if beyond || state != SNAP_NONE {
+                    None
+                } else if domain_side(n.val, snap, iv) {
+                    Some(UP)
+                } else {
+                    Some(DOWN)
+                }
+            })
+            .collect()
+    }
+
+    /// Whether snapping the centre keeps the domain homeomorphic (module docs): the closed
+    /// set `S` of the link where the field is at least the level (up nodes, and snapped
+    /// nodes on the level) is a disk whose complement (down nodes) is connected.
+    fn regular(&self, snap: u8, from_down: bool, snaps: &[u8], iv: &Interval) -> bool {
+        let Some(cls) = self.classes(snap, snaps, iv) else {
+            return false;
+        };
+        let groups_ok = self.groups.iter().all(|g| {
+            let c = cls[g[0]];
+            c != ON && g.iter().all(|&i| cls[i] == c)
+        });
+        groups_ok && self.on_nodes_ok(&cls, from_down) && self.sides_connected(&cls)
+    }
+
+    /// Every node on the level touches an up node, no two of them are joined by an edge
+    /// (so no face of the mesh has three snapped corners), and its down neighbours form one
+    /// run around it (`S` is then one wedge there, not a pinch: the level passes through the
+    /// node, so every down neighbour cuts `S` apart around it). A node whose neighbours are
+    /// all up is inside `S`; that is allowed only when the centre comes from above (from
+    /// below, the domain is a collar of `S` that must thin out only along `∂S`).
+    fn on_nodes_ok(&self, cls: &[u8], from_down: bool) -> bool {
+        (0..self.nodes.len()).filter(|&z| cls[z] == ON).all(|z| {
+            let (mut ups, mut mixed) = (0usize, 0usize);
+            for t in self.tris.iter().filter(|t| t.contains(&z)) {
+                let mut others = t.iter().copied().filter(|&x| x != z);
+                let (a, b) = (others.next().unwrap_or(z), others.next().unwrap_or(z));
+                if cls[a] == ON || cls[b] == ON {
+                    return false;
+                }
+                ups += (cls[a] == UP) as usize + (cls[b] == UP) as usize;
+                mixed += (cls[a] != cls[b]) as usize;
+            }
+            ups > 0 && (mixed == 2 || (mixed == 0 && !from_down))
+        })
+    }
+
+    /// Up and on nodes (joined by edges with an up end) form one connected set, down nodes
+    /// (joined by down-down edges) another, both nonempty; outside cells join their nodes.
+    fn sides_connected(&self, cls: &[u8]) -> bool {
+        let side = |c: u8| (c == DOWN) as usize;
+        let mut uf: Vec<usize> = (0..self.nodes.len()).collect();
+        for t in &self.tris {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                let joined = match (cls[a], cls[b]) {
+                    (DOWN, DOWN) => true,
+                    (DOWN, _) | (_, DOWN) | (ON, ON) => false,
+                    _ => true,
+                };
+                if joined {
+                    union(&mut uf, a, b);
+                }
+            }
+        }
+        for g in &self.groups {
+            for &i in &g[1..] {
+                union(&mut uf, g[0], i);
+            }
+        }
+        let mut roots = [None, None];
+        for i in 0..uf.len() {
+            let r = find(&mut uf, i);
+            match roots[side(cls[i])] {
+                None => roots[side(cls[i])] = Some(r),
+                Some(r0) if r0 != r => return false,
+                _ => {}
+            }
+        }
+        roots.iter().all(Option::is_some) && cls.contains(&UP)
+    }
+}
+
+fn find(uf: &mut [usize], mut i: usize) -> usize {
+    while uf[i] != i {
+        uf[i] = uf[uf[i]];
+        i = uf[i];
+    }
+    i
+}
+
+fn union(uf: &mut [usize], a: usize, b: usize) {
+    let (ra, rb) = (find(uf, a), find(uf, b));
+    if ra != rb {
+        uf[ra.max(rb)] = ra.min(rb);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
+
+    fn noise(dims: [usize; 3], seed: u64, levels: f64) -> ScalarGrid {
+        let mut v = Vec::new();
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let h = (seed ^ (i + 97 * j + 9973 * k) as u64)
+                        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                        .wrapping_add(seed.wrapping_mul(0x2545_F491_4F6C_DD1D));
+                    let x = ((h >> 11) as f64) / ((1u64 << 53) as f64);
+                    v.push(if levels > 0.0 {
+                        (x * levels).floor()
+                    } else {
+                        x
+                    });
+                }
+            }
+        }
+        ScalarGrid::new(dims, v).unwrap()
+    }
+
+    /// Faces of the tets seen once must be exactly the boundary triangles; boundary edges
+    /// in exactly two triangles; each boundary vertex's fan one cycle.
+    fn manifold_problems(m: &crate::TetMesh) -> Vec<String> {
+        use std::collections::HashMap;
+        let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
+        for t in &m.tets {
+            for f in [
+                [t[1], t[2], t[3]],
+                [t[0], t[2], t[3]],
+                [t[0], t[1], t[3]],
+                [t[0], t[1], t[2]],
+            ] {
+                let mut f = f;
+                f.sort();
+                *faces.entry(f).or_default() += 1;
+            }
+        }
+        let mut out = Vec::new();
+        let mut once: Vec<[u32; 3]> = faces
+            .iter()
+            .filter(|(_, &c)| c == 1)
+            .map(|(f, _)| *f)
+            .collect();
+        once.sort();
+        let mut bnd: Vec<[u32; 3]> = m
+            .boundary
+            .iter()
+            .map(|b| {
+                let mut b = *b;
+                b.sort();
+                b
+            })
+            .collect();
+        bnd.sort();
+        if once != bnd {
+            out.push(format!(
+                "boundary mismatch: {} once-faces vs {} boundary",
+                once.len(),
+                bnd.len()
+            ));
+        }
+        if faces.values().any(|&c| c > 2) {
+            out.push("face in >2 tets".into());
+        }
+        let mut edges: HashMap<[u32; 2], usize> = HashMap::new();
+        let mut fan: HashMap<u32, Vec<[u32; 2]>> = HashMap::new();
+        for b in &m.boundary {
+            for i in 0..3 {
+                let (a, c) = (b[i], b[(i + 1) % 3]);
+                *edges.entry([a.min(c), a.max(c)]).or_default() += 1;
+                fan.entry(b[i])
+                    .or_default()
+                    .push([b[(i + 1) % 3], b[(i + 2) % 3]]);
+            }
+        }
+        if edges.values().any(|&c| c != 2) {
+            out.push("boundary edge not in 2 triangles".into());
+        }
+        for (v, f) in &fan {
+            // one cycle: walk
+            let mut next: HashMap<u32, u32> = HashMap::new();
+            for e in f {
+                next.insert(e[0], e[1]);
+            }
+            let start = f[0][0];
+            let (mut cur, mut n) = (start, 0);
+            loop {
+                cur = match next.get(&cur) {
+                    Some(&x) => x,
+                    None => break,
+                };
+                n += 1;
+                if cur == start || n > f.len() {
+                    break;
+                }
+            }
+            if n != f.len() {
+                out.push(format!("vertex {v} fan not one cycle ({n} of {})", f.len()));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn candidates_match_the_plain_scan() {
+        for seed in 0..20u64 {
+            let g = noise([70, 7, 6], seed, 0.0);
+            let iv = crate::clip::Interval::new(0.3, 0.8, &g.values);
+            let fast = super::candidates(&g, &iv, 0.2);
+            let mut plain = vec![0u8; g.num_vertices()];
+            for k in 1..5 {
+                for j in 1..6 {
+                    for i in 1..69 {
+                        plain[g.index(i, j, k)] = super::candidate_level(&g, &iv, [i, j, k], 0.2);
+                    }
+                }
+            }
+            assert_eq!(fast, plain, "seed {seed}");
+            assert!(fast.iter().any(|&c| c != 0));
+        }
+    }
+
+    #[test]
+    fn warping_keeps_betti_numbers() {
+        let mut bad = Vec::new();
+        for seed in 0..400u64 {
+            for (levels, alpha, beta) in [
+                (0.0, 0.45, f64::INFINITY),
+                (0.0, 0.3, 0.7),
+                (8.0, 3.5, f64::INFINITY),
+                (8.0, 3.0, 5.0),
+                (0.0, f64::NEG_INFINITY, 0.5),
+            ] {
+                let g = noise([6, 6, 6], seed, levels);
+                let o = MeshOptions::new(alpha, beta, Method::Ctd);
+                let plain = mesh_interval(&g, &o).unwrap().mesh;
+                let warped = mesh_interval(&g, &o.clone().warp(0.3)).unwrap().mesh;
+                let (a, b) = (
+                    crate::topology::betti(&plain),
+                    crate::topology::betti(&warped),
+                );
+                let probs = manifold_problems(&warped);
+                if a != b || !probs.is_empty() || manifold_problems(&plain) != probs {
+                    bad.push((seed, levels, alpha, a, b));
+                }
+            }
+        }
+        assert!(
+            bad.is_empty(),
+            "{} failures: {:?}",
+            bad.len(),
+            &bad[..bad.len().min(10)]
+        );
+    }
+}
