@@ -763,8 +763,8 @@ mod tests {
             // 0 below, 1 = alpha, 2 inside, 3 = beta, 4 above, 5 snapped to alpha, 6 snapped
             // to beta; skip classes a bound rules out
             let classes: Vec<usize> = (0..7)
-                .filter(|&c| (a.is_finite() || !matches!(c, 0 | 1 | 5)))
-                .filter(|&c| (b.is_finite() || !matches!(c, 3 | 4 | 6)))
+                .filter(|&c| a.is_finite() || !matches!(c, 0 | 1 | 5))
+                .filter(|&c| b.is_finite() || !matches!(c, 3 | 4 | 6))
                 .collect();
             let n = classes.len();
             for pattern in 0..n.pow(4) {
