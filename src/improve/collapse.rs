@@ -13,20 +13,28 @@ use super::Ctx;
 /// The collapse of `a` into `b`, if legal and improving: the smallest quality of the changed
 /// tets afterwards.
 pub fn evaluate_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
-    let (old, new, shared) = collapse_qualities(lm, ctx, a, b)?;
-    (new > 0.0 && new > old && link_condition(lm, a, b, &shared)).then_some(new)
+    let (new, shared) = collapse_qualities(lm, ctx, a, b, true)?;
+    link_condition(lm, a, b, &shared).then_some(new)
 }
 
 /// The collapse of `a` into `b`, if legal and every remaining tet stays positive (no gain
 /// needed: used to remove vertices that cannot reach their level set).
 pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
-    let (_, new, shared) = collapse_qualities(lm, ctx, a, b)?;
-    (new > 0.0 && link_condition(lm, a, b, &shared)).then_some(new)
+    let (new, shared) = collapse_qualities(lm, ctx, a, b, false)?;
+    link_condition(lm, a, b, &shared).then_some(new)
 }
 
-/// For a collapse of `a` into `b` that the constraints allow: the smallest quality of the
-/// star of `a` before, of the changed tets after, and the tets around the edge.
-fn collapse_qualities(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<(f64, f64, Vec<u32>)> {
+/// For a collapse of `a` into `b` that the constraints allow and that leaves every changed tet
+/// positive (and, with `gain`, better than the worst tet of the star of `a` before): the
+/// smallest quality of the changed tets after, and the tets around the edge. Stops at the
+/// first changed tet that fails.
+fn collapse_qualities(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    a: u32,
+    b: u32,
+    gain: bool,
+) -> Option<(f64, Vec<u32>)> {
     if !lm.is_free(a) || !lm.is_free(b) {
         return None;
     }
@@ -40,16 +48,24 @@ fn collapse_qualities(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<(f64,
     if lm.con[a as usize].level.is_some() && !short_edge(lm, a, b, ctx.boundary_collapse_ratio) {
         return None;
     }
-    let mut old = f64::INFINITY;
+    let star = &lm.star[a as usize];
+    let floor = if gain {
+        star.iter()
+            .map(|&t| lm.q[t as usize])
+            .fold(f64::INFINITY, f64::min)
+            .max(0.0)
+    } else {
+        0.0
+    };
     let mut new = f64::INFINITY;
     let xb = lm.x[b as usize];
-    for &t in &lm.star[a as usize] {
-        old = old.min(lm.q[t as usize]);
-        if !shared.contains(&t) {
-            new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
+    for &t in star.iter().filter(|t| !shared.contains(t)) {
+        new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
+        if new <= floor {
+            return None;
         }
     }
-    Some((old, new, shared))
+    Some((new, shared))
 }
 
 /// Whether edge `ab` is short against the other edges at `a`: boundary collapses are kept to
