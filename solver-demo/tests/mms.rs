@@ -21,10 +21,18 @@ fn mms_options() -> Options {
 }
 
 fn check_mms(name: &str, grids: &[tptd::ScalarGrid], level: f64) {
+    check_mms_with(name, grids, |g| mesh(g, f64::NEG_INFINITY, level));
+}
+
+fn check_mms_with(
+    name: &str,
+    grids: &[tptd::ScalarGrid],
+    make: impl Fn(&tptd::ScalarGrid) -> tptd::TetMesh,
+) {
     let dir = tempfile::tempdir().unwrap();
     let (mut h, mut l2, mut h1) = (Vec::new(), Vec::new(), Vec::new());
     for g in grids {
-        let file = through_file(&mesh(g, f64::NEG_INFINITY, level), dir.path(), "m.msh");
+        let file = through_file(&make(g), dir.path(), "m.msh");
         let sol = solve(&file, &mms_options(), &mut |_, _| {}).unwrap();
         assert!(sol.report.converged);
         let e = sol.mms.unwrap();
@@ -94,4 +102,23 @@ fn unit_source_on_a_ball_matches_the_exact_solution() {
     println!("nodal orders {o:.3?}");
     assert!(err[0] < 0.01, "coarse error {}", err[0]);
     assert!(o.iter().all(|&o| o >= 1.8), "nodal orders {o:?}");
+}
+
+#[test]
+fn mms_converges_on_quality_improved_balls() {
+    use tptd::improve::{improve, QualityOptions};
+    let grids = [ball_grid(12), ball_grid(24), ball_grid(48)];
+    check_mms_with("quality ball", &grids, |g| {
+        let mut m = mesh(g, f64::NEG_INFINITY, 1.0);
+        let before = m.tets.len();
+        improve(
+            &mut m,
+            g,
+            f64::NEG_INFINITY,
+            1.0,
+            &QualityOptions::default(),
+        );
+        assert_ne!(m.tets.len(), before, "the quality pass changed nothing");
+        m
+    });
 }
