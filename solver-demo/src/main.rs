@@ -42,6 +42,9 @@ struct Cli {
     /// Preconditioner.
     #[arg(long, value_enum, default_value_t = PrecondArg::Jacobi)]
     precond: PrecondArg,
+    /// Assemble through sprs triplets (TriMat -> CSR) instead of row by row (for comparison).
+    #[arg(long)]
+    triplets: bool,
     /// Manufactured solution u = sin(2x) cos(y) exp(z/2) with Dirichlet data on the whole
     /// boundary; prints the L2 and H1 errors.
     #[arg(long)]
@@ -73,6 +76,7 @@ fn options(cli: &Cli) -> Result<Options> {
     let mut opts = Options {
         source: cli.source,
         mms: cli.mms,
+        triplets: cli.triplets,
         ..Options::default()
     };
     for k in &cli.k {

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use tptd::io::MeshFile;
 
-use crate::assemble::{assemble, Problem, Source, FIXED};
+use crate::assemble::{assemble, assemble_triplets, Problem, Source, FIXED};
 use crate::mms::{self, Errors};
 use crate::pcg::{pcg, PcgOptions, PcgReport};
 use crate::setup::{boundary_nodes, check_solvable, conductivity, dirichlet_values};
@@ -24,6 +24,8 @@ pub struct Options {
     pub dirichlet: Vec<(String, f64)>,
     /// Solver options.
     pub pcg: PcgOptions,
+    /// Assemble from `sprs` triplets instead of row by row (the two agree up to rounding).
+    pub triplets: bool,
     /// Manufactured solution instead of `source` and `dirichlet` ([`crate::mms`]):
     /// Dirichlet data from the exact solution on every boundary node.
     pub mms: bool,
@@ -38,6 +40,7 @@ impl Default for Options {
             dirichlet: Vec::new(),
             pcg: PcgOptions::default(),
             mms: false,
+            triplets: false,
         }
     }
 }
@@ -103,7 +106,11 @@ pub fn solve(
         source,
         dirichlet: &g,
     };
-    let system = assemble(&pb)?;
+    let system = if opts.triplets {
+        assemble_triplets(&pb)?
+    } else {
+        assemble(&pb)?
+    };
     sol.times.push(("assemble", t.elapsed().as_secs_f64()));
     let t = Instant::now();
     let mut x = vec![0.0; system.b.len()];
