@@ -225,8 +225,11 @@ pub fn assemble_triplets(pb: &Problem) -> Result<System, SolveError> {
     Ok(System { a, b, dof })
 }
 
-/// Element matrix (row-major 4 x 4) and load vector of every tet, in parallel.
-fn element_data(pb: &Problem) -> Result<Vec<([f64; 16], [f64; 4])>, SolveError> {
+/// Element matrix (row-major 4 x 4) and load vector of one tet.
+type Element = ([f64; 16], [f64; 4]);
+
+/// The [`Element`] of every tet, in parallel.
+fn element_data(pb: &Problem) -> Result<Vec<Element>, SolveError> {
     (0..pb.mesh.tets.len())
         .into_par_iter()
         .map(|t| {
@@ -262,6 +265,47 @@ fn node_tets(mesh: &TetMesh) -> (Vec<usize>, Vec<u32>) {
     (ptr, items)
 }
 
+/// The tets around every node (see [`node_tets`]).
+struct Around<'a> {
+    ptr: &'a [usize],
+    items: &'a [u32],
+}
+
+/// The CSR rows of the free nodes `nodes` (see [`assemble`]).
+fn row_block(pb: &Problem, dof: &[u32], elems: &[Element], around: &Around, nodes: &[u32]) -> Rows {
+    let mut out = Rows::default();
+    let mut row: Vec<(usize, f64)> = Vec::with_capacity(64);
+    for &v in nodes {
+        row.clear();
+        let mut rhs = 0.0;
+        for &item in &around.items[around.ptr[v as usize]..around.ptr[v as usize + 1]] {
+            let (t, a) = (item as usize / 4, item as usize % 4);
+            let (m, f) = &elems[t];
+            rhs += f[a];
+            for (b, &w) in pb.mesh.tets[t].iter().enumerate() {
+                match dof[w as usize] {
+                    FIXED => rhs -= m[4 * a + b] * pb.dirichlet[w as usize],
+                    c => row.push((c as usize, m[4 * a + b])),
+                }
+            }
+        }
+        // Stable: equal columns are summed in tet order.
+        row.sort_by_key(|e| e.0);
+        let start = out.cols.len();
+        for &(c, x) in &row {
+            if out.cols.len() > start && out.cols.last() == Some(&c) {
+                *out.vals.last_mut().unwrap() += x;
+            } else {
+                out.cols.push(c);
+                out.vals.push(x);
+            }
+        }
+        out.lens.push(out.cols.len() - start);
+        out.rhs.push(rhs);
+    }
+    out
+}
+
 /// One block of CSR rows: column indices, values, row lengths and right-hand sides.
 #[derive(Default)]
 struct Rows {
@@ -286,41 +330,13 @@ pub fn assemble(pb: &Problem) -> Result<System, SolveError> {
     let free: Vec<u32> = (0..dof.len() as u32)
         .filter(|&v| dof[v as usize] != FIXED)
         .collect();
+    let around = Around {
+        ptr: &ptr,
+        items: &items,
+    };
     let blocks: Vec<Rows> = free
         .par_chunks(1024)
-        .map(|nodes| {
-            let mut out = Rows::default();
-            let mut row: Vec<(usize, f64)> = Vec::with_capacity(64);
-            for &v in nodes {
-                row.clear();
-                let mut rhs = 0.0;
-                for &item in &items[ptr[v as usize]..ptr[v as usize + 1]] {
-                    let (t, a) = (item as usize / 4, item as usize % 4);
-                    let (m, f) = &elems[t];
-                    rhs += f[a];
-                    for (b, &w) in pb.mesh.tets[t].iter().enumerate() {
-                        match dof[w as usize] {
-                            FIXED => rhs -= m[4 * a + b] * pb.dirichlet[w as usize],
-                            c => row.push((c as usize, m[4 * a + b])),
-                        }
-                    }
-                }
-                // Stable: equal columns are summed in tet order.
-                row.sort_by_key(|e| e.0);
-                let start = out.cols.len();
-                for &(c, x) in &row {
-                    if out.cols.len() > start && *out.cols.last().unwrap() == c {
-                        *out.vals.last_mut().unwrap() += x;
-                    } else {
-                        out.cols.push(c);
-                        out.vals.push(x);
-                    }
-                }
-                out.lens.push(out.cols.len() - start);
-                out.rhs.push(rhs);
-            }
-            out
-        })
+        .map(|nodes| row_block(pb, &dof, &elems, &around, nodes))
         .collect();
     let nnz = blocks.iter().map(|b| b.cols.len()).sum();
     let (mut indptr, mut cols, mut vals) = (

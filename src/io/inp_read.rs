@@ -244,7 +244,7 @@ fn finish(mut st: State) -> Result<MeshFile, ParseError> {
             st.out
                 .mesh
                 .boundary_labels
-                .extend(std::iter::repeat(label).take(tris.len()));
+                .extend(std::iter::repeat_n(label, tris.len()));
         }
         if st.out.group(name).is_none() {
             let nodes = tris.iter().flatten().copied().collect();
