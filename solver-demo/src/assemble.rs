@@ -225,25 +225,6 @@ pub fn assemble_triplets(pb: &Problem) -> Result<System, SolveError> {
     Ok(System { a, b, dof })
 }
 
-/// Element matrix (row-major 4 x 4) and load vector of one tet.
-type Element = ([f64; 16], [f64; 4]);
-
-/// The [`Element`] of every tet, in parallel.
-fn element_data(pb: &Problem) -> Result<Vec<Element>, SolveError> {
-    (0..pb.mesh.tets.len())
-        .into_par_iter()
-        .map(|t| {
-            let p = corners(pb.mesh, t);
-            let g = tet_geometry(p).ok_or_else(|| {
-                SolveError::Invalid(format!("tetrahedron {} is degenerate", t + 1))
-            })?;
-            let kv = pb.k[t] * g.volume;
-            let m = std::array::from_fn(|ab| kv * dot3(g.grad[ab / 4], g.grad[ab % 4]));
-            Ok((m, element_load(&p, g.volume, pb.source)))
-        })
-        .collect()
-}
-
 /// For every node the (tet, local index) pairs of the tets around it, in tet order, packed
 /// as `4 t + a`, in CSR form (`ptr`, `items`).
 fn node_tets(mesh: &TetMesh) -> (Vec<usize>, Vec<u32>) {
@@ -271,8 +252,28 @@ struct Around<'a> {
     items: &'a [u32],
 }
 
-/// The CSR rows of the free nodes `nodes` (see [`assemble`]).
-fn row_block(pb: &Problem, dof: &[u32], elems: &[Element], around: &Around, nodes: &[u32]) -> Rows {
+/// Row `a` of the element matrix of tet `t` and its load `F_a`.
+fn element_row(pb: &Problem, t: usize, a: usize) -> Result<([f64; 4], f64), SolveError> {
+    let p = corners(pb.mesh, t);
+    let g = tet_geometry(p)
+        .ok_or_else(|| SolveError::Invalid(format!("tetrahedron {} is degenerate", t + 1)))?;
+    let kv = pb.k[t] * g.volume;
+    let row = std::array::from_fn(|b| kv * dot3(g.grad[a], g.grad[b]));
+    let load = match pb.source {
+        Source::Constant(s) => s * g.volume / 4.0,
+        source => element_load(&p, g.volume, source)[a],
+    };
+    Ok((row, load))
+}
+
+/// The CSR rows of the free nodes `nodes` (see [`assemble`]); element rows are computed
+/// where they are needed, which is cheaper than storing all element matrices.
+fn row_block(
+    pb: &Problem,
+    dof: &[u32],
+    around: &Around,
+    nodes: &[u32],
+) -> Result<Rows, SolveError> {
     let mut out = Rows::default();
     let mut row: Vec<(usize, f64)> = Vec::with_capacity(64);
     for &v in nodes {
@@ -280,12 +281,12 @@ fn row_block(pb: &Problem, dof: &[u32], elems: &[Element], around: &Around, node
         let mut rhs = 0.0;
         for &item in &around.items[around.ptr[v as usize]..around.ptr[v as usize + 1]] {
             let (t, a) = (item as usize / 4, item as usize % 4);
-            let (m, f) = &elems[t];
-            rhs += f[a];
+            let (m, f) = element_row(pb, t, a)?;
+            rhs += f;
             for (b, &w) in pb.mesh.tets[t].iter().enumerate() {
                 match dof[w as usize] {
-                    FIXED => rhs -= m[4 * a + b] * pb.dirichlet[w as usize],
-                    c => row.push((c as usize, m[4 * a + b])),
+                    FIXED => rhs -= m[b] * pb.dirichlet[w as usize],
+                    c => row.push((c as usize, m[b])),
                 }
             }
         }
@@ -303,7 +304,7 @@ fn row_block(pb: &Problem, dof: &[u32], elems: &[Element], around: &Around, node
         out.lens.push(out.cols.len() - start);
         out.rhs.push(rhs);
     }
-    out
+    Ok(out)
 }
 
 /// One block of CSR rows: column indices, values, row lengths and right-hand sides.
@@ -325,7 +326,6 @@ pub fn assemble(pb: &Problem) -> Result<System, SolveError> {
         return Err(SolveError::Invalid("too many tetrahedra".into()));
     }
     let (dof, n) = number_dofs(pb.dirichlet);
-    let elems = element_data(pb)?;
     let (ptr, items) = node_tets(pb.mesh);
     let free: Vec<u32> = (0..dof.len() as u32)
         .filter(|&v| dof[v as usize] != FIXED)
@@ -336,8 +336,8 @@ pub fn assemble(pb: &Problem) -> Result<System, SolveError> {
     };
     let blocks: Vec<Rows> = free
         .par_chunks(1024)
-        .map(|nodes| row_block(pb, &dof, &elems, &around, nodes))
-        .collect();
+        .map(|nodes| row_block(pb, &dof, &around, nodes))
+        .collect::<Result<_, _>>()?;
     let nnz = blocks.iter().map(|b| b.cols.len()).sum();
     let (mut indptr, mut cols, mut vals) = (
         Vec::with_capacity(n + 1),

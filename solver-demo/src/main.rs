@@ -106,10 +106,13 @@ fn options(cli: &Cli) -> Result<Options> {
 
 /// Prints progress to stderr once the solve runs longer than 2 s, at most once a second.
 fn progress_printer() -> impl FnMut(usize, f64) {
-    let start = Instant::now();
+    let mut start = None;
     let mut last = 0.0;
     move |it, res| {
-        let t = start.elapsed().as_secs_f64();
+        let t = start
+            .get_or_insert_with(Instant::now)
+            .elapsed()
+            .as_secs_f64();
         if t > 2.0 && t - last >= 1.0 {
             last = t;
             eprintln!("  iteration {it}: relative residual {res:.3e} ({t:.1} s)");
