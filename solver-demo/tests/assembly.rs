@@ -95,3 +95,68 @@ fn stiffness_rows_sum_to_zero_and_reproduce_linear_functions() {
         }
     }
 }
+
+#[test]
+fn conductivity_per_region_gives_the_exact_two_layer_solution() {
+    // The slab [0, 2] x [0, 1]^2, k = 1 for x < 1 and k = 3 for x > 1, u = 0 at x = 0 and
+    // u = 1 at x = 2: flux continuity gives the piecewise-linear u with u(1) = 3/4, which P1
+    // reproduces exactly on a mesh that conforms to x = 1.
+    use solver_demo::run::{solve, Options};
+    use tptd::io::{MeshFile, NodeGroup};
+    let g = grid([9, 5, 5], [0.0; 3], [2.0, 1.0, 1.0], |p| p[0]);
+    let m = mesh(&g, f64::NEG_INFINITY, f64::INFINITY);
+    let side = |x: f64| NodeGroup {
+        name: if x == 0.0 {
+            "left".into()
+        } else {
+            "right".into()
+        },
+        nodes: (0..m.points.len() as u32)
+            .filter(|&v| m.points[v as usize][0] == x)
+            .collect(),
+    };
+    let tet_region = m
+        .tets
+        .iter()
+        .map(|t| u32::from(t.iter().map(|&v| m.points[v as usize][0]).sum::<f64>() > 4.0))
+        .collect();
+    let file = MeshFile {
+        node_groups: vec![side(0.0), side(2.0)],
+        regions: vec!["soft".into(), "hard".into()],
+        tet_region,
+        mesh: m,
+    };
+    let opts = Options {
+        k_regions: vec![("hard".into(), 3.0)],
+        dirichlet: vec![("left".into(), 0.0), ("right".into(), 1.0)],
+        pcg: solver_demo::pcg::PcgOptions {
+            tol: 1e-13,
+            ..Default::default()
+        },
+        ..Options::default()
+    };
+    let sol = solve(&file, &opts, &mut |_, _| {}).unwrap();
+    for (p, u) in file.mesh.points.iter().zip(&sol.u) {
+        let exact = if p[0] <= 1.0 {
+            0.75 * p[0]
+        } else {
+            0.75 + 0.25 * (p[0] - 1.0)
+        };
+        assert!((u - exact).abs() < 1e-10, "u({p:?}) = {u}, exact {exact}");
+    }
+    // Ignoring the regions gives a different (linear) solution: the test can fail.
+    let uniform = solve(
+        &file,
+        &Options {
+            k_regions: vec![],
+            ..opts
+        },
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(uniform
+        .u
+        .iter()
+        .zip(&sol.u)
+        .any(|(a, b)| (a - b).abs() > 0.1));
+}
