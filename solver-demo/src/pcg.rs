@@ -74,9 +74,10 @@ pub fn dot(x: &[f64], y: &[f64]) -> f64 {
     let partial: Vec<f64> = x
         .par_chunks(BLOCK)
         .zip(y.par_chunks(BLOCK))
-        .map(|(a, b)| a.iter().zip(b).map(|(p, q)| p * q).sum())
+        .map(|(a, b)| a.iter().zip(b).fold(0.0, |s, (p, q)| s + p * q))
         .collect();
-    partial.iter().sum()
+    // A fold from +0.0 (an empty `sum` of f64 is -0.0).
+    partial.iter().fold(0.0, |s, x| s + x)
 }
 
 /// The diagonal of `a`.

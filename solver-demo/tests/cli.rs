@@ -183,6 +183,19 @@ fn bad_input_gives_one_line_errors() {
         &["--dirichlet", "first=1"],
         "containing node 5 has no Dirichlet node",
     );
+    let flat = d.join("flat.inp");
+    std::fs::write(
+        &flat,
+        "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 2, 0, 0\n\
+         *ELEMENT, TYPE=C3D4, ELSET=DOMAIN\n1, 1, 2, 3, 4\n*NSET, NSET=A\n1\n",
+    )
+    .unwrap();
+    fails(
+        d,
+        &flat,
+        &["--dirichlet", "a=1"],
+        "tetrahedron 1 is degenerate",
+    );
     let bad = d.join("bad.msh");
     std::fs::write(
         &bad,
