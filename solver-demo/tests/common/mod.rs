@@ -10,7 +10,7 @@ use tptd::io::msh::{write_msh, MshVersion};
 use tptd::io::{read_mesh, MeshFile};
 use tptd::{mesh_interval, MeshOptions, Method, ScalarGrid, TetMesh};
 
-/// A grid with `n` vertices per axis over `[lo, hi]^3`... per axis, sampling `f`.
+/// A grid with `n[k]` vertices along axis `k` spanning `[lo[k], hi[k]]`, sampling `f`.
 pub fn grid(n: [usize; 3], lo: [f64; 3], hi: [f64; 3], f: impl Fn([f64; 3]) -> f64) -> ScalarGrid {
     let h: [f64; 3] = std::array::from_fn(|k| (hi[k] - lo[k]) / (n[k] - 1) as f64);
     let mut values = Vec::with_capacity(n[0] * n[1] * n[2]);
