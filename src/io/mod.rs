@@ -18,3 +18,9 @@ mod write_common;
 pub use atomic::{check_writable, write_atomically, WriteError};
 pub use mesh_out::{write_mesh, MeshFormat, WriteOptions};
 pub use volume::{read_volume, ReadError};
+
+// Mesh readers (the twins of the writers above), used by `solver-demo`.
+mod inp_read;
+mod mesh_in;
+mod msh_read;
+pub use mesh_in::{read_mesh, MeshFile, MeshReadError, NodeGroup};

@@ -10,12 +10,16 @@
 //!   orientation);
 //! * point data `f`: Float64, the field values (the active scalars).
 //!
+//! [`write_vtu_fields`] writes other named Float64 point and cell fields instead of `f`
+//! (point fields before `Points`, cell fields after `types`), e.g. a solution and its
+//! gradient.
+//!
 //! Only the tetrahedra are written: the labelled boundary triangles are **not** part of the
 //! `.vtu` (use the `.msh` or `.inp` writers when the boundary groups are needed).
 
 use std::io::{self, Write};
 
-use super::write_common::check_lengths;
+use super::write_common::{check_lengths, invalid};
 use crate::mesh::TetMesh;
 
 /// VTK cell type of a linear tetrahedron.
@@ -24,31 +28,42 @@ const VTK_TETRA: u8 = 10;
 /// Bytes converted per `write_all` call for the binary arrays.
 const CHUNK: usize = 1 << 16;
 
+/// A named Float64 array written as point or cell data by [`write_vtu_fields`].
+#[derive(Clone, Copy, Debug)]
+pub struct VtuField<'a> {
+    /// The array name shown in ParaView.
+    pub name: &'a str,
+    /// Components per point or cell (1 for a scalar, 3 for a vector).
+    pub components: usize,
+    /// `components` values per point or cell, interleaved.
+    pub data: &'a [f64],
+}
+
 /// Sizes of the appended arrays, in file order, and the integer type of the cell arrays.
 struct Layout {
     /// Whether `connectivity` and `offsets` need Int64 (an id or offset exceeds `i32`).
     wide: bool,
-    /// Byte sizes of `f`, `Points`, `connectivity`, `offsets`, `types`.
-    sizes: [u64; 5],
+    /// Byte sizes of the point fields, `Points`, `connectivity`, `offsets`, `types` and the
+    /// cell fields, in file order.
+    sizes: Vec<u64>,
 }
 
 impl Layout {
-    fn new(mesh: &TetMesh) -> Self {
+    fn new(mesh: &TetMesh, point: &[VtuField], cell: &[VtuField]) -> Self {
         let n_points = mesh.points.len() as u64;
         let n_tets = mesh.tets.len();
         let wide = n_points > i32::MAX as u64 || n_tets.saturating_mul(4) > i32::MAX as usize;
         let int_size = if wide { 8 } else { 4 };
         let n_tets = n_tets as u64;
-        Layout {
-            wide,
-            sizes: [
-                8 * n_points,
-                24 * n_points,
-                int_size * 4 * n_tets,
-                int_size * n_tets,
-                n_tets,
-            ],
-        }
+        let mut sizes: Vec<u64> = point.iter().map(|f| 8 * f.data.len() as u64).collect();
+        sizes.extend([
+            24 * n_points,
+            int_size * 4 * n_tets,
+            int_size * n_tets,
+            n_tets,
+        ]);
+        sizes.extend(cell.iter().map(|f| 8 * f.data.len() as u64));
+        Layout { wide, sizes }
     }
 
     /// VTK name of the integer type of `connectivity` and `offsets`.
@@ -61,49 +76,74 @@ impl Layout {
     }
 
     /// Offsets of the arrays in the appended data (each preceded by its UInt64 byte count).
-    fn offsets(&self) -> [u64; 5] {
-        let mut offsets = [0u64; 5];
-        for k in 1..5 {
+    fn offsets(&self) -> Vec<u64> {
+        let mut offsets = vec![0u64; self.sizes.len()];
+        for k in 1..offsets.len() {
             offsets[k] = offsets[k - 1] + 8 + self.sizes[k - 1];
         }
         offsets
     }
 }
 
-/// The XML part of the file, up to and including the `_` that starts the appended data.
-fn xml_header(mesh: &TetMesh, layout: &Layout) -> String {
-    let o = layout.offsets();
+/// One `<DataArray>` line of a Float64 field stored at `offset`.
+fn field_line(f: &VtuField, offset: u64) -> String {
     format!(
+        "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" offset=\"{offset}\"/>\n",
+        f.name, f.components
+    )
+}
+
+/// The XML part of the file, up to and including the `_` that starts the appended data.
+fn xml_header(mesh: &TetMesh, layout: &Layout, point: &[VtuField], cell: &[VtuField]) -> String {
+    let o = layout.offsets();
+    let np = point.len();
+    let mut x = String::from(concat!(
+        "<?xml version=\"1.0\"?>\n",
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+        "  <UnstructuredGrid>\n",
+    ));
+    x += &format!(
+        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
+        mesh.points.len(),
+        mesh.tets.len()
+    );
+    if let Some(first) = point.first() {
+        x += &format!("      <PointData Scalars=\"{}\">\n", first.name);
+        for (f, &off) in point.iter().zip(&o) {
+            x += &field_line(f, off);
+        }
+        x += "      </PointData>\n";
+    }
+    if !cell.is_empty() {
+        x += "      <CellData>\n";
+        for (f, &off) in cell.iter().zip(&o[np + 4..]) {
+            x += &field_line(f, off);
+        }
+        x += "      </CellData>\n";
+    }
+    let it = layout.int_type();
+    x += &format!(
         concat!(
-            "<?xml version=\"1.0\"?>\n",
-            "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
-            "  <UnstructuredGrid>\n",
-            "    <Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{nc}\">\n",
-            "      <PointData Scalars=\"f\">\n",
-            "        <DataArray type=\"Float64\" Name=\"f\" NumberOfComponents=\"1\" format=\"appended\" offset=\"{o0}\"/>\n",
-            "      </PointData>\n",
             "      <Points>\n",
-            "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"{o1}\"/>\n",
+            "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"{}\"/>\n",
             "      </Points>\n",
             "      <Cells>\n",
-            "        <DataArray type=\"{it}\" Name=\"connectivity\" format=\"appended\" offset=\"{o2}\"/>\n",
-            "        <DataArray type=\"{it}\" Name=\"offsets\" format=\"appended\" offset=\"{o3}\"/>\n",
-            "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{o4}\"/>\n",
+            "        <DataArray type=\"{it}\" Name=\"connectivity\" format=\"appended\" offset=\"{}\"/>\n",
+            "        <DataArray type=\"{it}\" Name=\"offsets\" format=\"appended\" offset=\"{}\"/>\n",
+            "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{}\"/>\n",
             "      </Cells>\n",
             "    </Piece>\n",
             "  </UnstructuredGrid>\n",
             "  <AppendedData encoding=\"raw\">\n",
             "   _"
         ),
-        np = mesh.points.len(),
-        nc = mesh.tets.len(),
-        it = layout.int_type(),
-        o0 = o[0],
-        o1 = o[1],
-        o2 = o[2],
-        o3 = o[3],
-        o4 = o[4],
-    )
+        o[np],
+        o[np + 1],
+        o[np + 2],
+        o[np + 3],
+        it = it,
+    );
+    x
 }
 
 /// The binary appended data: small pieces are collected in a buffer that is handed to the
@@ -141,13 +181,13 @@ impl Appended<'_> {
         self.put(&size.to_le_bytes())
     }
 
-    /// The field values `f` as Float64.
-    fn values(&mut self, mesh: &TetMesh, size: u64) -> io::Result<()> {
+    /// A Float64 array (a field).
+    fn values(&mut self, data: &[f64], size: u64) -> io::Result<()> {
         self.array_size(size)?;
         if NATIVE {
-            return self.put_direct(bytemuck::cast_slice(&mesh.values));
+            return self.put_direct(bytemuck::cast_slice(data));
         }
-        for &v in &mesh.values {
+        for &v in data {
             self.put(&v.to_le_bytes())?;
         }
         Ok(())
@@ -216,21 +256,66 @@ const NATIVE: bool = cfg!(target_endian = "little");
 /// Returns the first error of `w`, or [`io::ErrorKind::InvalidInput`] when the mesh is
 /// inconsistent (`values` or `boundary_labels` of the wrong length, an out-of-range index).
 pub fn write_vtu(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
+    let f = VtuField {
+        name: "f",
+        components: 1,
+        data: &mesh.values,
+    };
+    write_vtu_fields(mesh, &[f], &[], w)
+}
+
+/// Writes the tetrahedra of `mesh` with the given point and cell fields (instead of `f`) as
+/// a VTK XML UnstructuredGrid, like [`write_vtu`]: point fields first, then `Points`, the
+/// cell arrays and the cell fields in the appended data; the first point field is the
+/// active scalar.
+///
+/// # Errors
+/// As [`write_vtu`], and [`io::ErrorKind::InvalidInput`] when a field does not have
+/// `components` values per point (cell).
+pub fn write_vtu_fields(
+    mesh: &TetMesh,
+    point: &[VtuField],
+    cell: &[VtuField],
+    w: &mut dyn Write,
+) -> io::Result<()> {
     check_lengths(mesh)?;
-    let layout = Layout::new(mesh);
-    let [s_values, s_points, s_conn, s_offsets, s_types] = layout.sizes;
+    check_fields(point, mesh.points.len())?;
+    check_fields(cell, mesh.tets.len())?;
+    let layout = Layout::new(mesh, point, cell);
+    let np = point.len();
     let n_tets = mesh.tets.len();
-    w.write_all(xml_header(mesh, &layout).as_bytes())?;
+    w.write_all(xml_header(mesh, &layout, point, cell).as_bytes())?;
     let mut out = Appended {
         w,
         buf: Vec::with_capacity(CHUNK + 64),
     };
-    out.values(mesh, s_values)?;
-    out.points(mesh, s_points)?;
-    out.connectivity(mesh, s_conn, layout.wide)?;
-    out.offsets(n_tets, s_offsets, layout.wide)?;
-    out.types(n_tets, s_types)?;
+    let s = &layout.sizes;
+    for (f, &size) in point.iter().zip(s) {
+        out.values(f.data, size)?;
+    }
+    out.points(mesh, s[np])?;
+    out.connectivity(mesh, s[np + 1], layout.wide)?;
+    out.offsets(n_tets, s[np + 2], layout.wide)?;
+    out.types(n_tets, s[np + 3])?;
+    for (f, &size) in cell.iter().zip(&s[np + 4..]) {
+        out.values(f.data, size)?;
+    }
     out.put(b"\n  </AppendedData>\n</VTKFile>\n")?;
     out.flush()?;
     out.w.flush()
+}
+
+/// Checks that every field has `components` values for each of `n` points or cells.
+fn check_fields(fields: &[VtuField], n: usize) -> io::Result<()> {
+    for f in fields {
+        if f.components == 0 || f.data.len() != n * f.components {
+            return Err(invalid(format!(
+                "field {} has {} values, expected {} x {n}",
+                f.name,
+                f.data.len(),
+                f.components
+            )));
+        }
+    }
+    Ok(())
 }
