@@ -23,6 +23,7 @@ pub mod io;
 pub(crate) mod keys;
 pub mod mesh;
 pub mod report;
+pub mod surface;
 pub mod topology;
 pub(crate) mod trilinear;
 
@@ -32,4 +33,5 @@ pub use extract::{
     Method,
 };
 pub use grid::ScalarGrid;
-pub use mesh::{BoundaryLabel, TetMesh};
+pub use mesh::{BoundaryLabel, TetMesh, TriSurface};
+pub use surface::{analysis::analyse_surface, level_surface, SurfaceOptions};

@@ -18,7 +18,9 @@ pub(crate) struct Cli {
     pub(crate) input: Option<PathBuf>,
 
     /// Output mesh; the format follows the extension: .msh (Gmsh), .inp (Abaqus/CalculiX),
-    /// .vtu (VTK) [default with --demo: tptd-demo.vtu]
+    /// .vtu (VTK) for tetrahedra; .obj, .ply, .stl for the isosurface (the level sets
+    /// f = alpha and f = beta, normals towards increasing f) [default with --demo:
+    /// tptd-demo.vtu]
     #[arg(short, long, value_name = "OUT", required_unless_present = "demo")]
     pub(crate) output: Option<PathBuf>,
 
@@ -50,6 +52,14 @@ pub(crate) struct Cli {
     /// Override the grid spacing (physical size of a voxel), e.g. 0.5,0.5,1.2
     #[arg(long, value_name = "SX,SY,SZ", value_parser = parse_spacing)]
     pub(crate) spacing: Option<Spacing>,
+
+    /// Surface output: also write the triangles on the grid box that close the surface
+    #[arg(long)]
+    pub(crate) caps: bool,
+
+    /// Surface output: ASCII instead of binary .ply / .stl
+    #[arg(long)]
+    pub(crate) ascii: bool,
 
     /// Skip the Betti numbers and dihedral angles
     #[arg(long)]

@@ -10,7 +10,9 @@ use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
 use tptd::improve::quality::{summarize, QualitySummary};
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
-use tptd::io::{check_writable, read_volume, write_atomically, write_mesh, MeshFormat};
+use tptd::io::{
+    check_writable, read_volume, write_atomically, write_mesh, MeshFormat, SurfaceFormat,
+};
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
 use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid};
 
@@ -18,6 +20,7 @@ use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
 use crate::progress::{improve_with_progress, mesh_with_progress};
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
+use crate::surface::write_level_surface;
 
 /// Output written by `--demo` when no `-o` is given.
 const DEMO_OUTPUT: &str = "tptd-demo.vtu";
@@ -27,11 +30,11 @@ pub(crate) struct Job {
     /// The input as named in messages (`demo` for the demo volume).
     input_name: String,
     /// The mesh output path.
-    output: PathBuf,
+    pub(crate) output: PathBuf,
     /// The meshing options.
     pub(crate) opts: MeshOptions,
     /// The mesh writer options.
-    write: WriteOptions,
+    pub(crate) write: WriteOptions,
 }
 
 /// The results of the analysis stage (all `None` with `--no-analysis`).
@@ -73,7 +76,13 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let comparison = compare_demo(&cli, &grid, &job)?;
 
     let t = Instant::now();
-    write_mesh(&job.output, &out.mesh, &job.write).map_err(write_error)?;
+    let surface = match SurfaceFormat::from_path(&job.output) {
+        Some(_) => Some(write_level_surface(&cli, &job, &out.mesh)?),
+        None => {
+            write_mesh(&job.output, &out.mesh, &job.write).map_err(write_error)?;
+            None
+        }
+    };
     let t_write = secs(t);
 
     let timings = Timings {
@@ -84,7 +93,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         write: t_write,
         total: secs(t_total),
     };
-    let report = make_report(&job, &grid, &out, analysis, quality, timings);
+    let mut report = make_report(&job, &grid, &out, analysis, quality, timings);
+    report.surface = surface;
     finish(&cli, &report, comparison.as_ref())?;
     // The process ends here: let the OS reclaim the mesh and the grid at exit instead of
     // freeing hundreds of megabytes page by page first.
@@ -114,7 +124,9 @@ fn check_args(cli: &Cli) -> Result<Job> {
         method: cli.method.method(),
         threads: cli.threads.map(|n| n as usize),
     };
-    let write = WriteOptions::default().with_msh_version(cli.msh_version.version());
+    let write = WriteOptions::default()
+        .with_msh_version(cli.msh_version.version())
+        .with_ascii(cli.ascii);
     Ok(Job {
         input_name,
         output,
@@ -152,7 +164,9 @@ fn interval(cli: &Cli, demo: bool, input_name: &str) -> Result<(f64, f64)> {
 /// Checks the mesh output (a known format, writable) and the report output (writable, not
 /// the mesh's path).
 fn check_outputs(output: &Path, report: Option<&Path>) -> Result<()> {
-    MeshFormat::from_path(output).map_err(write_error)?;
+    if SurfaceFormat::from_path(output).is_none() {
+        MeshFormat::from_path(output).map_err(write_error)?;
+    }
     check_writable(output).map_err(write_error)?;
     if let Some(r) = report {
         if r == output {
