@@ -1,0 +1,117 @@
+//! End-to-end tests of `tptd-mesh` with isosurface output (`-o OUT.obj|.ply|.stl`): the
+//! report's surface section, `--caps`, `--ascii`, thread independence, and the errors.
+
+use std::fs;
+use std::path::Path;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
+
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    let o = Command::new(BIN)
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("the binary runs");
+    o
+}
+
+fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "stdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn surface_report(dir: &Path, out: &str, extra: &[&str]) -> Value {
+    let mut args = vec!["--demo", "-q", "-o", out, "--report", "r.json"];
+    args.extend_from_slice(extra);
+    ok(&run_in(dir, &args));
+    let r: Value = serde_json::from_str(&fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+    r["surface"].clone()
+}
+
+#[test]
+fn demo_isosurface_keeps_the_vessels_apart_and_six_merges_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = surface_report(dir.path(), "ctd.obj", &[]);
+    // two closed tubes (capped inside the box): two spheres
+    assert_eq!(s["betti"], serde_json::json!([2, 0, 2]), "{s}");
+    assert_eq!(s["closed_manifold"], true);
+    assert_eq!(s["oriented"], true);
+    assert!(s["area"].as_f64().unwrap() > 0.0);
+    let six = surface_report(dir.path(), "six.obj", &["--method", "six"]);
+    assert_eq!(six["betti"][0], 1, "{six}");
+    let text = fs::read_to_string(dir.path().join("ctd.obj")).unwrap();
+    let v = text.lines().filter(|l| l.starts_with("v ")).count();
+    let f = text.lines().filter(|l| l.starts_with("f ")).count();
+    assert_eq!(
+        (v as u64, f as u64),
+        (
+            s["vertices"].as_u64().unwrap(),
+            s["triangles"].as_u64().unwrap()
+        )
+    );
+}
+
+#[test]
+fn caps_close_the_surface_and_ascii_is_text() {
+    let dir = tempfile::tempdir().unwrap();
+    // at 0.05 the level set meets the grid box
+    let open = surface_report(dir.path(), "o.ply", &["--alpha", "0.05"]);
+    let closed = surface_report(dir.path(), "c.ply", &["--alpha", "0.05", "--caps"]);
+    assert_eq!(open["closed_manifold"], false, "{open}");
+    assert!(open["border_edges"].as_u64().unwrap() > 0);
+    assert_eq!(closed["closed_manifold"], true, "{closed}");
+    assert_eq!(closed["oriented"], true, "{closed}");
+    ok(&run_in(
+        dir.path(),
+        &["--demo", "-q", "-o", "a.stl", "--ascii"],
+    ));
+    ok(&run_in(dir.path(), &["--demo", "-q", "-o", "b.stl"]));
+    let a = fs::read_to_string(dir.path().join("a.stl")).unwrap();
+    assert!(a.starts_with("solid tptd\n") && a.trim_end().ends_with("endsolid tptd"));
+    let b = fs::read(dir.path().join("b.stl")).unwrap();
+    let n = u32::from_le_bytes(b[80..84].try_into().unwrap()) as usize;
+    assert_eq!(b.len(), 84 + 50 * n);
+    assert_eq!(n, a.matches("facet normal").count());
+}
+
+#[test]
+fn surface_output_is_identical_for_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["obj", "ply", "stl"] {
+        let one = format!("one.{ext}");
+        let two = format!("two.{ext}");
+        ok(&run_in(
+            dir.path(),
+            &["--demo", "-q", "-j", "1", "-o", &one, "--method", "tptd"],
+        ));
+        ok(&run_in(
+            dir.path(),
+            &["--demo", "-q", "-j", "2", "-o", &two, "--method", "tptd"],
+        ));
+        assert!(
+            fs::read(dir.path().join(&one)).unwrap() == fs::read(dir.path().join(&two)).unwrap(),
+            "{ext}"
+        );
+    }
+}
+
+#[test]
+fn unknown_extension_names_the_surface_formats_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = run_in(dir.path(), &["--demo", "-o", "x.off"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("x.off") && err.contains(".obj, .ply or .stl"),
+        "{err}"
+    );
+    assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+}
