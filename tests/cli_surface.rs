@@ -115,3 +115,74 @@ fn unknown_extension_names_the_surface_formats_and_writes_nothing() {
     );
     assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// A small ASCII `.vts`: a sheared, bent 6×5×4 grid with fields `a` (two blobs) and `b`.
+fn write_vts(path: &Path) {
+    let dims = [6usize, 5, 4];
+    let (mut pts, mut a, mut b) = (String::new(), String::new(), String::new());
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let (x, y, z) = (i as f64, j as f64, k as f64);
+                pts += &format!("{} {} {} ", x + 0.2 * y, y + 0.1 * (x * 0.8).sin(), 0.5 * z);
+                let d1 = (x - 1.2).powi(2) + (y - 2.0).powi(2) + (z - 1.5).powi(2);
+                let d2 = (x - 3.8).powi(2) + (y - 2.0).powi(2) + (z - 1.5).powi(2);
+                a += &format!("{} ", (-d1).exp() + (-d2).exp());
+                b += &format!("{} ", x + y);
+            }
+        }
+    }
+    let text = format!(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"StructuredGrid\" version=\"0.1\">\n\
+         <StructuredGrid WholeExtent=\"0 5 0 4 0 3\"><Piece Extent=\"0 5 0 4 0 3\">\n\
+         <PointData><DataArray type=\"Float64\" Name=\"a\" format=\"ascii\">{a}</DataArray>\n\
+         <DataArray type=\"Float64\" Name=\"b\" format=\"ascii\">{b}</DataArray></PointData>\n\
+         <Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">{pts}\
+         </DataArray></Points></Piece></StructuredGrid></VTKFile>\n"
+    );
+    fs::write(path, text).unwrap();
+}
+
+#[test]
+fn curvilinear_vts_meshes_to_every_output_format() {
+    let dir = tempfile::tempdir().unwrap();
+    write_vts(&dir.path().join("g.vts"));
+    for out in ["m.msh", "m.inp", "m.vtu", "s.obj", "s.ply", "s.stl"] {
+        let o = run_in(
+            dir.path(),
+            &[
+                "g.vts", "--alpha", "0.5", "-q", "-o", out, "--report", "r.json",
+            ],
+        );
+        ok(&o);
+        let r: Value =
+            serde_json::from_str(&fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+        // the two blobs stay apart
+        assert_eq!(r["betti"], serde_json::json!([2, 0, 0]), "{out}: {r}");
+        if out.starts_with('s') {
+            assert_eq!(r["surface"]["betti"], serde_json::json!([2, 0, 2]), "{out}");
+        }
+    }
+    ok(&run_in(
+        dir.path(),
+        &[
+            "g.vts", "--field", "b", "--alpha", "4.5", "-q", "-o", "b.vtu",
+        ],
+    ));
+    let o = run_in(
+        dir.path(),
+        &["g.vts", "--field", "c", "--alpha", "1", "-o", "c.vtu"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        err.contains("g.vts") && err.contains("the file has: a, b"),
+        "{err}"
+    );
+    let o = run_in(
+        dir.path(),
+        &["g.vts", "--spacing", "1,1,1", "--alpha", "1", "-o", "c.vtu"],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!dir.path().join("c.vtu").exists());
+}

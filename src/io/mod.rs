@@ -12,12 +12,14 @@ pub mod nifti;
 pub mod npy;
 pub mod nrrd;
 pub mod obj;
+pub mod plot3d;
 pub mod ply;
 pub mod stl;
 mod volume;
+pub mod vts;
 pub mod vtu;
 mod write_common;
 
 pub use atomic::{check_writable, write_atomically, WriteError};
 pub use mesh_out::{write_mesh, write_surface, MeshFormat, SurfaceFormat, WriteOptions};
-pub use volume::{read_volume, ReadError};
+pub use volume::{is_curvilinear, read_curvilinear, read_volume, ReadError};

@@ -20,7 +20,8 @@ use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
 use crate::progress::{improve_with_progress, mesh_with_progress};
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
-use crate::surface::write_level_surface;
+use crate::surface::{read_curvilinear_input, write_level_surface};
+use tptd::curvilinear::map_mesh;
 
 /// Output written by `--demo` when no `-o` is given.
 const DEMO_OUTPUT: &str = "tptd-demo.vtu";
@@ -56,7 +57,11 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let job = check_args(&cli)?;
 
     let t = Instant::now();
-    let grid = read_grid(&cli, &job.input_name)?;
+    let curvilinear = read_curvilinear_input(&cli, &job.input_name)?;
+    let grid = match &curvilinear {
+        Some(c) => c.values.clone(),
+        None => read_grid(&cli, &job.input_name)?,
+    };
     let t_read = secs(t);
     warn_exact_bounds(&grid, &job);
 
@@ -65,6 +70,9 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let t_mesh = secs(t);
 
     let (quality, t_quality) = improve_mesh(&cli, &grid, &job, &mut out);
+    if let Some(c) = &curvilinear {
+        map_mesh(&mut out.mesh, c).map_err(|e| file_error(&job.input_name, e))?;
+    }
 
     let t = Instant::now();
     let analysis = analyse(&out, cli.no_analysis, cli.quality);
