@@ -138,6 +138,65 @@ fn vts_in_every_encoding_and_plot3d_twins_read_the_same_grid() {
         let single = vts.values.values.iter().zip(&fs[k]);
         assert!(single.into_iter().all(|(a, b)| *a == f64::from(*b as f32)));
     }
+    damaged_files_give_errors(dir.path());
+}
+
+/// Truncated and corrupted copies of every file: an error naming the file, never a panic.
+fn damaged_files_give_errors(dir: &Path) {
+    let bad = dir.join("bad");
+    std::fs::create_dir(&bad).unwrap();
+    let mut rng = common::Rng::new(5);
+    let names: Vec<String> = MODES
+        .iter()
+        .map(|m| format!("{m}.vts"))
+        .chain([
+            "twin.xyz".into(),
+            "rec.xyz".into(),
+            "twin.q".into(),
+            "rec.f".into(),
+        ])
+        .collect();
+    for name in &names {
+        let orig = std::fs::read(dir.join(name)).unwrap();
+        for round in 0..12 {
+            let mut b = orig.clone();
+            if round % 2 == 0 {
+                b.truncate(rng.usize(0, orig.len() - 1));
+            } else {
+                for _ in 0..4 {
+                    let i = rng.usize(0, b.len() - 1);
+                    b[i] = rng.usize(0, 255) as u8;
+                }
+            }
+            for f in ["twin.xyz", "twin.q", "rec.xyz", "rec.f"] {
+                std::fs::copy(dir.join(f), bad.join(f)).unwrap();
+            }
+            let target = bad.join(name);
+            std::fs::write(&target, &b).unwrap();
+            let input = if name.ends_with(".vts") || name.ends_with(".xyz") {
+                target.clone()
+            } else {
+                bad.join(if name.starts_with("twin") {
+                    "twin.xyz"
+                } else {
+                    "rec.xyz"
+                })
+            };
+            let function = bad.join(if name.starts_with("rec") {
+                "rec.f"
+            } else {
+                "twin.q"
+            });
+            let f = input
+                .to_string_lossy()
+                .ends_with(".xyz")
+                .then_some(function.as_path());
+            if let Err(e) = read_curvilinear(&input, f, None) {
+                let msg = e.to_string();
+                assert!(msg.contains("bad/") && !msg.contains('\n'), "{msg}");
+            }
+        }
+    }
 }
 
 #[test]

@@ -247,6 +247,7 @@ pub fn read_vts(path: &Path, field: Option<&str>) -> Result<CurvilinearGrid, Rea
         bytes: &bytes,
         enc,
         appended: p.appended,
+        limit: std::cell::Cell::new(0),
     };
     let pts_desc = p
         .arrays
@@ -292,6 +293,8 @@ struct Source<'a> {
     bytes: &'a [u8],
     enc: Encoding,
     appended: Option<(bool, usize)>,
+    /// Bytes the array being decoded needs.
+    limit: std::cell::Cell<usize>,
 }
 
 impl Source<'_> {
@@ -299,6 +302,7 @@ impl Source<'_> {
     fn values(&self, a: &ArrayDesc, count: usize) -> Result<Vec<f64>, ReadError> {
         let ty = a.ty.expect("set when parsed");
         let what = format!("DataArray {:?}", a.name);
+        self.limit.set(count.saturating_mul(ty.size()));
         let data = match a.format.as_str() {
             "ascii" => return self.ascii(a, count, &what),
             "binary" => self.base64_block(a.text.trim().as_bytes(), &what)?,
@@ -358,8 +362,13 @@ impl Source<'_> {
         }
     }
 
+    /// Header integer `i` of `b` (`usize::MAX` when `b` is too short: callers then report
+    /// truncation through their checked arithmetic).
     fn header_int(&self, b: &[u8], i: usize) -> usize {
         let s = self.enc.header.size();
+        if b.len() < (i + 1) * s {
+            return usize::MAX;
+        }
         decode_samples(&b[i * s..(i + 1) * s], self.enc.header, self.enc.endian)[0] as usize
     }
 
@@ -401,7 +410,7 @@ impl Source<'_> {
             .filter(|c| !c.is_ascii_whitespace())
             .collect();
         let hs = self.enc.header.size();
-        let chars = |bytes: usize| bytes.div_ceil(3) * 4;
+        let chars = |bytes: usize| bytes.div_ceil(3).saturating_mul(4);
         let dec = |t: &[u8]| {
             base64::engine::general_purpose::STANDARD
                 .decode(t)
@@ -459,8 +468,15 @@ impl Source<'_> {
         let nb = self.header_int(header, 0);
         let block = self.header_int(header, 1);
         let last = self.header_int(header, 2);
-        if header.len() < (3 + nb) * hs {
+        if nb.checked_add(3).and_then(|x| x.checked_mul(hs)) > Some(header.len()) {
             return Err(self.truncated(what));
+        }
+        // never inflate more than the array needs (a corrupt or hostile header)
+        if nb.saturating_mul(block) > self.limit.get().saturating_add(block) {
+            return Err(ReadError::invalid(
+                self.path,
+                format!("{what}: compression header declares more data than the array holds"),
+            ));
         }
         let mut out = Vec::new();
         let mut pos = 0usize;
