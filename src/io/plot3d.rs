@@ -7,7 +7,9 @@
 //! format (one record per k plane). The function file must use the grid file's layout. A
 //! `.q` file holds the five variables `density`, `momentum_x`, `momentum_y`, `momentum_z`,
 //! `energy` (after the four reals Mach, alpha, Re, time); a `.f` file holds `nvars` variables
-//! named `f1`, `f2`, …. `field` picks one by name or by its 1-based number; default the first.
+//! named `f1`, `f2`, …; a function file with another extension (`bluntfinq.bin`) is read as
+//! `.q` if it is one, else as `.f`. `field` picks a variable by name or by its 1-based number;
+//! default the first.
 
 use std::path::Path;
 
@@ -194,14 +196,15 @@ pub fn read_plot3d(
                 ReadError::invalid(xyz, "no function file (.q or .f) next to it; name one")
             })?,
     };
-    let is_q = fpath
+    let ext = fpath
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("q"));
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
     let fb = read_all(&fpath)?;
-    let (names, vals) = if is_q {
-        read_q(&fpath, &fb, &l, &dims)?
-    } else {
-        read_f(&fpath, &fb, &l, &dims)?
+    // `.q` and `.f` by extension; any other name: a solution file if it reads as one
+    let (names, vals) = match ext.as_deref() {
+        Some("q") => read_q(&fpath, &fb, &l, &dims)?,
+        Some("f") => read_f(&fpath, &fb, &l, &dims)?,
+        _ => read_q(&fpath, &fb, &l, &dims).or_else(|_| read_f(&fpath, &fb, &l, &dims))?,
     };
     let k = pick(&fpath, &names, field)?;
     let values = vals[k * n..(k + 1) * n].to_vec();
