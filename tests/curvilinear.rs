@@ -138,6 +138,11 @@ fn vts_in_every_encoding_and_plot3d_twins_read_the_same_grid() {
         let single = vts.values.values.iter().zip(&fs[k]);
         assert!(single.into_iter().all(|(a, b)| *a == f64::from(*b as f32)));
     }
+    // blunt-fin naming: the solution file as `bluntfinq.bin`, read as a .q by its content
+    let bin = dir.path().join("bluntfinq.bin");
+    std::fs::copy(dir.path().join("twin.q"), &bin).unwrap();
+    let fin = read_plot3d(&dir.path().join("twin.xyz"), Some(&bin), Some("energy")).unwrap();
+    assert_eq!(fin, read_vts(&dir.path().join("twin.vts"), Some("energy")).unwrap());
     damaged_files_give_errors(dir.path());
 }
 
