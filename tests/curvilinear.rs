@@ -142,7 +142,10 @@ fn vts_in_every_encoding_and_plot3d_twins_read_the_same_grid() {
     let bin = dir.path().join("bluntfinq.bin");
     std::fs::copy(dir.path().join("twin.q"), &bin).unwrap();
     let fin = read_plot3d(&dir.path().join("twin.xyz"), Some(&bin), Some("energy")).unwrap();
-    assert_eq!(fin, read_vts(&dir.path().join("twin.vts"), Some("energy")).unwrap());
+    assert_eq!(
+        fin,
+        read_vts(&dir.path().join("twin.vts"), Some("energy")).unwrap()
+    );
     damaged_files_give_errors(dir.path());
 }
 
