@@ -185,4 +185,18 @@ fn curvilinear_vts_meshes_to_every_output_format() {
     );
     assert_eq!(o.status.code(), Some(1));
     assert!(!dir.path().join("c.vtu").exists());
+    // --field on a volume that has no fields
+    let o = run_in(dir.path(), &["--demo", "--field", "a", "-o", "e.vtu"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("curvilinear grids"));
+    assert!(!dir.path().join("e.vtu").exists());
+    // mapped output is identical for one and two threads
+    for (j, out) in [("1", "j1.msh"), ("2", "j2.msh")] {
+        ok(&run_in(
+            dir.path(),
+            &["g.vts", "--alpha", "0.5", "-q", "-j", j, "-o", out],
+        ));
+    }
+    let (a, b) = (dir.path().join("j1.msh"), dir.path().join("j2.msh"));
+    assert!(fs::read(a).unwrap() == fs::read(b).unwrap());
 }
