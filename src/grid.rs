@@ -272,6 +272,56 @@ pub fn det3(m: &[[f64; 3]; 3]) -> f64 {
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
+/// A curvilinear (structured, warped) grid: scalar values and a physical position at every
+/// vertex of a `dims` lattice. In each cell both the field and the geometry are trilinear in
+/// the cell's parameter space (isoparametric hexahedra, as VTK interpolates them).
+///
+/// `values` is the field on the parameter-space lattice (unit spacing, zero origin, identity
+/// direction): the mesher decomposes and clips there, and `crate::curvilinear` maps the
+/// result through the cells' trilinear geometry maps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CurvilinearGrid {
+    /// The field on the parameter-space lattice (index space).
+    pub values: ScalarGrid,
+    /// Physical position of each grid vertex, numbered like `values` (x fastest).
+    pub points: Vec<[f64; 3]>,
+}
+
+impl CurvilinearGrid {
+    /// Builds a curvilinear grid from vertex values and positions (both x fastest).
+    ///
+    /// # Errors
+    /// The [`GridError`]s of [`ScalarGrid::new`]; [`GridError::WrongLength`] when `points`
+    /// does not have one position per vertex; [`GridError::BadDirection`] for a non-finite
+    /// position.
+    pub fn new(
+        dims: [usize; 3],
+        values: Vec<f64>,
+        points: Vec<[f64; 3]>,
+    ) -> Result<Self, GridError> {
+        let values = ScalarGrid::new(dims, values)?;
+        if points.len() != values.values.len() {
+            return Err(GridError::WrongLength {
+                dims,
+                want: values.values.len(),
+                got: points.len(),
+            });
+        }
+        if points.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(GridError::BadDirection);
+        }
+        Ok(CurvilinearGrid { values, points })
+    }
+
+    /// The eight corner positions of cell `c` (corner order of the numbering conventions).
+    pub fn cell_points(&self, c: [usize; 3]) -> [[f64; 3]; 8] {
+        std::array::from_fn(|k| {
+            let o = corner_offset(k);
+            self.points[self.values.index(c[0] + o[0], c[1] + o[1], c[2] + o[2])]
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

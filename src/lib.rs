@@ -13,6 +13,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub(crate) mod clip;
+pub mod curvilinear;
 pub(crate) mod decompose;
 pub mod demo;
 pub(crate) mod extract;
@@ -23,14 +24,17 @@ pub mod io;
 pub(crate) mod keys;
 pub mod mesh;
 pub mod report;
+pub mod surface;
 pub mod topology;
 pub(crate) mod trilinear;
 pub(crate) mod warp;
 
+pub use curvilinear::{mesh_curvilinear, CurvilinearError};
 pub use decompose::CellCase;
 pub use extract::{
     mesh_interval, mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput, MeshStats,
     Method,
 };
-pub use grid::ScalarGrid;
-pub use mesh::{BoundaryLabel, TetMesh};
+pub use grid::{CurvilinearGrid, ScalarGrid};
+pub use mesh::{BoundaryLabel, TetMesh, TriSurface};
+pub use surface::{analysis::analyse_surface, level_surface, SurfaceOptions};

@@ -81,3 +81,21 @@ impl TetMesh {
         partial.iter().sum()
     }
 }
+
+/// A triangle surface with labelled triangles: the isosurface output of
+/// [`crate::surface::level_surface`], written by the `obj`, `ply` and `stl` writers.
+///
+/// Invariants: every point is used by a triangle; `values[p]` is the field at `points[p]`;
+/// `labels[t]` labels `triangles[t]`; triangles are listed grouped by label in
+/// [`BoundaryLabel::ALL`] order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriSurface {
+    /// #P physical positions.
+    pub points: Vec<[f64; 3]>,
+    /// #P field values.
+    pub values: Vec<f64>,
+    /// #F triangles, as indices into `points`.
+    pub triangles: Vec<[u32; 3]>,
+    /// #F labels, one per triangle.
+    pub labels: Vec<BoundaryLabel>,
+}

@@ -129,6 +129,10 @@ pub struct Report {
     /// The quality pass (`--quality` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub quality: Option<QualitySection>,
+    /// The isosurface written (surface outputs `.obj`, `.ply`, `.stl` only; set by the caller
+    /// after [`build_report`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface: Option<crate::surface::analysis::SurfaceAnalysis>,
     /// Worker threads used.
     pub threads: usize,
     /// Stage timings.
@@ -219,6 +223,7 @@ pub fn build_report(
         betti,
         dihedral_degrees: dihedral.map(|(min, max)| Dihedral { min, max }),
         quality,
+        surface: None,
         threads: run.threads,
         timings_seconds: timings,
     }

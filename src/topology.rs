@@ -7,13 +7,13 @@
 use crate::mesh::TetMesh;
 
 /// Union–find over `n` elements.
-struct Dsu(Vec<u32>);
+pub(crate) struct Dsu(Vec<u32>);
 
 impl Dsu {
-    fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         Dsu((0..n as u32).collect())
     }
-    fn find(&mut self, mut x: u32) -> u32 {
+    pub(crate) fn find(&mut self, mut x: u32) -> u32 {
         while self.0[x as usize] != x {
             let p = self.0[self.0[x as usize] as usize];
             self.0[x as usize] = p;
@@ -21,7 +21,7 @@ impl Dsu {
         }
         x
     }
-    fn union(&mut self, a: u32, b: u32) {
+    pub(crate) fn union(&mut self, a: u32, b: u32) {
         let (ra, rb) = (self.find(a), self.find(b));
         if ra != rb {
             self.0[ra.max(rb) as usize] = ra.min(rb);

@@ -298,7 +298,7 @@ fn errors_are_one_line_and_leave_nothing_behind() {
         &["missing.npy", "-o", "m.vtu", "--alpha", "1"],
         "missing.npy",
     );
-    assert_clean_failure(d, &[vol, "-o", "m.obj", "--alpha", "1"], "m.obj");
+    assert_clean_failure(d, &[vol, "-o", "m.off", "--alpha", "1"], "m.off");
     assert_clean_failure(d, &[vol, "-o", "m", "--alpha", "1"], "m");
     let e = assert_clean_failure(
         d,

@@ -31,7 +31,8 @@ pub enum WriteError {
     },
     /// The path's extension names no mesh format (see [`super::MeshFormat::from_path`]).
     #[error(
-        "cannot write '{}': unknown output format; use a .msh, .inp or .vtu extension",
+        "cannot write '{}': unknown output format; use a .msh, .inp or .vtu (tetrahedra) or \
+         .obj, .ply or .stl (isosurface) extension",
         .path.display()
     )]
     UnknownFormat {

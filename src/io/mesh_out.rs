@@ -1,5 +1,7 @@
 //! Mesh output by file extension: [`write_mesh`] is the twin of [`super::read_volume`], and
 //! [`MeshFormat`] chooses among the writers [`super::msh`], [`super::inp`] and [`super::vtu`].
+//! Isosurfaces likewise: [`write_surface`] and [`SurfaceFormat`] choose among [`super::obj`],
+//! [`super::ply`] and [`super::stl`].
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -7,8 +9,11 @@ use std::path::Path;
 use super::atomic::{write_atomically, WriteError};
 use super::inp::write_inp;
 use super::msh::{write_msh, MshVersion};
+use super::obj::write_obj;
+use super::ply::write_ply;
+use super::stl::write_stl;
 use super::vtu::write_vtu;
-use crate::mesh::TetMesh;
+use crate::mesh::{TetMesh, TriSurface};
 
 /// An output mesh format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -66,6 +71,8 @@ impl MeshFormat {
 pub struct WriteOptions {
     /// The `.msh` format version (default 4.1); ignored by the other formats.
     pub msh_version: MshVersion,
+    /// ASCII instead of binary `.ply` / `.stl` (default binary); ignored by the other formats.
+    pub ascii: bool,
 }
 
 impl WriteOptions {
@@ -75,6 +82,76 @@ impl WriteOptions {
         self.msh_version = version;
         self
     }
+}
+
+impl WriteOptions {
+    /// These options with ASCII (`true`) or binary `.ply` / `.stl` output.
+    #[must_use]
+    pub fn with_ascii(mut self, ascii: bool) -> Self {
+        self.ascii = ascii;
+        self
+    }
+}
+
+/// An output surface format (isosurfaces).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SurfaceFormat {
+    /// Wavefront `.obj` ([`write_obj`]).
+    Obj,
+    /// Stanford `.ply` ([`write_ply`]).
+    Ply,
+    /// `.stl` ([`write_stl`]).
+    Stl,
+}
+
+impl SurfaceFormat {
+    /// The surface format named by the extension of `path` (case-insensitive): `.obj`, `.ply`
+    /// or `.stl`; `None` for any other.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("obj") => Some(SurfaceFormat::Obj),
+            Some("ply") => Some(SurfaceFormat::Ply),
+            Some("stl") => Some(SurfaceFormat::Stl),
+            _ => None,
+        }
+    }
+
+    /// Writes `s` in this format to `w` (not atomically; see [`write_surface`]).
+    ///
+    /// # Errors
+    /// Whatever the format's writer returns.
+    pub fn write(
+        self,
+        s: &TriSurface,
+        w: &mut dyn Write,
+        options: &WriteOptions,
+    ) -> io::Result<()> {
+        match self {
+            SurfaceFormat::Obj => write_obj(s, w),
+            SurfaceFormat::Ply => write_ply(s, w, options.ascii),
+            SurfaceFormat::Stl => write_stl(s, w, options.ascii),
+        }
+    }
+}
+
+/// Writes the surface `s` to `path` atomically, in the format chosen by the extension of
+/// `path` ([`SurfaceFormat::from_path`]).
+///
+/// # Errors
+/// [`WriteError::UnknownFormat`] for an extension that names no surface format (nothing is
+/// created), otherwise whatever [`write_atomically`] returns.
+pub fn write_surface(
+    path: &Path,
+    s: &TriSurface,
+    options: &WriteOptions,
+) -> Result<(), WriteError> {
+    let format = SurfaceFormat::from_path(path).ok_or_else(|| WriteError::UnknownFormat {
+        path: path.to_path_buf(),
+    })?;
+    write_atomically(path, |w| format.write(s, w, options))
 }
 
 /// Writes `mesh` to `path` atomically (see [`write_atomically`]), in the format chosen by
@@ -137,7 +214,7 @@ mod tests {
             .unwrap();
             assert_eq!(std::fs::read(&path).unwrap(), expected, "{name}");
         }
-        let bad = dir.path().join("e.stl");
+        let bad = dir.path().join("e.off");
         assert!(matches!(
             write_mesh(&bad, &mesh, &WriteOptions::default()),
             Err(WriteError::UnknownFormat { .. })

@@ -1,6 +1,6 @@
 //! Readers and writers, one file per format. `io` never imports the algorithms and the
 //! algorithms never import `io`: both only share [`crate::grid::ScalarGrid`] and
-//! [`crate::mesh::TetMesh`].
+//! [`crate::mesh::TetMesh`] (and [`crate::mesh::TriSurface`]).
 
 pub mod atomic;
 mod header;
@@ -11,13 +11,18 @@ pub mod msh;
 pub mod nifti;
 pub mod npy;
 pub mod nrrd;
+pub mod obj;
+pub mod plot3d;
+pub mod ply;
+pub mod stl;
 mod volume;
+pub mod vts;
 pub mod vtu;
 mod write_common;
 
 pub use atomic::{check_writable, write_atomically, WriteError};
-pub use mesh_out::{write_mesh, MeshFormat, WriteOptions};
-pub use volume::{read_volume, ReadError};
+pub use mesh_out::{write_mesh, write_surface, MeshFormat, SurfaceFormat, WriteOptions};
+pub use volume::{is_curvilinear, read_curvilinear, read_volume, ReadError};
 
 // Mesh readers (the twins of the writers above), used by `solver-demo`.
 mod inp_read;

@@ -13,7 +13,8 @@ use std::path::Path;
 use crate::grid::{GridError, ScalarGrid};
 
 /// Extensions [`read_volume`] understands, for error messages.
-pub(crate) const SUPPORTED_EXTENSIONS: &str = ".npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha";
+pub(crate) const SUPPORTED_EXTENSIONS: &str =
+    ".npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha (curvilinear: .vts, .xyz)";
 
 /// Why a volume file could not be read.
 ///
@@ -160,6 +161,39 @@ pub fn read_volume(path: &Path) -> Result<ScalarGrid, ReadError> {
         super::nifti::read_nifti(path)
     } else if name.ends_with(".mhd") || name.ends_with(".mha") {
         super::mhd::read_mhd(path)
+    } else {
+        Err(ReadError::UnknownFormat {
+            file: file_name(path),
+        })
+    }
+}
+
+/// Whether `path` names a curvilinear-grid file ([`read_curvilinear`]): `.vts` or a Plot3D
+/// grid `.xyz`.
+pub fn is_curvilinear(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    name.ends_with(".vts") || name.ends_with(".xyz")
+}
+
+/// Reads a curvilinear grid by extension: `.vts` ([`super::vts::read_vts`]) or a Plot3D grid
+/// `.xyz` with its function file ([`super::plot3d::read_plot3d`]; `function` names it when it
+/// is not the `.q` / `.f` next to the grid). `field` picks the scalar (default the first).
+///
+/// # Errors
+/// [`ReadError::UnknownFormat`] for another extension, otherwise the reader's errors.
+pub fn read_curvilinear(
+    path: &Path,
+    function: Option<&Path>,
+    field: Option<&str>,
+) -> Result<crate::grid::CurvilinearGrid, ReadError> {
+    let name = path.to_string_lossy().to_ascii_lowercase();
+    if name.ends_with(".vts") {
+        super::vts::read_vts(path, field)
+    } else if name.ends_with(".xyz") {
+        super::plot3d::read_plot3d(path, function, field)
     } else {
         Err(ReadError::UnknownFormat {
             file: file_name(path),

@@ -1,9 +1,10 @@
-//! Helpers shared by the mesh writers (`msh`, `inp`, `vtu`): the mesh consistency check, the
+//! Helpers shared by the mesh writers (`msh`, `inp`, `vtu`, `obj`, `ply`, `stl`): the mesh and
+//! surface consistency checks, triangle normals, the
 //! invalid-input error, the boundary labels that occur, and the buffered text formatter.
 
 use std::io::{self, Write};
 
-use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::mesh::{BoundaryLabel, TetMesh, TriSurface};
 
 /// Checks that `values` and `boundary_labels` have the lengths of `points` and `boundary` and
 /// that every tet and triangle refers to an existing node.
@@ -130,5 +131,38 @@ impl<'a> TextOut<'a> {
         self.w.write_all(&self.buf)?;
         self.buf.clear();
         self.w.flush()
+    }
+}
+
+/// Checks that a surface's `values` and `labels` have the lengths of `points` and
+/// `triangles` and that every triangle refers to an existing point.
+pub(crate) fn check_surface(s: &TriSurface) -> io::Result<()> {
+    if s.values.len() != s.points.len() || s.labels.len() != s.triangles.len() {
+        return Err(invalid(format!(
+            "surface has {} points, {} values, {} triangles, {} labels",
+            s.points.len(),
+            s.values.len(),
+            s.triangles.len(),
+            s.labels.len()
+        )));
+    }
+    let n = s.points.len();
+    if s.triangles.iter().flatten().any(|&i| i as usize >= n) {
+        return Err(invalid(format!(
+            "surface refers to a point index >= the {n} points"
+        )));
+    }
+    Ok(())
+}
+
+/// The unit normal of triangle `t` of `s` (right-hand rule; zero for a degenerate one).
+pub(crate) fn unit_normal(s: &TriSurface, t: [u32; 3]) -> [f64; 3] {
+    let [a, b, c] = t.map(|i| s.points[i as usize]);
+    let n = crate::geom::cross(crate::geom::sub(b, a), crate::geom::sub(c, a));
+    let len = crate::geom::dot(n, n).sqrt();
+    if len > 0.0 {
+        n.map(|x| x / len)
+    } else {
+        [0.0; 3]
     }
 }

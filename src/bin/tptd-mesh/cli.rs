@@ -13,12 +13,15 @@ use tptd::Method;
 #[derive(Parser, Debug)]
 #[command(name = "tptd-mesh", version)]
 pub(crate) struct Cli {
-    /// Input volume (.npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha)
+    /// Input volume (.npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha), or a curvilinear grid
+    /// (.vts, or a Plot3D .xyz with its .q or .f file)
     #[arg(value_name = "INPUT", required_unless_present = "demo")]
     pub(crate) input: Option<PathBuf>,
 
     /// Output mesh; the format follows the extension: .msh (Gmsh), .inp (Abaqus/CalculiX),
-    /// .vtu (VTK) [default with --demo: tptd-demo.vtu]
+    /// .vtu (VTK) for tetrahedra; .obj, .ply, .stl for the isosurface (the level sets
+    /// f = alpha and f = beta, normals towards increasing f) [default with --demo:
+    /// tptd-demo.vtu]
     #[arg(short, long, value_name = "OUT", required_unless_present = "demo")]
     pub(crate) output: Option<PathBuf>,
 
@@ -50,6 +53,23 @@ pub(crate) struct Cli {
     /// Override the grid spacing (physical size of a voxel), e.g. 0.5,0.5,1.2
     #[arg(long, value_name = "SX,SY,SZ", value_parser = parse_spacing)]
     pub(crate) spacing: Option<Spacing>,
+
+    /// Curvilinear input: the point-data scalar (.vts) or variable (Plot3D: a name such as
+    /// density, or a 1-based number) to mesh [default: the first]
+    #[arg(long, value_name = "NAME")]
+    pub(crate) field: Option<String>,
+
+    /// Plot3D input: the function file (.q or .f) [default: the grid's name with .q, else .f]
+    #[arg(long, value_name = "FILE")]
+    pub(crate) function: Option<PathBuf>,
+
+    /// Surface output: also write the triangles on the grid box that close the surface
+    #[arg(long)]
+    pub(crate) caps: bool,
+
+    /// Surface output: ASCII instead of binary .ply / .stl
+    #[arg(long)]
+    pub(crate) ascii: bool,
 
     /// Skip the Betti numbers and dihedral angles
     #[arg(long)]

@@ -38,7 +38,8 @@ pub(crate) fn write_error(e: WriteError) -> anyhow::Error {
         WriteError::NoFileName { path } => file_error(path.display(), "does not name a file"),
         WriteError::UnknownFormat { path } => file_error(
             path.display(),
-            "unknown output format; use a .msh, .inp or .vtu extension",
+            "unknown output format; use a .msh, .inp or .vtu (tetrahedra) or .obj, .ply or .stl \
+             (isosurface) extension",
         ),
         WriteError::MissingDirectory { path, dir } => file_error(
             path.display(),

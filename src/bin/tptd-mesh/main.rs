@@ -1,19 +1,21 @@
 //! `tptd-mesh`: command-line front end. Reads a scalar volume (or generates the demo volume),
 //! meshes the interval volume `{alpha <= f <= beta}` into tetrahedra, analyses the mesh and
-//! writes it as `.msh`, `.inp` or `.vtu`, plus an optional JSON report.
+//! writes it as `.msh`, `.inp` or `.vtu` (or its level sets as `.obj`, `.ply` or `.stl`), plus
+//! an optional JSON report.
 //!
 //! This is the only part of the crate that prints. Every failure is reported as one line
 //! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1; outputs are written
 //! atomically, so a failed run leaves no (partial) output file behind.
 //!
 //! Modules: [`cli`] (arguments), [`run`] (the run, step by step), [`summary`] (stdout),
-//! [`progress`] (the progress bar), [`error`] (`{file}: {problem}` errors).
+//! [`progress`] (the progress bar), [`error`] (`{file}: {problem}` errors), [`surface`] (isosurface output).
 
 mod cli;
 mod error;
 mod progress;
 mod run;
 mod summary;
+mod surface;
 
 fn main() {
     let cli = cli::parse_or_exit();

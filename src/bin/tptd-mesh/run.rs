@@ -10,7 +10,9 @@ use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
 use tptd::improve::quality::{summarize, QualitySummary};
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
-use tptd::io::{check_writable, read_volume, write_atomically, write_mesh, MeshFormat};
+use tptd::io::{
+    check_writable, read_volume, write_atomically, write_mesh, MeshFormat, SurfaceFormat,
+};
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
 use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid};
 
@@ -18,6 +20,8 @@ use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
 use crate::progress::{improve_with_progress, mesh_with_progress};
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
+use crate::surface::{read_curvilinear_input, write_level_surface};
+use tptd::curvilinear::map_mesh;
 
 /// Output written by `--demo` when no `-o` is given.
 const DEMO_OUTPUT: &str = "tptd-demo.vtu";
@@ -27,11 +31,11 @@ pub(crate) struct Job {
     /// The input as named in messages (`demo` for the demo volume).
     input_name: String,
     /// The mesh output path.
-    output: PathBuf,
+    pub(crate) output: PathBuf,
     /// The meshing options.
     pub(crate) opts: MeshOptions,
     /// The mesh writer options.
-    write: WriteOptions,
+    pub(crate) write: WriteOptions,
 }
 
 /// The results of the analysis stage (all `None` with `--no-analysis`).
@@ -53,7 +57,11 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let job = check_args(&cli)?;
 
     let t = Instant::now();
-    let grid = read_grid(&cli, &job.input_name)?;
+    let curvilinear = read_curvilinear_input(&cli, &job.input_name)?;
+    let grid = match &curvilinear {
+        Some(c) => c.values.clone(),
+        None => read_grid(&cli, &job.input_name)?,
+    };
     let t_read = secs(t);
     warn_exact_bounds(&grid, &job);
 
@@ -62,6 +70,9 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let t_mesh = secs(t);
 
     let (quality, t_quality) = improve_mesh(&cli, &grid, &job, &mut out);
+    if let Some(c) = &curvilinear {
+        map_mesh(&mut out.mesh, c).map_err(|e| file_error(&job.input_name, e))?;
+    }
 
     let t = Instant::now();
     let analysis = analyse(&out, cli.no_analysis, cli.quality);
@@ -73,7 +84,13 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let comparison = compare_demo(&cli, &grid, &job)?;
 
     let t = Instant::now();
-    write_mesh(&job.output, &out.mesh, &job.write).map_err(write_error)?;
+    let surface = match SurfaceFormat::from_path(&job.output) {
+        Some(_) => Some(write_level_surface(&cli, &job, &out.mesh)?),
+        None => {
+            write_mesh(&job.output, &out.mesh, &job.write).map_err(write_error)?;
+            None
+        }
+    };
     let t_write = secs(t);
 
     let timings = Timings {
@@ -84,7 +101,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         write: t_write,
         total: secs(t_total),
     };
-    let report = make_report(&job, &grid, &out, analysis, quality, timings);
+    let mut report = make_report(&job, &grid, &out, analysis, quality, timings);
+    report.surface = surface;
     finish(&cli, &report, comparison.as_ref())?;
     // The process ends here: let the OS reclaim the mesh and the grid at exit instead of
     // freeing hundreds of megabytes page by page first.
@@ -119,7 +137,9 @@ fn check_args(cli: &Cli) -> Result<Job> {
             0.0
         },
     };
-    let write = WriteOptions::default().with_msh_version(cli.msh_version.version());
+    let write = WriteOptions::default()
+        .with_msh_version(cli.msh_version.version())
+        .with_ascii(cli.ascii);
     Ok(Job {
         input_name,
         output,
@@ -157,7 +177,9 @@ fn interval(cli: &Cli, demo: bool, input_name: &str) -> Result<(f64, f64)> {
 /// Checks the mesh output (a known format, writable) and the report output (writable, not
 /// the mesh's path).
 fn check_outputs(output: &Path, report: Option<&Path>) -> Result<()> {
-    MeshFormat::from_path(output).map_err(write_error)?;
+    if SurfaceFormat::from_path(output).is_none() {
+        MeshFormat::from_path(output).map_err(write_error)?;
+    }
     check_writable(output).map_err(write_error)?;
     if let Some(r) = report {
         if r == output {

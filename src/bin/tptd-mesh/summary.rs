@@ -198,6 +198,18 @@ fn output_lines(s: &mut String, r: &Report, report_path: Option<&Path>) {
         t.write,
         t.total
     );
+    if let Some(sf) = &r.surface {
+        let _ = writeln!(
+            s,
+            "  surface   {} vertices, {} triangles, area {:.6}, Betti {:?}, closed 2-manifold {}, oriented {}",
+            sf.vertices,
+            sf.triangles,
+            sf.area,
+            sf.betti,
+            if sf.closed_manifold { "yes" } else { "no" },
+            if sf.oriented { "yes" } else { "no" }
+        );
+    }
     let _ = writeln!(s, "  wrote     {}", r.output);
     if let Some(p) = report_path {
         let _ = writeln!(s, "  report    {}", p.display());

@@ -1,0 +1,51 @@
+//! Isosurface output (`-o OUT.obj|.ply|.stl`): the level sets of the meshed interval; and
+//! curvilinear input (`.vts`, Plot3D), whose mesh is made in parameter space and mapped.
+
+use anyhow::Result;
+use tptd::io::{is_curvilinear, read_curvilinear, write_surface};
+use tptd::surface::analysis::{analyse_surface, SurfaceAnalysis};
+use tptd::CurvilinearGrid;
+use tptd::{level_surface, SurfaceOptions, TetMesh};
+
+use crate::cli::Cli;
+use crate::error::{file_error, write_error};
+use crate::run::Job;
+
+/// Writes the level sets of `mesh` (with `--caps` the box triangles too) to the job's output
+/// and returns their analysis for the report.
+pub(crate) fn write_level_surface(cli: &Cli, job: &Job, mesh: &TetMesh) -> Result<SurfaceAnalysis> {
+    let opts = SurfaceOptions {
+        caps: cli.caps,
+        beta: job.opts.beta,
+    };
+    let s = level_surface(mesh, &opts);
+    write_surface(&job.output, &s, &job.write).map_err(write_error)?;
+    Ok(analyse_surface(&s))
+}
+
+/// The curvilinear grid of a `.vts` / `.xyz` input (`None` for other inputs).
+pub(crate) fn read_curvilinear_input(
+    cli: &Cli,
+    input_name: &str,
+) -> Result<Option<CurvilinearGrid>> {
+    let Some(path) = cli.input.as_deref().filter(|p| is_curvilinear(p)) else {
+        if cli.field.is_some() || cli.function.is_some() {
+            return Err(file_error(
+                input_name,
+                "--field and --function apply to curvilinear grids (.vts, .xyz) only",
+            ));
+        }
+        return Ok(None);
+    };
+    if cli.spacing.is_some() {
+        return Err(file_error(
+            input_name,
+            "--spacing does not apply to a curvilinear grid (its points give the geometry)",
+        ));
+    }
+    Ok(Some(read_curvilinear(
+        path,
+        cli.function.as_deref(),
+        cli.field.as_deref(),
+    )?))
+}
