@@ -51,6 +51,23 @@ pub struct LocalMesh {
     weight: f64,
     /// Domain-boundary faces of the region, keyed by their sorted vertex ids.
     pub faces: FxHashMap<[u32; 3], BoundaryFace>,
+    /// Memo of failed attempts (see [`LocalMesh::settled_tet`]).
+    memo: Memo,
+}
+
+/// When the neighbourhoods changed and when operations on them last failed, on one clock.
+/// An operation on a tet reads only the stars of its corners, and every change to a tet
+/// stamps its corners; so an attempt on a tet that failed after its corners' last stamps
+/// would fail again, and is skipped (the same result, without the work).
+#[derive(Default)]
+struct Memo {
+    clock: u64,
+    /// Per vertex: the last change to a tet around it.
+    stamp: Vec<u64>,
+    /// Per tet: when an operation on it last failed (0: never).
+    tet_failed: Vec<u64>,
+    /// Per vertex: when smoothing it last failed (0: never).
+    vertex_failed: Vec<u64>,
 }
 
 /// Sorted copy of a triangle, the key of [`LocalMesh::faces`].
@@ -209,7 +226,47 @@ impl LocalMesh {
             q: Vec::new(),
             weight: 1.0,
             faces: FxHashMap::default(),
+            memo: Memo {
+                clock: 1,
+                stamp: vec![1; n],
+                tet_failed: Vec::new(),
+                vertex_failed: vec![0; n],
+            },
         }
+    }
+
+    /// Records a change to tet `t` (created, removed, or a corner moved).
+    #[inline]
+    fn touch(&mut self, t: u32) {
+        self.memo.clock += 1;
+        for v in self.tets[t as usize] {
+            self.memo.stamp[v as usize] = self.memo.clock;
+        }
+    }
+
+    /// Whether an operation on tet `t` failed after the last change around its corners.
+    pub fn settled_tet(&self, t: u32) -> bool {
+        let failed = self.memo.tet_failed[t as usize];
+        failed != 0
+            && self.tets[t as usize]
+                .iter()
+                .all(|&v| self.memo.stamp[v as usize] <= failed)
+    }
+
+    /// Records that an operation on tet `t` changed nothing.
+    pub fn tet_failed(&mut self, t: u32) {
+        self.memo.tet_failed[t as usize] = self.memo.clock;
+    }
+
+    /// Whether smoothing `v` failed after the last change around it.
+    pub fn settled_vertex(&self, v: u32) -> bool {
+        let failed = self.memo.vertex_failed[v as usize];
+        failed != 0 && self.memo.stamp[v as usize] <= failed
+    }
+
+    /// Records that smoothing `v` changed nothing.
+    pub fn vertex_failed(&mut self, v: u32) {
+        self.memo.vertex_failed[v as usize] = self.memo.clock;
     }
 
     /// Sets the constraints of the free vertices from their boundary faces and box planes,
@@ -242,14 +299,17 @@ impl LocalMesh {
         self.tets.push(t);
         self.alive.push(true);
         self.q.push(biased_min_sine(self.corners(t), self.weight));
+        self.memo.tet_failed.push(0);
         for v in t {
             self.star[v as usize].push(id);
         }
+        self.touch(id);
         id
     }
 
     /// Removes tet `id` from the mesh and from its vertices' stars.
     pub fn kill_tet(&mut self, id: u32) {
+        self.touch(id);
         self.alive[id as usize] = false;
         for v in self.tets[id as usize] {
             let s = &mut self.star[v as usize];
@@ -313,13 +373,16 @@ impl LocalMesh {
     /// Recomputes the quality of the tets around `v` (after `v` moved).
     pub fn update_star_quality(&mut self, v: u32) {
         for i in 0..self.star[v as usize].len() {
-            let t = self.star[v as usize][i] as usize;
+            let t = self.star[v as usize][i];
+            self.touch(t);
+            let t = t as usize;
             self.q[t] = biased_min_sine(self.corners(self.tets[t]), self.weight);
         }
     }
 
     /// Recomputes the quality of tet `t` (after its corners changed).
     pub fn update_quality(&mut self, t: u32) {
+        self.touch(t);
         let t = t as usize;
         self.q[t] = biased_min_sine(self.corners(self.tets[t]), self.weight);
     }

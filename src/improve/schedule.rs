@@ -88,10 +88,13 @@ fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
 }
 
 /// Calls `op` on every alive bad tet (worst first) until the time budget runs out; returns
-/// how many calls changed something.
+/// how many calls changed something. With `memo`, skips the tets on which `op` failed since
+/// the last change around them (only for operations that read nothing beyond the stars of
+/// the tet's corners; flips do, through the apex across a face, so they are not memoised).
 fn for_each_bad_tet(
     lm: &mut LocalMesh,
     ctx: &Ctx,
+    memo: bool,
     mut op: impl FnMut(&mut LocalMesh, u32) -> bool,
 ) -> usize {
     let mut n = 0;
@@ -99,8 +102,13 @@ fn for_each_bad_tet(
         if i % 64 == 63 && ctx.out_of_time() {
             break;
         }
-        if lm.alive[t as usize] && op(lm, t) {
+        if !lm.alive[t as usize] || (memo && lm.settled_tet(t)) {
+            continue;
+        }
+        if op(lm, t) {
             n += 1;
+        } else if memo {
+            lm.tet_failed(t);
         }
     }
     n
@@ -108,7 +116,7 @@ fn for_each_bad_tet(
 
 /// Collapses the shortest edges of bad tets where that helps.
 fn collapse_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
-    let n = for_each_bad_tet(lm, ctx, |lm, t| collapse_shortest(lm, ctx, t));
+    let n = for_each_bad_tet(lm, ctx, true, |lm, t| collapse_shortest(lm, ctx, t));
     report.collapses += n;
     n
 }
@@ -141,7 +149,7 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
 
 /// 2-3 flips of the faces and 3-2 flips of the edges of bad tets.
 fn flip_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
-    let n = for_each_bad_tet(lm, ctx, |lm, t| flip_tet(lm, ctx, t));
+    let n = for_each_bad_tet(lm, ctx, false, |lm, t| flip_tet(lm, ctx, t));
     report.flips += n;
     n
 }
@@ -175,8 +183,13 @@ fn smooth_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usi
         if i % 64 == 63 && ctx.out_of_time() {
             break;
         }
+        if lm.settled_vertex(v) {
+            continue;
+        }
         if smooth_vertex(lm, ctx, v) {
             n += 1;
+        } else {
+            lm.vertex_failed(v);
         }
     }
     report.smoothed += n;
