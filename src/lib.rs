@@ -13,6 +13,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub(crate) mod clip;
+pub mod critical;
 pub(crate) mod decompose;
 pub mod demo;
 pub(crate) mod extract;

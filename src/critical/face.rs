@@ -1,0 +1,99 @@
+//! Face saddles: saddles of the bilinear interpolant on grid faces that are critical points of
+//! the piecewise-trilinear field (Lemma 4 of seed 002), on interior faces and on the grid box.
+//!
+//! Rotate the face so that its corners `A, C` (a diagonal) lie above the saddle value `s` and
+//! `B, D` below, and shift all values by `-s`. On the plane at distance `t` into one of the two
+//! cells the bilinear slice has corners `A_t = A + t (A' - A)` etc. (primes: the corners one step
+//! into that cell), its asymptotic-decider value `A_t C_t - B_t D_t` is 0 at `t = 0` and its
+//! derivative there is `d = C (A' - A) + A (C' - C) - D (B' - B) - B (D' - D)`. With `d > 0` the
+//! slices just inside that cell connect `A` and `C` (the upper corners), with `d < 0` they
+//! connect `B` and `D`. The saddle is a saddle of the whole field iff both cells connect the
+//! same pair; on the grid box, where only one cell exists, the pair the cell does *not* connect
+//! stays apart, which changes only one of the two filtrations. `d = 0` is degenerate (a curve of
+//! critical points crosses the cell, seed 004 §5.3): the point is reported as such.
+
+use super::vertex::LinkClass;
+
+/// Link class and degeneracy of a face saddle.
+///
+/// `q`: the four face values in cyclic order (`face_corners` order); `s`: the saddle value;
+/// `sides[0]`, `sides[1]`: the values one step across the face on the lower and the upper
+/// side of the face's normal axis, in the same order, `None` on the grid box.
+/// Returns `None` when the saddle is regular, `Some((class, degenerate))` otherwise.
+pub fn classify_face_saddle(
+    q: [f64; 4],
+    s: f64,
+    sides: [Option<[f64; 4]>; 2],
+) -> Option<(LinkClass, bool)> {
+    // rotate so that entries 0 and 2 are the upper diagonal
+    let r = if q[0] > s { 0 } else { 1 };
+    let at = |a: &[f64; 4], i: usize| a[(i + r) % 4];
+    let [a, b, c, d] = [0, 1, 2, 3].map(|i| at(&q, i) - s);
+    let deriv = |o: &[f64; 4]| {
+        let [a1, b1, c1, d1] = [0, 1, 2, 3].map(|i| at(o, i) - s);
+        c * (a1 - a) + a * (c1 - c) - d * (b1 - b) - b * (d1 - d)
+    };
+    let ds: Vec<f64> = sides.iter().flatten().map(deriv).collect();
+    if ds.iter().any(|&x| x == 0.0) {
+        let both = LinkClass {
+            upper: [2, 0, 0],
+            lower: [2, 0, 0],
+        };
+        return Some((both, true));
+    }
+    let upper_joined = ds.iter().filter(|&&x| x > 0.0).count();
+    let lower_joined = ds.len() - upper_joined;
+    let class = match (upper_joined, lower_joined) {
+        // both cells join the upper corners: the upper link is a ring, the lower two pieces
+        (2, 0) => LinkClass {
+            upper: [1, 1, 0],
+            lower: [2, 0, 0],
+        },
+        (0, 2) => LinkClass {
+            upper: [2, 0, 0],
+            lower: [1, 1, 0],
+        },
+        // on the box, one cell: the pair it joins is one disk, the other pair stays apart
+        (1, 0) => LinkClass {
+            upper: [1, 0, 0],
+            lower: [2, 0, 0],
+        },
+        (0, 1) => LinkClass {
+            upper: [2, 0, 0],
+            lower: [1, 0, 0],
+        },
+        _ => return None,
+    };
+    Some((class, false))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lemma4_cases() {
+        // checkerboard face 1,0,1,0 (saddle 0.5); above it +1 everywhere, below -1:
+        // one cell joins the upper corners, the other the lower: regular
+        let q = [1.0, 0.0, 1.0, 0.0];
+        assert_eq!(
+            classify_face_saddle(q, 0.5, [Some([-1.0; 4]), Some([2.0; 4])]),
+            None
+        );
+        // both sides higher: both join the upper corners, a saddle of both filtrations
+        let (c, deg) = classify_face_saddle(q, 0.5, [Some([2.0; 4]), Some([3.0; 4])]).unwrap();
+        assert!(!deg && c.superlevel() && c.sublevel());
+        assert_eq!(c.upper, [1, 1, 0]);
+        // rotated face (upper diagonal at entries 1, 3) gives the same answer
+        let q2 = [0.0, 1.0, 0.0, 1.0];
+        let (c2, _) = classify_face_saddle(q2, 0.5, [Some([2.0; 4]), Some([3.0; 4])]).unwrap();
+        assert_eq!(c, c2);
+        // on the box: one cell joining the upper corners changes only the sublevel sets
+        let (c, _) = classify_face_saddle(q, 0.5, [None, Some([2.0; 4])]).unwrap();
+        assert!(c.sublevel() && !c.superlevel());
+        // the across-face checkerboard continuing (mean equal to the saddle value): degenerate
+        let (_, deg) = classify_face_saddle(q, 0.5, [Some([0.0, 1.0, 0.0, 1.0]), Some([2.0; 4])])
+            .unwrap();
+        assert!(deg);
+    }
+}

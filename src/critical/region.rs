@@ -1,0 +1,407 @@
+//! Critical regions on plateaus (seed 004): vertices with an edge-connected neighbour of the
+//! same value cannot be classified locally. A flood fill collects each plateau `R` (maximal
+//! edge-connected set of equal values); every grid edge leaving `R` becomes a node, positive
+//! or negative by the sign of `f - f(R)` at its far end; nodes are joined when their edges lie
+//! in one connected part of `{f > f(R)}` (or `{f < f(R)}`) near `R` inside some cell
+//! ([`join_in_cell`]). With `n_p`, `n_n` components: `n_n = 0` is a region minimum, `n_p = 0` a
+//! region maximum, `n_p + n_n > 2` a region saddle (Definition 5 of seed 004).
+//!
+//! Inside one cell, near a cube-edge-connected piece `S` of `R` (seed 004 §5.2, the base cases
+//! grouped by what `S` is):
+//! * `S` one corner (C1): the cell is split like a linear tetrahedron, all exits of one sign
+//!   are joined.
+//! * `S` one cube edge (C2): on the slice at parameter `t` along the edge the two neighbours
+//!   across the cell (along the two other axes) have values linear in `t`; the parts of one
+//!   sign on the two sides are joined when the `t`-ranges where both have that sign overlap
+//!   (C2.0–C2.4.1); when both cross `f(R)` at the same `t`, the far corner of that slice
+//!   decides (C2.4.0–C2.4.2).
+//! * larger `S`: exits of one sign on a common cell face are joined when they are adjacent
+//!   near `S` on that face (they share their far corner, or leave one corner or one edge of `S`);
+//!   exits leaving a whole face of `S` towards the opposite face `G` follow the contours of `G`
+//!   (C8: the asymptotic decider of `G` joins a diagonal pair).
+
+use std::collections::HashMap;
+
+use rayon::prelude::*;
+
+use super::find::make_point;
+use super::vertex::LinkClass;
+use super::{CriticalKind, CriticalPoint, RegionInfo};
+use crate::grid::{corner_offset, face_corners, ScalarGrid};
+use crate::trilinear::face_saddle_of;
+
+/// The plateaus of the grid: vertex lists (ascending index) of every maximal edge-connected set
+/// of at least two vertices with equal values, ordered by their smallest vertex.
+pub fn plateaus(grid: &ScalarGrid) -> Vec<Vec<usize>> {
+    let n = grid.num_vertices();
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let nbrs = |idx: usize| {
+        let p = grid.vertex_ijk(idx);
+        (0..6).filter_map(move |d| {
+            let (a, side) = (d / 2, d % 2);
+            if side == 0 {
+                (p[a] > 0).then(|| idx - stride[a])
+            } else {
+                (p[a] + 1 < grid.dims[a]).then(|| idx + stride[a])
+            }
+        })
+    };
+    let flat: Vec<bool> = (0..n)
+        .into_par_iter()
+        .map(|i| nbrs(i).any(|m| grid.values[m] == grid.values[i]))
+        .collect();
+    let mut seen = vec![false; n];
+    let mut out = Vec::new();
+    let mut stack = Vec::new();
+    for s in 0..n {
+        if !flat[s] || seen[s] {
+            continue;
+        }
+        let v = grid.values[s];
+        let mut region = vec![s];
+        seen[s] = true;
+        stack.push(s);
+        while let Some(i) = stack.pop() {
+            for m in nbrs(i) {
+                if !seen[m] && grid.values[m] == v {
+                    seen[m] = true;
+                    region.push(m);
+                    stack.push(m);
+                }
+            }
+        }
+        region.sort_unstable();
+        out.push(region);
+    }
+    out
+}
+
+/// Union–find over a small number of nodes.
+struct Uf(Vec<usize>);
+
+impl Uf {
+    fn find(&mut self, mut x: usize) -> usize {
+        while self.0[x] != x {
+            self.0[x] = self.0[self.0[x]];
+            x = self.0[x];
+        }
+        x
+    }
+    fn union(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            self.0[ra.max(rb)] = ra.min(rb);
+        }
+    }
+}
+
+/// The critical plateaus of the grid, classified.
+pub fn critical_regions(grid: &ScalarGrid) -> Vec<CriticalPoint> {
+    let regions = plateaus(grid);
+    regions
+        .par_iter()
+        .filter_map(|r| classify_region(grid, r))
+        .collect()
+}
+
+/// Classifies one plateau (vertex indices, ascending); `None` when it is regular.
+pub fn classify_region(grid: &ScalarGrid, region: &[usize]) -> Option<CriticalPoint> {
+    let v = grid.values[region[0]];
+    let in_region = |idx: usize| region.binary_search(&idx).is_ok();
+    let mut nodes: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut sign: Vec<bool> = Vec::new();
+    let mut cells: Vec<[usize; 3]> = Vec::new();
+    let cd = grid.cell_dims();
+    for &r in region {
+        let p = grid.vertex_ijk(r);
+        for o in 0..8 {
+            let c: Option<Vec<usize>> = (0..3)
+                .map(|a| {
+                    let lo = if (o >> a) & 1 == 1 { p[a] } else { p[a].wrapping_sub(1) };
+                    (lo < cd[a]).then_some(lo)
+                })
+                .collect();
+            if let Some(c) = c {
+                cells.push([c[0], c[1], c[2]]);
+            }
+        }
+    }
+    cells.sort_unstable_by_key(|c| (c[2], c[1], c[0]));
+    cells.dedup();
+    let mut links: Vec<(usize, usize)> = Vec::new();
+    let mut node = |a: usize, b: usize, up: bool, sign: &mut Vec<bool>| -> usize {
+        let key = (a.min(b), a.max(b));
+        let n = nodes.len();
+        *nodes.entry(key).or_insert_with(|| {
+            sign.push(up);
+            n
+        })
+    };
+    for c in &cells {
+        let base = grid.index(c[0], c[1], c[2]);
+        let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+        let gidx: [usize; 8] = std::array::from_fn(|k| {
+            let o = corner_offset(k);
+            base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2]
+        });
+        let vals = gidx.map(|g| grid.values[g]);
+        let mut rmask = 0u8;
+        for k in 0..8 {
+            if vals[k] == v && in_region(gidx[k]) {
+                rmask |= 1 << k;
+            }
+        }
+        let mut local = Vec::new();
+        join_in_cell(&vals, v, rmask, &mut local);
+        for (e1, e2) in local {
+            let n1 = node(gidx[e1.0], gidx[e1.1], vals[e1.1] > v, &mut sign);
+            let n2 = node(gidx[e2.0], gidx[e2.1], vals[e2.1] > v, &mut sign);
+            links.push((n1, n2));
+        }
+    }
+    let mut uf = Uf((0..sign.len()).collect());
+    for (a, b) in links {
+        uf.union(a, b);
+    }
+    let (mut np, mut nn) = (0u8, 0u8);
+    for i in 0..sign.len() {
+        if uf.find(i) == i {
+            if sign[i] {
+                np = np.saturating_add(1);
+            } else {
+                nn = nn.saturating_add(1);
+            }
+        }
+    }
+    region_point(grid, region, v, np, nn)
+}
+
+/// The critical point of a plateau with `np` positive and `nn` negative neighbourhood parts.
+fn region_point(
+    grid: &ScalarGrid,
+    region: &[usize],
+    v: f64,
+    np: u8,
+    nn: u8,
+) -> Option<CriticalPoint> {
+    let kind = if nn == 0 {
+        CriticalKind::RegionMinimum
+    } else if np == 0 {
+        CriticalKind::RegionMaximum
+    } else if np as usize + nn as usize > 2 {
+        CriticalKind::RegionSaddle
+    } else {
+        return None;
+    };
+    let mut sum = [0.0; 3];
+    let mut lo = [usize::MAX; 3];
+    let mut hi = [0usize; 3];
+    let mut on_box = false;
+    for &r in region {
+        let p = grid.vertex_ijk(r);
+        for a in 0..3 {
+            sum[a] += p[a] as f64;
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+            on_box |= p[a] == 0 || p[a] + 1 == grid.dims[a];
+        }
+    }
+    let centroid = sum.map(|s| s / region.len() as f64);
+    // Component counts only (seed 004): a plateau minimum changes the sublevel sets; inside the
+    // box it also closes a cavity of the superlevel sets, on the box only when it separates.
+    let class = LinkClass {
+        upper: [np, 0, 0],
+        lower: [nn, 0, 0],
+    };
+    let mut pt = make_point(grid, kind, v, centroid, class, false);
+    pt.on_box = on_box;
+    pt.superlevel = match kind {
+        CriticalKind::RegionMinimum => !on_box || np != 1,
+        _ => true,
+    };
+    pt.sublevel = match kind {
+        CriticalKind::RegionMaximum => !on_box || nn != 1,
+        _ => true,
+    };
+    let corner = |p: [usize; 3]| grid.to_physical(p.map(|x| x as f64));
+    let (a, b) = (corner(lo), corner(hi));
+    pt.region = Some(RegionInfo {
+        vertices: region.len(),
+        bbox_min: std::array::from_fn(|k| a[k].min(b[k])),
+        bbox_max: std::array::from_fn(|k| a[k].max(b[k])),
+    });
+    pt.keys = region
+        .iter()
+        .map(|&r| crate::keys::vertex_key(r, crate::keys::CORNER))
+        .collect();
+    Some(pt)
+}
+
+/// An exit of the region in a cell: (region corner, far corner), cell-local corner ids.
+type Exit = (usize, usize);
+
+/// The pairs of exits of one cell that lie in one part of `{f > v}` or `{f < v}` near the
+/// region (see the module docs). `vals`: corner values; `rmask`: region corners. Every exit
+/// appears at least once (paired with itself when alone).
+pub fn join_in_cell(vals: &[f64; 8], v: f64, rmask: u8, out: &mut Vec<(Exit, Exit)>) {
+    let pieces = pieces(rmask);
+    for s in pieces {
+        let exits: Vec<Exit> = (0..8)
+            .filter(|&r| s & (1 << r) != 0)
+            .flat_map(|r| (0..3).map(move |a| (r, r ^ (1 << a))))
+            .filter(|&(_, a)| rmask & (1 << a) == 0)
+            .collect();
+        for &e in &exits {
+            out.push((e, e));
+        }
+        let up = |e: Exit| vals[e.1] > v;
+        let mut join = |x: Exit, y: Exit| {
+            if up(x) == up(y) {
+                out.push((x, y));
+            }
+        };
+        match s.count_ones() {
+            1 => {
+                for i in 0..exits.len() {
+                    for j in i + 1..exits.len() {
+                        join(exits[i], exits[j]);
+                    }
+                }
+            }
+            2 => join_along_edge(vals, v, s, &exits, &mut join),
+            _ => join_larger(vals, v, s, &exits, &mut join),
+        }
+    }
+}
+
+/// The cube-edge-connected pieces of a set of corners.
+fn pieces(mask: u8) -> Vec<u8> {
+    let mut left = mask;
+    let mut out = Vec::new();
+    while left != 0 {
+        let first = left.trailing_zeros() as usize;
+        let mut piece = 1u8 << first;
+        loop {
+            let mut grown = piece;
+            for c in 0..8 {
+                if piece & (1 << c) != 0 {
+                    for a in 0..3 {
+                        let n = c ^ (1 << a);
+                        if left & (1 << n) != 0 {
+                            grown |= 1 << n;
+                        }
+                    }
+                }
+            }
+            if grown == piece {
+                break;
+            }
+            piece = grown;
+        }
+        left &= !piece;
+        out.push(piece);
+    }
+    out
+}
+
+/// `S` is one cube edge `r0 – r1` (C2).
+fn join_along_edge(
+    vals: &[f64; 8],
+    v: f64,
+    s: u8,
+    exits: &[Exit],
+    join: &mut impl FnMut(Exit, Exit),
+) {
+    let r0 = s.trailing_zeros() as usize;
+    let r1 = 7 - (!s).leading_zeros() as usize;
+    let axis = (r0 ^ r1).trailing_zeros() as usize;
+    let others: Vec<usize> = (0..3).filter(|&a| a != axis).collect();
+    // the exits along the same side axis are joined when of one sign (a face of the cell)
+    for &a in &others {
+        join((r0, r0 ^ (1 << a)), (r1, r1 ^ (1 << a)));
+    }
+    // across the two side axes: t-ranges of each sign
+    let (a, b) = (others[0], others[1]);
+    let ya = (vals[r0 ^ (1 << a)] - v, vals[r1 ^ (1 << a)] - v);
+    let zb = (vals[r0 ^ (1 << b)] - v, vals[r1 ^ (1 << b)] - v);
+    for positive in [true, false] {
+        let sgn = if positive { 1.0 } else { -1.0 };
+        let ra = sign_range(sgn * ya.0, sgn * ya.1);
+        let rb = sign_range(sgn * zb.0, sgn * zb.1);
+        let (Some(ra), Some(rb)) = (ra, rb) else {
+            continue;
+        };
+        let overlap = ra.0.max(rb.0) < ra.1.min(rb.1)
+            || (ra.0.max(rb.0) == ra.1.min(rb.1) && ra.1 > ra.0 && rb.1 > rb.0 && {
+                // touching at one t where both cross: the far corner of that slice decides
+                let t = ra.0.max(rb.0);
+                let far0 = vals[r0 ^ (1 << a) ^ (1 << b)];
+                let far1 = vals[r1 ^ (1 << a) ^ (1 << b)];
+                sgn * (far0 + t * (far1 - far0) - v) > 0.0
+            });
+        if overlap {
+            let ea = if sgn * ya.0 > 0.0 { (r0, r0 ^ (1 << a)) } else { (r1, r1 ^ (1 << a)) };
+            let eb = if sgn * zb.0 > 0.0 { (r0, r0 ^ (1 << b)) } else { (r1, r1 ^ (1 << b)) };
+            join(ea, eb);
+        }
+    }
+    let _ = exits;
+}
+
+/// The closed `t`-range in `[0, 1]` where `y0 + t (y1 - y0) > 0` (its closure), if any.
+fn sign_range(y0: f64, y1: f64) -> Option<(f64, f64)> {
+    match (y0 > 0.0, y1 > 0.0) {
+        (true, true) => Some((0.0, 1.0)),
+        (false, false) => None,
+        (true, false) => Some((0.0, y0 / (y0 - y1))),
+        (false, true) => Some((y0 / (y0 - y1), 1.0)),
+    }
+}
+
+/// `S` has three or more corners.
+fn join_larger(
+    vals: &[f64; 8],
+    v: f64,
+    s: u8,
+    exits: &[Exit],
+    join: &mut impl FnMut(Exit, Exit),
+) {
+    for i in 0..exits.len() {
+        for j in i + 1..exits.len() {
+            let (x, y) = (exits[i], exits[j]);
+            // same far corner, or the same region corner, or parallel exits from an edge of S
+            let parallel = (x.0 ^ x.1) == (y.0 ^ y.1) && (x.0 ^ y.0).count_ones() == 1;
+            let same_corner = x.0 == y.0;
+            if x.1 == y.1 || parallel || same_corner {
+                join(x, y);
+            }
+        }
+    }
+    // a whole face of S: the opposite face's contours decide its diagonal pairs
+    for f in 0..6 {
+        let fc = face_corners(f);
+        if !fc.iter().all(|&c| s & (1 << c) != 0) {
+            continue;
+        }
+        let g = f ^ 1;
+        let gc = face_corners(g);
+        if gc.iter().any(|&c| s & (1 << c) != 0) {
+            continue;
+        }
+        let q = gc.map(|c| vals[c]);
+        let Some(sd) = face_saddle_of(q) else {
+            continue;
+        };
+        let positive = sd.value > v;
+        if sd.value == v {
+            continue;
+        }
+        for (i, j) in [(0, 2), (1, 3)] {
+            let (ci, cj) = (gc[i], gc[j]);
+            if (vals[ci] > v) == positive && (vals[cj] > v) == positive {
+                let axis = f / 2;
+                join((ci ^ (1 << axis), ci), (cj ^ (1 << axis), cj));
+            }
+        }
+    }
+}
