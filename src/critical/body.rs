@@ -15,19 +15,22 @@ pub fn classify_body_saddles(v: &[f64; 8]) -> Vec<(BodySaddle, Option<LinkClass>
         .iter()
         .map(|s| {
             let [x, y, z] = s.pos;
-            let det = (e + h * z) * (f + h * x) * (g + h * y);
-            let class = if det > 0.0 {
+            let (fxy, fyz, fxz) = (e + h * z, f + h * x, g + h * y);
+            let det = fxy * fyz * fxz;
+            // zero up to rounding: a curve of critical points (degenerate)
+            let scale = (fxy.abs() + fyz.abs() + fxz.abs()).powi(3);
+            let class = if det.abs() <= 1e-12 * scale {
+                None
+            } else if det > 0.0 {
                 Some(LinkClass {
                     upper: [2, 0, 0],
                     lower: [1, 1, 0],
                 })
-            } else if det < 0.0 {
+            } else {
                 Some(LinkClass {
                     upper: [1, 1, 0],
                     lower: [2, 0, 0],
                 })
-            } else {
-                None
             };
             (*s, class)
         })

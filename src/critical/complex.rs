@@ -106,17 +106,13 @@ pub fn build_complex(grid: &ScalarGrid) -> Complex {
         .collect();
     let mut edges: Vec<[u32; 2]> = tets
         .iter()
-        .flat_map(|t| {
-            [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(a, b)| [t[a], t[b]])
-        })
+        .flat_map(|t| [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(a, b)| [t[a], t[b]]))
         .collect();
     edges.par_sort_unstable();
     edges.dedup();
     let mut triangles: Vec<[u32; 3]> = tets
         .iter()
-        .flat_map(|t| {
-            [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]].map(|f| f.map(|i| t[i]))
-        })
+        .flat_map(|t| [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]].map(|f| f.map(|i| t[i])))
         .collect();
     triangles.par_sort_unstable();
     triangles.dedup();
@@ -176,7 +172,13 @@ impl Complex {
 
     /// `above`: components of the vertices above each level; otherwise the components of the
     /// vertices below that do not reach the grid box.
-    fn count_components(&self, vals: &[f64], ws: &[f64], adj: &[Vec<u32>], above: bool) -> Vec<usize> {
+    fn count_components(
+        &self,
+        vals: &[f64],
+        ws: &[f64],
+        adj: &[Vec<u32>],
+        above: bool,
+    ) -> Vec<usize> {
         let n = vals.len();
         let mut order: Vec<u32> = (0..n as u32).collect();
         order.sort_by(|&a, &b| vals[a as usize].total_cmp(&vals[b as usize]));
@@ -229,7 +231,11 @@ impl Complex {
     /// Euler characteristic of the full subcomplex above each level.
     fn euler(&self, vals: &[f64], ws: &[f64]) -> Vec<i64> {
         let mut mins: Vec<(f64, i64)> = Vec::new();
-        let min_of = |s: &[u32]| s.iter().map(|&i| vals[i as usize]).fold(f64::INFINITY, f64::min);
+        let min_of = |s: &[u32]| {
+            s.iter()
+                .map(|&i| vals[i as usize])
+                .fold(f64::INFINITY, f64::min)
+        };
         mins.extend(vals.iter().map(|&x| (x, 1)));
         mins.extend(self.edges.iter().map(|e| (min_of(e), -1)));
         mins.extend(self.triangles.iter().map(|t| (min_of(t), 1)));

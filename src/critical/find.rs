@@ -42,7 +42,10 @@ pub fn find_critical_with_options(
         all
     };
     Ok(match opts.threads {
-        Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build() {
+        Some(n) => match rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build()
+        {
             Ok(pool) => pool.install(run),
             Err(_) => run(),
         },
@@ -215,15 +218,20 @@ fn faces_in_slab(grid: &ScalarGrid, k: usize, out: &mut Vec<CriticalPoint>) {
                 let Some(s) = face_saddle_of(q) else {
                     continue;
                 };
-                let lower = (p[axis] > 0).then(|| fc.map(|c| grid.values[corner(c) - stride[axis]]));
-                let upper =
-                    (p[axis] + 1 < dims[axis]).then(|| fc.map(|c| grid.values[corner(c) + stride[axis]]));
+                let lower =
+                    (p[axis] > 0).then(|| fc.map(|c| grid.values[corner(c) - stride[axis]]));
+                let upper = (p[axis] + 1 < dims[axis])
+                    .then(|| fc.map(|c| grid.values[corner(c) + stride[axis]]));
                 let Some((class, degenerate)) = classify_face_saddle(q, s.value, [lower, upper])
                 else {
                     continue;
                 };
                 let local = face_point(2 * axis, s.uv);
-                let index = [i as f64 + local[0], j as f64 + local[1], k as f64 + local[2]];
+                let index = [
+                    i as f64 + local[0],
+                    j as f64 + local[1],
+                    k as f64 + local[2],
+                ];
                 let mut pt = make_point(
                     grid,
                     CriticalKind::FaceSaddle,
@@ -246,7 +254,11 @@ fn cells_in_slab(grid: &ScalarGrid, k: usize, out: &mut Vec<CriticalPoint>) {
             let v = grid.cell_values(i, j, k);
             let base = grid.index(i, j, k);
             for (n, (s, class)) in classify_body_saddles(&v).into_iter().enumerate() {
-                let index = [i as f64 + s.pos[0], j as f64 + s.pos[1], k as f64 + s.pos[2]];
+                let index = [
+                    i as f64 + s.pos[0],
+                    j as f64 + s.pos[1],
+                    k as f64 + s.pos[2],
+                ];
                 let (class, degenerate) = match class {
                     Some(c) => (c, false),
                     None => (

@@ -117,7 +117,11 @@ pub fn classify_region(grid: &ScalarGrid, region: &[usize]) -> Option<CriticalPo
         for o in 0..8 {
             let c: Option<Vec<usize>> = (0..3)
                 .map(|a| {
-                    let lo = if (o >> a) & 1 == 1 { p[a] } else { p[a].wrapping_sub(1) };
+                    let lo = if (o >> a) & 1 == 1 {
+                        p[a]
+                    } else {
+                        p[a].wrapping_sub(1)
+                    };
                     (lo < cd[a]).then_some(lo)
                 })
                 .collect();
@@ -163,36 +167,56 @@ pub fn classify_region(grid: &ScalarGrid, region: &[usize]) -> Option<CriticalPo
     for (a, b) in links {
         uf.union(a, b);
     }
-    let (mut np, mut nn) = (0u8, 0u8);
+    // which nodes lie on the grid box (both ends on one box plane)
+    let mut on_box_node = vec![false; sign.len()];
+    for (&(a, b), &i) in &nodes {
+        let (pa, pb) = (grid.vertex_ijk(a), grid.vertex_ijk(b));
+        on_box_node[i] =
+            (0..3).any(|x| pa[x] == pb[x] && (pa[x] == 0 || pa[x] + 1 == grid.dims[x]));
+    }
+    let mut touch = vec![false; sign.len()];
+    for i in 0..sign.len() {
+        let r = uf.find(i);
+        touch[r] |= on_box_node[i];
+    }
+    let mut parts = Parts::default();
     for i in 0..sign.len() {
         if uf.find(i) == i {
-            if sign[i] {
-                np = np.saturating_add(1);
+            let (n, free) = if sign[i] {
+                (&mut parts.np, &mut parts.np_free)
             } else {
-                nn = nn.saturating_add(1);
-            }
+                (&mut parts.nn, &mut parts.nn_free)
+            };
+            *n += 1;
+            *free += !touch[i] as usize;
         }
     }
-    region_point(grid, region, v, np, nn)
+    region_point(grid, region, v, parts)
 }
 
-/// The critical point of a plateau with `np` positive and `nn` negative neighbourhood parts.
+/// Connected parts of `{f > f(R)}` (`np`) and `{f < f(R)}` (`nn`) near a plateau `R`, and how
+/// many of each do not reach the grid box.
+#[derive(Default)]
+struct Parts {
+    np: usize,
+    nn: usize,
+    np_free: usize,
+    nn_free: usize,
+}
+
+/// The critical point of a plateau, `None` when it is regular.
+///
+/// Inside the box the neighbourhood of a (contractible) plateau is a ball around it, so it is
+/// regular iff `np = nn = 1` (seed 004). On the box it is a half-ball whose link is a disk:
+/// the upper part is contractible iff it is connected and no lower part is enclosed in it
+/// (every lower part reaches the box), and likewise for the lower part; a box plateau may thus
+/// change one filtration only (a lower pocket below a box plateau opens a hole in `{f >= w}`).
 fn region_point(
     grid: &ScalarGrid,
     region: &[usize],
     v: f64,
-    np: u8,
-    nn: u8,
+    parts: Parts,
 ) -> Option<CriticalPoint> {
-    let kind = if nn == 0 {
-        CriticalKind::RegionMinimum
-    } else if np == 0 {
-        CriticalKind::RegionMaximum
-    } else if np as usize + nn as usize > 2 {
-        CriticalKind::RegionSaddle
-    } else {
-        return None;
-    };
     let mut sum = [0.0; 3];
     let mut lo = [usize::MAX; 3];
     let mut hi = [0usize; 3];
@@ -206,23 +230,41 @@ fn region_point(
             on_box |= p[a] == 0 || p[a] + 1 == grid.dims[a];
         }
     }
+    let Parts {
+        np,
+        nn,
+        np_free,
+        nn_free,
+    } = parts;
+    let (superlevel, sublevel) = if !is_simple(grid, region, on_box) {
+        // not a ball (or a half-ball on the box): component counts cannot say which
+        // filtration changes, so both are flagged (a bound there is reported as unsafe)
+        (true, true)
+    } else if on_box {
+        (np != 1 || nn_free > 0, nn != 1 || np_free > 0)
+    } else {
+        let c = !(np == 1 && nn == 1);
+        (c, c)
+    };
+    if !(superlevel || sublevel) {
+        return None;
+    }
+    let kind = if nn == 0 {
+        CriticalKind::RegionMinimum
+    } else if np == 0 {
+        CriticalKind::RegionMaximum
+    } else {
+        CriticalKind::RegionSaddle
+    };
     let centroid = sum.map(|s| s / region.len() as f64);
-    // Component counts only (seed 004): a plateau minimum changes the sublevel sets; inside the
-    // box it also closes a cavity of the superlevel sets, on the box only when it separates.
     let class = LinkClass {
-        upper: [np, 0, 0],
-        lower: [nn, 0, 0],
+        upper: [np.min(255) as u8, 0, 0],
+        lower: [nn.min(255) as u8, 0, 0],
     };
     let mut pt = make_point(grid, kind, v, centroid, class, false);
     pt.on_box = on_box;
-    pt.superlevel = match kind {
-        CriticalKind::RegionMinimum => !on_box || np != 1,
-        _ => true,
-    };
-    pt.sublevel = match kind {
-        CriticalKind::RegionMaximum => !on_box || nn != 1,
-        _ => true,
-    };
+    pt.superlevel = superlevel;
+    pt.sublevel = sublevel;
     let corner = |p: [usize; 3]| grid.to_physical(p.map(|x| x as f64));
     let (a, b) = (corner(lo), corner(hi));
     pt.region = Some(RegionInfo {
@@ -235,6 +277,43 @@ fn region_point(
         .map(|&r| crate::keys::vertex_key(r, crate::keys::CORNER))
         .collect();
     Some(pt)
+}
+
+/// Whether the plateau is cube-complex contractible as far as Euler characteristics tell
+/// (`χ(R) = 1`) and, when it touches the box, meets the box in one piece with `χ = 1`: then its
+/// neighbourhood is a ball (half-ball) and its link a sphere (disk).
+fn is_simple(grid: &ScalarGrid, region: &[usize], on_box: bool) -> bool {
+    let inr = |p: [usize; 3]| region.binary_search(&grid.index(p[0], p[1], p[2])).is_ok();
+    let at_box = |p: [usize; 3], a: usize| p[a] == 0 || p[a] + 1 == grid.dims[a];
+    // chi of R (all cells) and of R on the box (cells lying in one box plane)
+    let (mut chi, mut chi_box, mut vb) = (0i64, 0i64, 0usize);
+    for &r in region {
+        let p = grid.vertex_ijk(r);
+        // cells whose smallest corner is p, spanned by the axes in `mask`
+        for mask in 0u8..8 {
+            let dim = mask.count_ones();
+            let ok = (0..3).all(|a| mask & (1 << a) == 0 || p[a] + 1 < grid.dims[a]);
+            if !ok {
+                continue;
+            }
+            let all = (0u8..8)
+                .filter(|c| c & !mask == 0)
+                .all(|c| inr(std::array::from_fn(|a| p[a] + ((c >> a) & 1) as usize)));
+            if !all {
+                continue;
+            }
+            let sign = if dim % 2 == 0 { 1 } else { -1 };
+            chi += sign;
+            // in a box plane: some axis not spanned with p at the box there
+            if (0..3).any(|a| mask & (1 << a) == 0 && at_box(p, a)) {
+                chi_box += sign;
+                if dim == 0 {
+                    vb += 1;
+                }
+            }
+        }
+    }
+    chi == 1 && (!on_box || (chi_box == 1 && vb > 0))
 }
 
 /// An exit of the region in a cell: (region corner, far corner), cell-local corner ids.
@@ -313,7 +392,7 @@ fn join_along_edge(
     join: &mut impl FnMut(Exit, Exit),
 ) {
     let r0 = s.trailing_zeros() as usize;
-    let r1 = 7 - (!s).leading_zeros() as usize;
+    let r1 = 7 - s.leading_zeros() as usize;
     let axis = (r0 ^ r1).trailing_zeros() as usize;
     let others: Vec<usize> = (0..3).filter(|&a| a != axis).collect();
     // the exits along the same side axis are joined when of one sign (a face of the cell)
@@ -340,8 +419,16 @@ fn join_along_edge(
                 sgn * (far0 + t * (far1 - far0) - v) > 0.0
             });
         if overlap {
-            let ea = if sgn * ya.0 > 0.0 { (r0, r0 ^ (1 << a)) } else { (r1, r1 ^ (1 << a)) };
-            let eb = if sgn * zb.0 > 0.0 { (r0, r0 ^ (1 << b)) } else { (r1, r1 ^ (1 << b)) };
+            let ea = if sgn * ya.0 > 0.0 {
+                (r0, r0 ^ (1 << a))
+            } else {
+                (r1, r1 ^ (1 << a))
+            };
+            let eb = if sgn * zb.0 > 0.0 {
+                (r0, r0 ^ (1 << b))
+            } else {
+                (r1, r1 ^ (1 << b))
+            };
             join(ea, eb);
         }
     }
@@ -359,13 +446,7 @@ fn sign_range(y0: f64, y1: f64) -> Option<(f64, f64)> {
 }
 
 /// `S` has three or more corners.
-fn join_larger(
-    vals: &[f64; 8],
-    v: f64,
-    s: u8,
-    exits: &[Exit],
-    join: &mut impl FnMut(Exit, Exit),
-) {
+fn join_larger(vals: &[f64; 8], v: f64, s: u8, exits: &[Exit], join: &mut impl FnMut(Exit, Exit)) {
     for i in 0..exits.len() {
         for j in i + 1..exits.len() {
             let (x, y) = (exits[i], exits[j]);

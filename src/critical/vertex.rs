@@ -255,7 +255,14 @@ mod tests {
     #[test]
     fn table_is_invariant_under_cube_symmetries_and_sign_flip() {
         // the 48 symmetries: permutations of axes and reflections
-        let perms = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+        let perms = [
+            [0, 1, 2],
+            [0, 2, 1],
+            [1, 0, 2],
+            [1, 2, 0],
+            [2, 0, 1],
+            [2, 1, 0],
+        ];
         for m in 0..64u8 {
             let c = VERTEX_TABLE[m as usize];
             let flipped = VERTEX_TABLE[(!m & 0x3f) as usize];
