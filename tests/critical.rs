@@ -194,6 +194,9 @@ fn levels_between(crit: &[f64], lo: f64, hi: f64, min_width: f64) -> Option<(f64
     ))
 }
 
+/// Reference Betti numbers, `None` when undecided.
+type Betti = Option<[usize; 3]>;
+
 fn superlevel_betti(f: &Field, w: f64, margin: f64) -> Option<[usize; 3]> {
     match reference_betti(f, w, f64::INFINITY, margin, &[12, 20]) {
         RefBetti::Resolved { betti, .. } => Some(betti),
@@ -214,7 +217,8 @@ fn check_spectrum_against_reference(f: &Field, what: &str) -> (usize, usize, usi
     cuts.insert(0, min - 1.0);
     cuts.push(max + 1.0);
     let (mut intervals, mut crossings, mut undecided) = (0, 0, 0);
-    let mut inside: Vec<Option<(Option<[usize; 3]>, Option<[usize; 3]>)>> = Vec::new();
+    // per interval: reference Betti numbers at its two levels (None: not sampled)
+    let mut inside: Vec<Option<(Betti, Betti)>> = Vec::new();
     for w in cuts.windows(2) {
         let Some((a, b, margin)) = levels_between(&crit, w[0], w[1], 0.003 * (max - min)) else {
             inside.push(None);

@@ -75,7 +75,7 @@ mod tests {
                 if i > 0 {
                     nb.push((i - 1) * n + j);
                 } else {
-                    nb.extend((0..n).map(|jj| jj)); // the pole row is one neighbourhood
+                    nb.extend(0..n); // the pole row is one neighbourhood
                 }
                 if i + 1 < n {
                     nb.push((i + 1) * n + j);

@@ -42,7 +42,7 @@ pub fn classify_face_saddle(
         }
     };
     let ds: Vec<f64> = sides.iter().flatten().map(deriv).collect();
-    if ds.iter().any(|&x| x == 0.0) {
+    if ds.contains(&0.0) {
         let both = LinkClass {
             upper: [2, 0, 0],
             lower: [2, 0, 0],

@@ -37,7 +37,9 @@ pub fn find_critical_with_options(
     }
     let run = || {
         let mut all = all_critical(grid);
-        super::persistence::assign_persistence(grid, &mut all);
+        if opts.persistence {
+            super::persistence::assign_persistence(grid, &mut all);
+        }
         all.retain(|p| opts.keeps(p));
         all
     };
@@ -74,20 +76,39 @@ fn check_filters(opts: &CriticalOptions, min: f64, max: f64) -> Result<(), Criti
 
 /// All critical points and regions, persistence unset, in the deterministic order.
 pub fn all_critical(grid: &ScalarGrid) -> Vec<CriticalPoint> {
+    critical_in_windows(grid, &[(f64::NEG_INFINITY, f64::INFINITY)])
+}
+
+/// Value windows `[lo, hi]`: only points with a value inside one are looked for.
+type Windows<'a> = &'a [(f64, f64)];
+
+/// Whether some window meets `[lo, hi]`.
+#[inline]
+fn meets(w: Windows, lo: f64, hi: f64) -> bool {
+    w.iter().any(|&(a, b)| lo <= b && hi >= a)
+}
+
+/// The critical points and regions with a value in one of `windows` (persistence unset,
+/// deterministic order). Vertices, faces and cells whose values cannot reach a window are
+/// skipped, which makes checking a mesh bound much cheaper than [`all_critical`].
+pub fn critical_in_windows(grid: &ScalarGrid, windows: Windows) -> Vec<CriticalPoint> {
     let nz = grid.dims[2];
     let mut all: Vec<CriticalPoint> = (0..nz)
         .into_par_iter()
         .flat_map_iter(|k| {
             let mut out = Vec::new();
-            vertices_in_slab(grid, k, &mut out);
-            faces_in_slab(grid, k, &mut out);
+            vertices_in_slab(grid, k, windows, &mut out);
+            faces_in_slab(grid, k, windows, &mut out);
             if k + 1 < nz {
-                cells_in_slab(grid, k, &mut out);
+                cells_in_slab(grid, k, windows, &mut out);
             }
             out
         })
         .collect();
-    all.extend(super::region::critical_regions(grid));
+    all.extend(super::region::critical_regions(grid, &|v| {
+        meets(windows, v, v)
+    }));
+    all.retain(|p| meets(windows, p.value, p.value));
     sort_points(&mut all);
     all
 }
@@ -172,9 +193,13 @@ pub fn vertex_class(grid: &ScalarGrid, p: [usize; 3]) -> Option<LinkClass> {
     })
 }
 
-fn vertices_in_slab(grid: &ScalarGrid, k: usize, out: &mut Vec<CriticalPoint>) {
+fn vertices_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<CriticalPoint>) {
     for j in 0..grid.dims[1] {
         for i in 0..grid.dims[0] {
+            let v = grid.value(i, j, k);
+            if !meets(w, v, v) {
+                continue;
+            }
             let Some(class) = vertex_class(grid, [i, j, k]) else {
                 continue;
             };
@@ -197,7 +222,7 @@ fn vertices_in_slab(grid: &ScalarGrid, k: usize, out: &mut Vec<CriticalPoint>) {
 }
 
 /// Face saddles of the faces whose smallest corner lies in slab `k`.
-fn faces_in_slab(grid: &ScalarGrid, k: usize, out: &mut Vec<CriticalPoint>) {
+fn faces_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<CriticalPoint>) {
     let dims = grid.dims;
     let stride = [1, dims[0], dims[0] * dims[1]];
     for j in 0..dims[1] {
@@ -215,6 +240,14 @@ fn faces_in_slab(grid: &ScalarGrid, k: usize, out: &mut Vec<CriticalPoint>) {
                     base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2]
                 };
                 let q = fc.map(|c| grid.values[corner(c)]);
+                let (lo, hi) = q
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                        (a.min(x), b.max(x))
+                    });
+                if !meets(w, lo, hi) {
+                    continue;
+                }
                 let Some(s) = face_saddle_of(q) else {
                     continue;
                 };
@@ -247,11 +280,19 @@ fn faces_in_slab(grid: &ScalarGrid, k: usize, out: &mut Vec<CriticalPoint>) {
     }
 }
 
-fn cells_in_slab(grid: &ScalarGrid, k: usize, out: &mut Vec<CriticalPoint>) {
+fn cells_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<CriticalPoint>) {
     let cd = grid.cell_dims();
     for j in 0..cd[1] {
         for i in 0..cd[0] {
             let v = grid.cell_values(i, j, k);
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                });
+            if !meets(w, lo, hi) {
+                continue;
+            }
             let base = grid.index(i, j, k);
             for (n, (s, class)) in classify_body_saddles(&v).into_iter().enumerate() {
                 let index = [

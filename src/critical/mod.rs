@@ -181,6 +181,9 @@ pub struct CriticalOptions {
     pub min_persistence: f64,
     /// Worker threads (`None`: rayon's default pool).
     pub threads: Option<usize>,
+    /// Compute the persistence (a union–find over the whole grid; off, every persistence is
+    /// `None`, which is enough to check bounds).
+    pub persistence: bool,
 }
 
 impl Default for CriticalOptions {
@@ -191,6 +194,7 @@ impl Default for CriticalOptions {
             kinds: Vec::new(),
             min_persistence: 0.0,
             threads: None,
+            persistence: true,
         }
     }
 }

@@ -8,17 +8,20 @@
 //! because a bounded component of `{f < w}` is a cavity of `{f >= w}`, cavities too. Saddles
 //! that only open or close tunnels keep `None`.
 //!
-//! The graph is the 1-skeleton of the complex, cheaply: grid edges everywhere, plus all edges
-//! of the TPTD tets of the cells that have a face or body saddle. In a cell without saddles the
-//! parts of `{f >= w}` meet the cell's faces in pieces that the cube edges already connect
-//! (an unambiguous face joins its corners of one side along its edges, and with no body saddle
-//! the cell holds no tunnel), so its diagonals add no connection.
+//! The graph carries the connections of the complex's 1-skeleton, cheaply: grid edges
+//! everywhere; each face saddle joined to its four face corners; and all edges of the TPTD
+//! tets of the cells with a body saddle. Without a body saddle a cell holds no critical point
+//! inside, so the parts of `{f >= w}` (and `{f <= w}`) in it are joined exactly as they are on
+//! its faces: an unambiguous face joins its corners of one side along its edges, an ambiguous
+//! one through its saddle.
 
 use rayon::prelude::*;
 
 use super::complex::cell_tets;
 use super::CriticalPoint;
+use crate::grid::face_corners;
 use crate::grid::ScalarGrid;
+use crate::keys::local_key;
 use crate::keys::CORNER;
 use crate::trilinear::{body_saddles, face_saddle};
 
@@ -32,20 +35,37 @@ struct Graph {
     adj: Vec<u32>,
 }
 
-fn has_saddle(v: &[f64; 8]) -> bool {
-    (0..6).any(|f| face_saddle(v, f).is_some()) || body_saddles(v).1 > 0
-}
-
 fn build_graph(grid: &ScalarGrid) -> Graph {
     let cd = grid.cell_dims();
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    // per slab: the tets of cells with a body saddle, and the fans of saddle faces (each face
+    // from the cell whose low side it is, plus the box faces on the high side)
     let tets: Vec<([u64; 4], [f64; 4])> = (0..cd[2])
         .into_par_iter()
         .flat_map_iter(|k| {
             let mut out = Vec::new();
             for j in 0..cd[1] {
                 for i in 0..cd[0] {
-                    if has_saddle(&grid.cell_values(i, j, k)) {
+                    let v = grid.cell_values(i, j, k);
+                    if body_saddles(&v).1 > 0 {
                         cell_tets(grid, [i, j, k], &mut out);
+                        continue;
+                    }
+                    let base = grid.index(i, j, k);
+                    for f in 0..6 {
+                        let own = f % 2 == 0 || [i, j, k][f / 2] + 1 == cd[f / 2];
+                        let Some(s) = face_saddle(&v, f).filter(|_| own) else {
+                            continue;
+                        };
+                        let key = local_key(base, stride, 8 + f);
+                        let fc = face_corners(f);
+                        // a degenerate "tet" (s, corner, corner, corner) whose edges include the fan
+                        for t in 0..2 {
+                            let (a, b) = (fc[2 * t], fc[2 * t + 1]);
+                            let ka = local_key(base, stride, a);
+                            let kb = local_key(base, stride, b);
+                            out.push(([key, ka, kb, kb], [s.value, v[a], v[b], v[b]]));
+                        }
                     }
                 }
             }

@@ -20,7 +20,7 @@
 //!   exits leaving a whole face of `S` towards the opposite face `G` follow the contours of `G`
 //!   (C8: the asymptotic decider of `G` joins a diagonal pair).
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use rayon::prelude::*;
 
@@ -30,9 +30,21 @@ use super::{CriticalKind, CriticalPoint, RegionInfo};
 use crate::grid::{corner_offset, face_corners, ScalarGrid};
 use crate::trilinear::face_saddle_of;
 
+/// Label of grid vertices that belong to no plateau.
+pub const NO_REGION: u32 = u32::MAX;
+
 /// The plateaus of the grid: vertex lists (ascending index) of every maximal edge-connected set
-/// of at least two vertices with equal values, ordered by their smallest vertex.
-pub fn plateaus(grid: &ScalarGrid) -> Vec<Vec<usize>> {
+/// of at least two vertices with equal values, ordered by their smallest vertex, and the
+/// plateau number of every grid vertex ([`NO_REGION`] for none).
+pub fn plateaus(grid: &ScalarGrid) -> (Vec<Vec<usize>>, Vec<u32>) {
+    plateaus_where(grid, &|_| true)
+}
+
+/// [`plateaus`] restricted to the values `keep` accepts (other vertices get [`NO_REGION`]).
+pub fn plateaus_where(
+    grid: &ScalarGrid,
+    keep: &(dyn Fn(f64) -> bool + Sync),
+) -> (Vec<Vec<usize>>, Vec<u32>) {
     let n = grid.num_vertices();
     let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
     let nbrs = |idx: usize| {
@@ -48,23 +60,24 @@ pub fn plateaus(grid: &ScalarGrid) -> Vec<Vec<usize>> {
     };
     let flat: Vec<bool> = (0..n)
         .into_par_iter()
-        .map(|i| nbrs(i).any(|m| grid.values[m] == grid.values[i]))
+        .map(|i| keep(grid.values[i]) && nbrs(i).any(|m| grid.values[m] == grid.values[i]))
         .collect();
-    let mut seen = vec![false; n];
+    let mut labels = vec![NO_REGION; n];
     let mut out = Vec::new();
     let mut stack = Vec::new();
     for s in 0..n {
-        if !flat[s] || seen[s] {
+        if !flat[s] || labels[s] != NO_REGION {
             continue;
         }
+        let id = out.len() as u32;
         let v = grid.values[s];
         let mut region = vec![s];
-        seen[s] = true;
+        labels[s] = id;
         stack.push(s);
         while let Some(i) = stack.pop() {
             for m in nbrs(i) {
-                if !seen[m] && grid.values[m] == v {
-                    seen[m] = true;
+                if labels[m] == NO_REGION && grid.values[m] == v {
+                    labels[m] = id;
                     region.push(m);
                     stack.push(m);
                 }
@@ -73,7 +86,7 @@ pub fn plateaus(grid: &ScalarGrid) -> Vec<Vec<usize>> {
         region.sort_unstable();
         out.push(region);
     }
-    out
+    (out, labels)
 }
 
 /// Union–find over a small number of nodes.
@@ -95,43 +108,86 @@ impl Uf {
     }
 }
 
-/// The critical plateaus of the grid, classified.
-pub fn critical_regions(grid: &ScalarGrid) -> Vec<CriticalPoint> {
-    let regions = plateaus(grid);
+/// The critical plateaus of the grid whose value `keep` accepts, classified.
+pub fn critical_regions(
+    grid: &ScalarGrid,
+    keep: &(dyn Fn(f64) -> bool + Sync),
+) -> Vec<CriticalPoint> {
+    let (regions, labels) = plateaus_where(grid, keep);
     regions
         .par_iter()
-        .filter_map(|r| classify_region(grid, r))
+        .enumerate()
+        .filter_map(|(id, r)| classify_region(grid, &labels, id as u32, r))
         .collect()
 }
 
-/// Classifies one plateau (vertex indices, ascending); `None` when it is regular.
-pub fn classify_region(grid: &ScalarGrid, region: &[usize]) -> Option<CriticalPoint> {
+/// Classifies plateau number `id` (vertex indices `region`, ascending; `labels` from
+/// [`plateaus`]); `None` when it is regular.
+pub fn classify_region(
+    grid: &ScalarGrid,
+    labels: &[u32],
+    id: u32,
+    region: &[usize],
+) -> Option<CriticalPoint> {
     let v = grid.values[region[0]];
-    let in_region = |idx: usize| region.binary_search(&idx).is_ok();
-    let mut nodes: HashMap<(usize, usize), usize> = HashMap::new();
-    let mut sign: Vec<bool> = Vec::new();
-    let mut cells: Vec<[usize; 3]> = Vec::new();
-    let cd = grid.cell_dims();
+    let in_region = |idx: usize| labels[idx] == id;
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    // a plateau whose exits all go up (down) is a minimum (maximum): no graph needed, a
+    // contractible one has one connected part around it
+    let (mut up, mut down) = (false, false);
     for &r in region {
         let p = grid.vertex_ijk(r);
-        for o in 0..8 {
-            let c: Option<Vec<usize>> = (0..3)
-                .map(|a| {
-                    let lo = if (o >> a) & 1 == 1 {
-                        p[a]
-                    } else {
-                        p[a].wrapping_sub(1)
-                    };
-                    (lo < cd[a]).then_some(lo)
-                })
-                .collect();
-            if let Some(c) = c {
-                cells.push([c[0], c[1], c[2]]);
+        for a in 0..3 {
+            for (ok, m) in [
+                (p[a] > 0, r.wrapping_sub(stride[a])),
+                (p[a] + 1 < grid.dims[a], r + stride[a]),
+            ] {
+                if ok && !in_region(m) {
+                    up |= grid.values[m] > v;
+                    down |= grid.values[m] < v;
+                }
             }
         }
     }
-    cells.sort_unstable_by_key(|c| (c[2], c[1], c[0]));
-    cells.dedup();
+    if !(up && down) {
+        let parts = Parts {
+            np: up as usize,
+            nn: down as usize,
+            np_free: 0,
+            nn_free: 0,
+        };
+        return region_point(grid, labels, id, region, v, parts);
+    }
+    let mut nodes: FxHashMap<(usize, usize), usize> = FxHashMap::default();
+    let mut sign: Vec<bool> = Vec::new();
+    let cd = grid.cell_dims();
+    // every cell holding a vertex of the region, visited from its smallest such vertex
+    let mut cells: Vec<[usize; 3]> = Vec::new();
+    for &r in region {
+        let p = grid.vertex_ijk(r);
+        for o in 0..8usize {
+            let c: [usize; 3] = std::array::from_fn(|a| {
+                if (o >> a) & 1 == 1 {
+                    p[a]
+                } else {
+                    p[a].wrapping_sub(1)
+                }
+            });
+            if (0..3).any(|a| c[a] >= cd[a]) {
+                continue;
+            }
+            let base = grid.index(c[0], c[1], c[2]);
+            let first = (0..8)
+                .map(|k| {
+                    let q = corner_offset(k);
+                    base + q[0] * stride[0] + q[1] * stride[1] + q[2] * stride[2]
+                })
+                .find(|&g| in_region(g));
+            if first == Some(r) {
+                cells.push(c);
+            }
+        }
+    }
     let mut links: Vec<(usize, usize)> = Vec::new();
     let mut node = |a: usize, b: usize, up: bool, sign: &mut Vec<bool>| -> usize {
         let key = (a.min(b), a.max(b));
@@ -143,7 +199,6 @@ pub fn classify_region(grid: &ScalarGrid, region: &[usize]) -> Option<CriticalPo
     };
     for c in &cells {
         let base = grid.index(c[0], c[1], c[2]);
-        let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
         let gidx: [usize; 8] = std::array::from_fn(|k| {
             let o = corner_offset(k);
             base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2]
@@ -191,7 +246,7 @@ pub fn classify_region(grid: &ScalarGrid, region: &[usize]) -> Option<CriticalPo
             *free += !touch[i] as usize;
         }
     }
-    region_point(grid, region, v, parts)
+    region_point(grid, labels, id, region, v, parts)
 }
 
 /// Connected parts of `{f > f(R)}` (`np`) and `{f < f(R)}` (`nn`) near a plateau `R`, and how
@@ -213,6 +268,8 @@ struct Parts {
 /// change one filtration only (a lower pocket below a box plateau opens a hole in `{f >= w}`).
 fn region_point(
     grid: &ScalarGrid,
+    labels: &[u32],
+    id: u32,
     region: &[usize],
     v: f64,
     parts: Parts,
@@ -236,7 +293,7 @@ fn region_point(
         np_free,
         nn_free,
     } = parts;
-    let (superlevel, sublevel) = if !is_simple(grid, region, on_box) {
+    let (superlevel, sublevel) = if !is_simple(grid, labels, id, region, on_box) {
         // not a ball (or a half-ball on the box): component counts cannot say which
         // filtration changes, so both are flagged (a bound there is reported as unsafe)
         (true, true)
@@ -282,34 +339,35 @@ fn region_point(
 /// Whether the plateau is cube-complex contractible as far as Euler characteristics tell
 /// (`χ(R) = 1`) and, when it touches the box, meets the box in one piece with `χ = 1`: then its
 /// neighbourhood is a ball (half-ball) and its link a sphere (disk).
-fn is_simple(grid: &ScalarGrid, region: &[usize], on_box: bool) -> bool {
-    let inr = |p: [usize; 3]| region.binary_search(&grid.index(p[0], p[1], p[2])).is_ok();
-    let at_box = |p: [usize; 3], a: usize| p[a] == 0 || p[a] + 1 == grid.dims[a];
-    // chi of R (all cells) and of R on the box (cells lying in one box plane)
+fn is_simple(grid: &ScalarGrid, labels: &[u32], id: u32, region: &[usize], on_box: bool) -> bool {
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
     let (mut chi, mut chi_box, mut vb) = (0i64, 0i64, 0usize);
     for &r in region {
         let p = grid.vertex_ijk(r);
-        // cells whose smallest corner is p, spanned by the axes in `mask`
-        for mask in 0u8..8 {
-            let dim = mask.count_ones();
-            let ok = (0..3).all(|a| mask & (1 << a) == 0 || p[a] + 1 < grid.dims[a]);
-            if !ok {
-                continue;
+        // bit c: the vertex at forward offset c (bit a = +1 along axis a) is in the region
+        let mut present = 1u8;
+        for c in 1..8usize {
+            let fits = (0..3).all(|a| (c >> a) & 1 == 0 || p[a] + 1 < grid.dims[a]);
+            let off: usize = (0..3).map(|a| ((c >> a) & 1) * stride[a]).sum();
+            if fits && labels[r + off] == id {
+                present |= 1 << c;
             }
-            let all = (0u8..8)
+        }
+        let at_box = |a: usize| p[a] == 0 || p[a] + 1 == grid.dims[a];
+        // the cube cell spanned by the axes in `mask` from p is in R when all its corners are
+        for mask in 0usize..8 {
+            let all = (0usize..8)
                 .filter(|c| c & !mask == 0)
-                .all(|c| inr(std::array::from_fn(|a| p[a] + ((c >> a) & 1) as usize)));
+                .all(|c| present & (1 << c) != 0);
             if !all {
                 continue;
             }
-            let sign = if dim % 2 == 0 { 1 } else { -1 };
+            let sign = if mask.count_ones() % 2 == 0 { 1 } else { -1 };
             chi += sign;
-            // in a box plane: some axis not spanned with p at the box there
-            if (0..3).any(|a| mask & (1 << a) == 0 && at_box(p, a)) {
+            // a cell in a box plane: some axis it does not span with p on the box there
+            if (0..3).any(|a| mask & (1 << a) == 0 && at_box(a)) {
                 chi_box += sign;
-                if dim == 0 {
-                    vb += 1;
-                }
+                vb += (mask == 0) as usize;
             }
         }
     }

@@ -2,9 +2,11 @@
 //!
 //! `{alpha <= f <= beta}` changes topology when `alpha` crosses a critical value of the
 //! superlevel sets or `beta` one of the sublevel sets; at such a value the domain pinches and
-//! no mesh there is well shaped. A bound is *unsafe* when it lies within `tol` of such a value;
-//! the suggested safe bounds are the midpoints of the nearest gaps between consecutive critical
-//! values that are at least `2 tol` wide, one below and one above.
+//! no mesh there is well shaped (near it, necks are about `sqrt(distance)` thin). A bound is
+//! *unsafe* when it lies within `tol` of such a value. The suggested bounds are the midpoints of
+//! the nearest gaps between consecutive critical values at least `2 tol` wide, one below and one
+//! above; where critical values are denser than that (integer MRI data: face saddles at many
+//! simple fractions), the midpoint of the widest gap on each side among those given.
 
 use super::CriticalPoint;
 
@@ -14,10 +16,10 @@ pub struct NearCritical {
     /// The critical points within `tol` of the bound (at most a few are needed for a message;
     /// all are kept), nearest first.
     pub hits: Vec<CriticalPoint>,
-    /// Nearest safe value below the bound, if any.
-    pub safe_below: Option<f64>,
-    /// Nearest safe value above the bound, if any.
-    pub safe_above: Option<f64>,
+    /// Suggested value below the bound and its distance to the nearest critical value.
+    pub safe_below: Option<(f64, f64)>,
+    /// Suggested value above the bound and its distance to the nearest critical value.
+    pub safe_above: Option<(f64, f64)>,
 }
 
 /// The critical points of `points` that matter for a lower bound (`lower`: they change
@@ -43,13 +45,20 @@ pub fn near_critical(
     let mut values: Vec<f64> = points.iter().filter(relevant).map(|p| p.value).collect();
     values.sort_by(f64::total_cmp);
     values.dedup();
-    let gaps: Vec<f64> = values
+    // (midpoint, half width) of each gap
+    let gaps: Vec<(f64, f64)> = values
         .windows(2)
-        .filter(|w| w[1] - w[0] >= 2.0 * tol)
-        .map(|w| 0.5 * (w[0] + w[1]))
+        .map(|w| (0.5 * (w[0] + w[1]), 0.5 * (w[1] - w[0])))
         .collect();
-    let safe_below = gaps.iter().rev().find(|&&m| m < bound).copied();
-    let safe_above = gaps.iter().find(|&&m| m > bound).copied();
+    let pick = |side: &mut dyn Iterator<Item = (f64, f64)>| {
+        let side: Vec<(f64, f64)> = side.collect();
+        side.iter()
+            .copied()
+            .find(|g| g.1 >= tol)
+            .or_else(|| side.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1)))
+    };
+    let safe_below = pick(&mut gaps.iter().rev().copied().filter(|g| g.0 < bound));
+    let safe_above = pick(&mut gaps.iter().copied().filter(|g| g.0 > bound));
     Some(NearCritical {
         hits,
         safe_below,
