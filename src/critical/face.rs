@@ -105,3 +105,48 @@ mod tests {
         assert!(deg);
     }
 }
+
+/// Every saddle of the bilinear interpolant on a grid face (critical for the field or not) with
+/// a value in `[lo, hi]`: `(value, physical position)`, in grid order. Regular ones change no
+/// topology, but they are vertices of the TPTD decomposition, so a mesh bound equal to one
+/// makes elements with a vertex on the bound (flat or needle-shaped).
+pub fn face_saddles_in(grid: &crate::ScalarGrid, lo: f64, hi: f64) -> Vec<(f64, [f64; 3])> {
+    use rayon::prelude::*;
+    let cd = grid.cell_dims();
+    (0..grid.dims[2])
+        .into_par_iter()
+        .flat_map_iter(|k| {
+            let mut out = Vec::new();
+            for j in 0..grid.dims[1] {
+                for i in 0..grid.dims[0] {
+                    let c = [i.min(cd[0] - 1), j.min(cd[1] - 1), k.min(cd[2] - 1)];
+                    let v = grid.cell_values(c[0], c[1], c[2]);
+                    // the low faces of the cell at (i, j, k) (the high box faces from the last cell)
+                    for f in 0..6 {
+                        let axis = f / 2;
+                        let p = [i, j, k];
+                        let fits = (0..3).all(|a| if a == axis { true } else { p[a] < cd[a] });
+                        let side_ok = if f % 2 == 0 {
+                            p[axis] < cd[axis]
+                        } else {
+                            p[axis] == cd[axis]
+                        };
+                        if !fits || !side_ok {
+                            continue;
+                        }
+                        let Some(s) = crate::trilinear::face_saddle(&v, f) else {
+                            continue;
+                        };
+                        if s.value < lo || s.value > hi {
+                            continue;
+                        }
+                        let local = crate::trilinear::face_point(f, s.uv);
+                        let idx = [0, 1, 2].map(|a| c[a] as f64 + local[a]);
+                        out.push((s.value, grid.to_physical(idx)));
+                    }
+                }
+            }
+            out
+        })
+        .collect()
+}

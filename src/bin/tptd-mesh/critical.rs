@@ -6,6 +6,7 @@ use std::io::Write;
 use std::time::Instant;
 
 use anyhow::Result;
+use tptd::critical::face::face_saddles_in;
 use tptd::critical::find::critical_in_windows;
 use tptd::critical::{
     contour_spectrum, find_critical_with_options, near_critical, CriticalOptions, CriticalPoint,
@@ -155,6 +156,21 @@ pub(crate) fn warn_critical_bounds(
             .filter(|p| (p.value - bound).abs() <= reach)
             .cloned()
             .collect();
+        let flat = face_saddles_in(grid, bound - tol, bound + tol);
+        if let Some((v, p)) = flat.first() {
+            eprintln!(
+                "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} face saddle(s) of \
+                 the bilinear interpolant (e.g. {} at ({:.3}, {:.3}, {:.3}); a checkerboard face \
+                 with corners k, k+1 has its saddle at k+0.5): they are vertices of the \
+                 decomposition, so elements there get a vertex on the bound",
+                fmt_bound(bound),
+                flat.len(),
+                fmt_bound(*v),
+                p[0],
+                p[1],
+                p[2]
+            );
+        }
         let Some(near) = near_critical(&around, bound, lower, tol) else {
             continue;
         };
