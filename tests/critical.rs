@@ -473,3 +473,23 @@ fn integer_plateaus_two_maxima_and_a_bridge() {
     );
     check_routes_agree(&f, "plateaus");
 }
+
+#[test]
+fn output_is_the_same_for_any_thread_count() {
+    let mut f = bumpy_field([9, 8, 7], 9, 0.05);
+    for v in f.values.iter_mut().step_by(3) {
+        *v = (*v * 4.0).round() / 4.0; // some plateaus
+    }
+    let grid = grid_of(&f);
+    let run = |threads| {
+        let opts = tptd::critical::CriticalOptions {
+            threads: Some(threads),
+            ..Default::default()
+        };
+        tptd::critical::find_critical_with_options(&grid, &opts).unwrap()
+    };
+    let one = run(1);
+    assert!(one.len() > 20);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(3));
+}

@@ -120,8 +120,9 @@ fn bound_on_a_checkerboard_face_saddle_warns() {
     // a bound away from every saddle and critical value gets no warning
     let (ok, _, stderr) = run(&[inp, "--alpha", "200.25", "-o", out.to_str().unwrap(), "-q"]);
     assert!(ok && !stderr.contains("is within"), "{stderr}");
-    // a bound on a critical value: the grid value 210 of the blob's maximum plateau
-    let (ok, _, stderr) = run(&[inp, "--beta", "210", "-o", out.to_str().unwrap(), "-q"]);
+    // a bound next to a critical value: 1e-4 above the blob's maximum plateau at 210 (within
+    // the default tolerance, 1e-5 of the range 20); exactly 210 has the grid-value warning
+    let (ok, _, stderr) = run(&[inp, "--beta", "209.9999", "-o", out.to_str().unwrap(), "-q"]);
     assert!(
         ok && stderr.contains("critical value(s)") && stderr.contains("region_maximum 210"),
         "{stderr}"

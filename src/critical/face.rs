@@ -75,37 +75,6 @@ pub fn classify_face_saddle(
     Some((class, false))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn lemma4_cases() {
-        // checkerboard face 1,0,1,0 (saddle 0.5); above it +1 everywhere, below -1:
-        // one cell joins the upper corners, the other the lower: regular
-        let q = [1.0, 0.0, 1.0, 0.0];
-        assert_eq!(
-            classify_face_saddle(q, 0.5, [Some([-1.0; 4]), Some([2.0; 4])]),
-            None
-        );
-        // both sides higher: both join the upper corners, a saddle of both filtrations
-        let (c, deg) = classify_face_saddle(q, 0.5, [Some([2.0; 4]), Some([3.0; 4])]).unwrap();
-        assert!(!deg && c.superlevel() && c.sublevel());
-        assert_eq!(c.upper, [1, 1, 0]);
-        // rotated face (upper diagonal at entries 1, 3) gives the same answer
-        let q2 = [0.0, 1.0, 0.0, 1.0];
-        let (c2, _) = classify_face_saddle(q2, 0.5, [Some([2.0; 4]), Some([3.0; 4])]).unwrap();
-        assert_eq!(c, c2);
-        // on the box: one cell joining the upper corners changes only the sublevel sets
-        let (c, _) = classify_face_saddle(q, 0.5, [None, Some([2.0; 4])]).unwrap();
-        assert!(c.sublevel() && !c.superlevel());
-        // the across-face checkerboard continuing (mean equal to the saddle value): degenerate
-        let (_, deg) =
-            classify_face_saddle(q, 0.5, [Some([0.0, 1.0, 0.0, 1.0]), Some([2.0; 4])]).unwrap();
-        assert!(deg);
-    }
-}
-
 /// Every saddle of the bilinear interpolant on a grid face (critical for the field or not) with
 /// a value in `[lo, hi]`: `(value, physical position)`, in grid order. Regular ones change no
 /// topology, but they are vertices of the TPTD decomposition, so a mesh bound equal to one
@@ -149,4 +118,35 @@ pub fn face_saddles_in(grid: &crate::ScalarGrid, lo: f64, hi: f64) -> Vec<(f64, 
             out
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lemma4_cases() {
+        // checkerboard face 1,0,1,0 (saddle 0.5); above it +1 everywhere, below -1:
+        // one cell joins the upper corners, the other the lower: regular
+        let q = [1.0, 0.0, 1.0, 0.0];
+        assert_eq!(
+            classify_face_saddle(q, 0.5, [Some([-1.0; 4]), Some([2.0; 4])]),
+            None
+        );
+        // both sides higher: both join the upper corners, a saddle of both filtrations
+        let (c, deg) = classify_face_saddle(q, 0.5, [Some([2.0; 4]), Some([3.0; 4])]).unwrap();
+        assert!(!deg && c.superlevel() && c.sublevel());
+        assert_eq!(c.upper, [1, 1, 0]);
+        // rotated face (upper diagonal at entries 1, 3) gives the same answer
+        let q2 = [0.0, 1.0, 0.0, 1.0];
+        let (c2, _) = classify_face_saddle(q2, 0.5, [Some([2.0; 4]), Some([3.0; 4])]).unwrap();
+        assert_eq!(c, c2);
+        // on the box: one cell joining the upper corners changes only the sublevel sets
+        let (c, _) = classify_face_saddle(q, 0.5, [None, Some([2.0; 4])]).unwrap();
+        assert!(c.sublevel() && !c.superlevel());
+        // the across-face checkerboard continuing (mean equal to the saddle value): degenerate
+        let (_, deg) =
+            classify_face_saddle(q, 0.5, [Some([0.0, 1.0, 0.0, 1.0]), Some([2.0; 4])]).unwrap();
+        assert!(deg);
+    }
 }

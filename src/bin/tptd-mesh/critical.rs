@@ -9,7 +9,8 @@ use anyhow::Result;
 use tptd::critical::face::face_saddles_in;
 use tptd::critical::find::critical_in_windows;
 use tptd::critical::{
-    contour_spectrum, find_critical_with_options, near_critical, CriticalOptions, CriticalPoint,
+    contour_spectrum, find_critical_with_options, near_critical, CriticalKind, CriticalOptions,
+    CriticalPoint,
 };
 use tptd::io::{check_writable, write_atomically};
 use tptd::ScalarGrid;
@@ -151,9 +152,14 @@ pub(crate) fn warn_critical_bounds(
         if !bound.is_finite() {
             continue;
         }
+        // grid values equal to the bound have their own warning (see run.rs)
+        let grid_value = |p: &CriticalPoint| {
+            p.value == bound
+                && !matches!(p.kind, CriticalKind::FaceSaddle | CriticalKind::BodySaddle)
+        };
         let around: Vec<CriticalPoint> = points
             .iter()
-            .filter(|p| (p.value - bound).abs() <= reach)
+            .filter(|p| (p.value - bound).abs() <= reach && !grid_value(p))
             .cloned()
             .collect();
         let flat = face_saddles_in(grid, bound - tol, bound + tol);
