@@ -401,6 +401,7 @@ fn drip_field_of_seed_002() {
         saddle.kind,
         CriticalKind::Saddle | CriticalKind::FaceSaddle | CriticalKind::BodySaddle
     ));
+    check_routes_agree(&f, "drip");
     println!(
         "drip: minimum {} at {:?}, saddle {} ({:?}) at {:?}",
         min.value, min.position, saddle.value, saddle.kind, saddle.position
