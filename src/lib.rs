@@ -6,13 +6,16 @@
 //! tetrahedra through the saddles of the trilinear interpolant, clips each tetrahedron to the
 //! interval, welds points by identity and returns a [`TetMesh`]; [`improve::improve`] raises
 //! the element quality without changing the topology; [`topology`] and [`improve::quality`]
-//! analyse the mesh and [`io::write_mesh`] writes it.
+//! analyse the mesh and [`io::write_mesh`] writes it. [`critical`] finds the critical points
+//! and regions of the trilinear field (where the topology of the level sets changes), to
+//! choose `alpha` and `beta` away from them.
 
 #![warn(missing_docs)]
 // Index loops over small fixed arrays (corners, faces, axes) read better than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
 pub(crate) mod clip;
+pub mod critical;
 pub mod curvilinear;
 pub(crate) mod decompose;
 pub mod demo;

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Parser, ValueEnum};
+use tptd::critical::CriticalKind;
 use tptd::io::msh::MshVersion;
 use tptd::Method;
 
@@ -22,7 +23,7 @@ pub(crate) struct Cli {
     /// .vtu (VTK) for tetrahedra; .obj, .ply, .stl for the isosurface (the level sets
     /// f = alpha and f = beta, normals towards increasing f) [default with --demo:
     /// tptd-demo.vtu]
-    #[arg(short, long, value_name = "OUT", required_unless_present = "demo")]
+    #[arg(short, long, value_name = "OUT", required_unless_present_any = ["demo", "critical"])]
     pub(crate) output: Option<PathBuf>,
 
     /// Lower bound of the interval [default: -inf; at least one of --alpha/--beta is required]
@@ -102,6 +103,76 @@ pub(crate) struct Cli {
     /// Print nothing on stdout and no progress bar (warnings and errors still go to stderr)
     #[arg(short, long)]
     pub(crate) quiet: bool,
+
+    /// Instead of meshing, list the critical points and critical regions of the trilinear
+    /// field (values where the topology of {f >= w} or {f <= w} changes), with persistence
+    #[arg(long, conflicts_with_all = ["output", "demo", "quality"])]
+    pub(crate) critical: bool,
+
+    /// With --critical: also write them as a JSON array to this file
+    #[arg(long, value_name = "FILE.json", requires = "critical")]
+    pub(crate) json: Option<PathBuf>,
+
+    /// With --critical: write the contour spectrum (Betti numbers of {f >= w} between
+    /// consecutive critical values) as CSV to this file (volumes up to about 10^6 cells)
+    #[arg(long, value_name = "FILE.csv", requires = "critical")]
+    pub(crate) spectrum: Option<PathBuf>,
+
+    /// With --critical: compute the persistence of each point (a union-find over the whole
+    /// grid; implied by --min-persistence)
+    #[arg(long, requires = "critical")]
+    pub(crate) persistence: bool,
+
+    /// With --critical: hide points whose persistence is below P (and those without one)
+    #[arg(long, value_name = "P", requires = "critical", value_parser = parse_nonnegative)]
+    pub(crate) min_persistence: Option<f64>,
+
+    /// With --critical: hide points with a value below V
+    #[arg(long, value_name = "V", allow_hyphen_values = true, requires = "critical", value_parser = parse_bound)]
+    pub(crate) min_value: Option<f64>,
+
+    /// With --critical: hide points with a value above V
+    #[arg(long, value_name = "V", allow_hyphen_values = true, requires = "critical", value_parser = parse_bound)]
+    pub(crate) max_value: Option<f64>,
+
+    /// With --critical: show only these kinds (comma-separated: minimum, maximum, saddle,
+    /// face_saddle, body_saddle, region_minimum, region_maximum, region_saddle)
+    #[arg(long, value_name = "KINDS", requires = "critical", value_parser = parse_kinds)]
+    pub(crate) kind: Option<Kinds>,
+
+    /// Tolerance of the check that --alpha/--beta are not (near) a critical value
+    /// [default: 1e-5 of the data range]
+    #[arg(long, value_name = "T", value_parser = parse_nonnegative)]
+    pub(crate) critical_tol: Option<f64>,
+
+    /// Skip the check of --alpha/--beta against the critical values before meshing
+    #[arg(long)]
+    pub(crate) no_critical_check: bool,
+}
+
+/// A parsed `--kind` list.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Kinds(pub(crate) Vec<CriticalKind>);
+
+/// Parses `--kind`: comma-separated kind names.
+fn parse_kinds(s: &str) -> Result<Kinds, String> {
+    s.split(',')
+        .map(|k| {
+            CriticalKind::from_name(k.trim()).ok_or_else(|| {
+                let names: Vec<&str> = CriticalKind::ALL.iter().map(|k| k.name()).collect();
+                format!("unknown kind '{}' (one of {})", k.trim(), names.join(", "))
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(Kinds)
+}
+
+/// Parses a finite number >= 0.
+fn parse_nonnegative(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v >= 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("expected a finite number >= 0, got '{s}'")),
+    }
 }
 
 /// `--method` values.

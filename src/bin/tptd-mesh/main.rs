@@ -7,10 +7,13 @@
 //! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1; outputs are written
 //! atomically, so a failed run leaves no (partial) output file behind.
 //!
-//! Modules: [`cli`] (arguments), [`run`] (the run, step by step), [`summary`] (stdout),
-//! [`progress`] (the progress bar), [`error`] (`{file}: {problem}` errors), [`surface`] (isosurface output).
+//! Modules: [`cli`] (arguments), [`run`] (the run, step by step), [`critical`] (`--critical`
+//! and the check of the bounds against the critical values), [`summary`] (stdout),
+//! [`progress`] (the progress bar), [`error`] (`{file}: {problem}` errors), [`surface`]
+//! (isosurface output).
 
 mod cli;
+mod critical;
 mod error;
 mod progress;
 mod run;
@@ -19,7 +22,12 @@ mod surface;
 
 fn main() {
     let cli = cli::parse_or_exit();
-    if let Err(e) = run::run(cli) {
+    let result = if cli.critical {
+        critical::run(cli)
+    } else {
+        run::run(cli)
+    };
+    if let Err(e) = result {
         let msg = e.to_string().replace(['\n', '\r'], " ");
         eprintln!("tptd-mesh: error: {msg}");
         std::process::exit(1);

@@ -64,6 +64,10 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     };
     let t_read = secs(t);
     warn_exact_bounds(&grid, &job);
+    if !cli.no_critical_check {
+        let (a, b) = (job.opts.alpha, job.opts.beta);
+        crate::critical::warn_critical_bounds(&grid, &job.input_name, a, b, cli.critical_tol);
+    }
 
     let t = Instant::now();
     let mut out = mesh(&grid, &job, cli.quiet)?;
@@ -194,7 +198,7 @@ fn check_outputs(output: &Path, report: Option<&Path>) -> Result<()> {
 }
 
 /// Reads the input volume (or generates the demo volume) and applies `--spacing`.
-fn read_grid(cli: &Cli, input_name: &str) -> Result<ScalarGrid> {
+pub(crate) fn read_grid(cli: &Cli, input_name: &str) -> Result<ScalarGrid> {
     let mut grid = match &cli.input {
         Some(p) => read_volume(p)?,
         None => demo_volume(),

@@ -1,0 +1,206 @@
+//! `--critical`: the critical points and regions of the input as a table (stdout), JSON and a
+//! contour-spectrum CSV; and the check of `--alpha`/`--beta` against the critical values
+//! before meshing.
+
+use std::io::Write;
+use std::time::Instant;
+
+use anyhow::Result;
+use tptd::critical::face::face_saddles_in;
+use tptd::critical::find::critical_in_windows;
+use tptd::critical::{
+    contour_spectrum, find_critical_with_options, near_critical, CriticalKind, CriticalOptions,
+    CriticalPoint,
+};
+use tptd::io::{check_writable, write_atomically};
+use tptd::ScalarGrid;
+
+use crate::cli::Cli;
+use crate::error::{file_error, write_error};
+use crate::run::read_grid;
+use crate::summary::fmt_bound;
+
+/// Runs `tptd-mesh INPUT --critical ...`.
+pub(crate) fn run(cli: Cli) -> Result<()> {
+    let t = Instant::now();
+    let input = match &cli.input {
+        Some(p) => p.display().to_string(),
+        None => "demo".to_string(),
+    };
+    for out in [&cli.json, &cli.spectrum].into_iter().flatten() {
+        check_writable(out).map_err(write_error)?;
+    }
+    let grid = read_grid(&cli, &input)?;
+    let opts = CriticalOptions {
+        min_value: cli.min_value.unwrap_or(f64::NEG_INFINITY),
+        max_value: cli.max_value.unwrap_or(f64::INFINITY),
+        kinds: cli.kind.clone().map(|k| k.0).unwrap_or_default(),
+        min_persistence: cli.min_persistence.unwrap_or(0.0),
+        threads: cli.threads.map(|n| n as usize),
+        persistence: cli.persistence || cli.min_persistence.is_some(),
+    };
+    let points = find_critical_with_options(&grid, &opts).map_err(|e| file_error(&input, e))?;
+    let secs = t.elapsed().as_secs_f64();
+    if let Some(path) = &cli.json {
+        write_atomically(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &points).map_err(std::io::Error::other)?;
+            writeln!(w)
+        })
+        .map_err(write_error)?;
+    }
+    if let Some(path) = &cli.spectrum {
+        write_spectrum(&grid, path, &opts)?;
+    }
+    if !cli.quiet {
+        print_table(&input, &points, secs)?;
+    }
+    Ok(())
+}
+
+/// Writes the contour spectrum over the filtered value range as CSV.
+fn write_spectrum(grid: &ScalarGrid, path: &std::path::Path, opts: &CriticalOptions) -> Result<()> {
+    // the spectrum needs every critical value of the range, whatever the kind/persistence filter
+    let all = CriticalOptions {
+        kinds: Vec::new(),
+        min_persistence: 0.0,
+        persistence: false,
+        ..opts.clone()
+    };
+    let points =
+        find_critical_with_options(grid, &all).map_err(|e| file_error(path.display(), e))?;
+    let steps = contour_spectrum(grid, &points, opts.min_value, opts.max_value);
+    write_atomically(path, |w| {
+        writeln!(w, "lo,hi,b0,b1,b2")?;
+        for s in &steps {
+            writeln!(
+                w,
+                "{},{},{},{},{}",
+                s.lo, s.hi, s.betti[0], s.betti[1], s.betti[2]
+            )?;
+        }
+        writeln!(w, "# critical values by kind: value,kind")?;
+        for p in points.iter().filter(|p| p.superlevel) {
+            writeln!(w, "# {},{}", p.value, p.kind.name())?;
+        }
+        Ok(())
+    })
+    .map_err(write_error)?;
+    Ok(())
+}
+
+/// The table on stdout.
+fn print_table(input: &str, points: &[CriticalPoint], secs: f64) -> std::io::Result<()> {
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{input}: {} critical points and regions ({secs:.2} s)",
+        points.len()
+    )?;
+    writeln!(
+        out,
+        "{:>14}  {:<15} {:>30}  {:>12}  {:<5} {:<5} region",
+        "value", "kind", "position (x, y, z)", "persistence", "f>=w", "f<=w"
+    )?;
+    let yes = |b: bool| if b { "yes" } else { "-" };
+    for p in points {
+        let pos = format!(
+            "{:.3}, {:.3}, {:.3}",
+            p.position[0], p.position[1], p.position[2]
+        );
+        let pers = p.persistence.map_or("-".to_string(), |x| format!("{x:.6}"));
+        let region = p
+            .region
+            .as_ref()
+            .map_or(String::new(), |r| format!("{} vertices", r.vertices));
+        writeln!(
+            out,
+            "{:>14}  {:<15} {:>30}  {:>12}  {:<5} {:<5} {region}",
+            format!("{:.6}", p.value),
+            p.kind.name(),
+            pos,
+            pers,
+            yes(p.superlevel),
+            yes(p.sublevel)
+        )?;
+    }
+    Ok(())
+}
+
+/// Warns on stderr when `alpha` (`beta`) lies within `tol` of a value where `{f >= w}`
+/// (`{f <= w}`) changes topology, naming the points and the nearest safe bounds.
+pub(crate) fn warn_critical_bounds(
+    grid: &ScalarGrid,
+    input: &str,
+    alpha: f64,
+    beta: f64,
+    tol: Option<f64>,
+) {
+    let (lo, hi) = grid.value_range();
+    let tol = tol.unwrap_or(1e-5 * (hi - lo));
+    // look for safe values this far around each bound
+    let reach = tol + 0.004 * (hi - lo);
+    let windows: Vec<(f64, f64)> = [alpha, beta]
+        .into_iter()
+        .filter(|b| b.is_finite())
+        .map(|b| (b - reach, b + reach))
+        .collect();
+    if windows.is_empty() || lo == hi {
+        return;
+    }
+    let points = critical_in_windows(grid, &windows);
+    for (name, bound, lower) in [("alpha", alpha, true), ("beta", beta, false)] {
+        if !bound.is_finite() {
+            continue;
+        }
+        // grid values equal to the bound have their own warning (see run.rs)
+        let grid_value = |p: &CriticalPoint| {
+            p.value == bound
+                && !matches!(p.kind, CriticalKind::FaceSaddle | CriticalKind::BodySaddle)
+        };
+        let around: Vec<CriticalPoint> = points
+            .iter()
+            .filter(|p| (p.value - bound).abs() <= reach && !grid_value(p))
+            .cloned()
+            .collect();
+        let flat = face_saddles_in(grid, bound - tol, bound + tol);
+        if let Some((v, p)) = flat.first() {
+            eprintln!(
+                "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} face saddle(s) of \
+                 the bilinear interpolant (e.g. {} at ({:.3}, {:.3}, {:.3}); a checkerboard face \
+                 with corners k, k+1 has its saddle at k+0.5): they are vertices of the \
+                 decomposition, so elements there get a vertex on the bound",
+                fmt_bound(bound),
+                flat.len(),
+                fmt_bound(*v),
+                p[0],
+                p[1],
+                p[2]
+            );
+        }
+        let Some(near) = near_critical(&around, bound, lower, tol) else {
+            continue;
+        };
+        let first = &near.hits[0];
+        let p = first.position;
+        let safe = |v: Option<(f64, f64)>| {
+            v.filter(|x| (x.0 - bound).abs() < reach)
+                .map_or(format!("none within {}", fmt_bound(reach)), |(x, d)| {
+                    format!("{x:.4} ({d:.4} from the nearest)")
+                })
+        };
+        eprintln!(
+            "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} critical value(s) of \
+             the trilinear field (e.g. {} {} at ({:.3}, {:.3}, {:.3})): the domain pinches there \
+             and its elements degenerate; nearest safer values: {} below, {} above",
+            fmt_bound(bound),
+            near.hits.len(),
+            first.kind.name(),
+            fmt_bound(first.value),
+            p[0],
+            p[1],
+            p[2],
+            safe(near.safe_below),
+            safe(near.safe_above),
+        );
+    }
+}

@@ -1,0 +1,546 @@
+//! Critical regions on plateaus (seed 004): vertices with an edge-connected neighbour of the
+//! same value cannot be classified locally. A flood fill collects each plateau `R` (maximal
+//! edge-connected set of equal values); every grid edge leaving `R` becomes a node, positive
+//! or negative by the sign of `f - f(R)` at its far end; nodes are joined when their edges lie
+//! in one connected part of `{f > f(R)}` (or `{f < f(R)}`) near `R` inside some cell
+//! ([`join_in_cell`]). With `n_p`, `n_n` components: `n_n = 0` is a region minimum, `n_p = 0` a
+//! region maximum, `n_p + n_n > 2` a region saddle (Definition 5 of seed 004).
+//!
+//! Inside one cell, near a cube-edge-connected piece `S` of `R` (seed 004 §5.2, the base cases
+//! grouped by what `S` is):
+//! * `S` one corner (C1): the cell is split like a linear tetrahedron, all exits of one sign
+//!   are joined.
+//! * `S` one cube edge (C2): on the slice at parameter `t` along the edge the two neighbours
+//!   across the cell (along the two other axes) have values linear in `t`; the parts of one
+//!   sign on the two sides are joined when the `t`-ranges where both have that sign overlap
+//!   (C2.0–C2.4.1); when both cross `f(R)` at the same `t`, the far corner of that slice
+//!   decides (C2.4.0–C2.4.2).
+//! * larger `S`: exits of one sign on a common cell face are joined when they are adjacent
+//!   near `S` on that face (they share their far corner, or leave one corner or one edge of `S`);
+//!   exits leaving a whole face of `S` towards the opposite face `G` follow the contours of `G`
+//!   (C8: the asymptotic decider of `G` joins a diagonal pair).
+
+use rustc_hash::FxHashMap;
+
+use rayon::prelude::*;
+
+use super::find::make_point;
+use super::vertex::LinkClass;
+use super::{CriticalKind, CriticalPoint, RegionInfo};
+use crate::grid::{corner_offset, face_corners, ScalarGrid};
+use crate::trilinear::face_saddle_of;
+
+/// Label of grid vertices that belong to no plateau.
+pub const NO_REGION: u32 = u32::MAX;
+
+/// The plateaus of the grid: vertex lists (ascending index) of every maximal edge-connected set
+/// of at least two vertices with equal values, ordered by their smallest vertex, and the
+/// plateau number of every grid vertex ([`NO_REGION`] for none).
+pub fn plateaus(grid: &ScalarGrid) -> (Vec<Vec<usize>>, Vec<u32>) {
+    plateaus_where(grid, &|_| true)
+}
+
+/// [`plateaus`] restricted to the values `keep` accepts (other vertices get [`NO_REGION`]).
+pub fn plateaus_where(
+    grid: &ScalarGrid,
+    keep: &(dyn Fn(f64) -> bool + Sync),
+) -> (Vec<Vec<usize>>, Vec<u32>) {
+    let n = grid.num_vertices();
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let nbrs = |idx: usize| {
+        let p = grid.vertex_ijk(idx);
+        (0..6).filter_map(move |d| {
+            let (a, side) = (d / 2, d % 2);
+            if side == 0 {
+                (p[a] > 0).then(|| idx - stride[a])
+            } else {
+                (p[a] + 1 < grid.dims[a]).then(|| idx + stride[a])
+            }
+        })
+    };
+    let flat: Vec<bool> = (0..n)
+        .into_par_iter()
+        .map(|i| keep(grid.values[i]) && nbrs(i).any(|m| grid.values[m] == grid.values[i]))
+        .collect();
+    let mut labels = vec![NO_REGION; n];
+    let mut out = Vec::new();
+    let mut stack = Vec::new();
+    for s in 0..n {
+        if !flat[s] || labels[s] != NO_REGION {
+            continue;
+        }
+        let id = out.len() as u32;
+        let v = grid.values[s];
+        let mut region = vec![s];
+        labels[s] = id;
+        stack.push(s);
+        while let Some(i) = stack.pop() {
+            for m in nbrs(i) {
+                if labels[m] == NO_REGION && grid.values[m] == v {
+                    labels[m] = id;
+                    region.push(m);
+                    stack.push(m);
+                }
+            }
+        }
+        region.sort_unstable();
+        out.push(region);
+    }
+    (out, labels)
+}
+
+/// Union–find over a small number of nodes.
+struct Uf(Vec<usize>);
+
+impl Uf {
+    fn find(&mut self, mut x: usize) -> usize {
+        while self.0[x] != x {
+            self.0[x] = self.0[self.0[x]];
+            x = self.0[x];
+        }
+        x
+    }
+    fn union(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            self.0[ra.max(rb)] = ra.min(rb);
+        }
+    }
+}
+
+/// The critical plateaus of the grid whose value `keep` accepts, classified.
+pub fn critical_regions(
+    grid: &ScalarGrid,
+    keep: &(dyn Fn(f64) -> bool + Sync),
+) -> Vec<CriticalPoint> {
+    let (regions, labels) = plateaus_where(grid, keep);
+    regions
+        .par_iter()
+        .enumerate()
+        .filter_map(|(id, r)| classify_region(grid, &labels, id as u32, r))
+        .collect()
+}
+
+/// Classifies plateau number `id` (vertex indices `region`, ascending; `labels` from
+/// [`plateaus`]); `None` when it is regular.
+pub fn classify_region(
+    grid: &ScalarGrid,
+    labels: &[u32],
+    id: u32,
+    region: &[usize],
+) -> Option<CriticalPoint> {
+    let v = grid.values[region[0]];
+    let in_region = |idx: usize| labels[idx] == id;
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    // a plateau whose exits all go up (down) is a minimum (maximum): no graph needed, a
+    // contractible one has one connected part around it
+    let (mut up, mut down) = (false, false);
+    for &r in region {
+        let p = grid.vertex_ijk(r);
+        for a in 0..3 {
+            for (ok, m) in [
+                (p[a] > 0, r.wrapping_sub(stride[a])),
+                (p[a] + 1 < grid.dims[a], r + stride[a]),
+            ] {
+                if ok && !in_region(m) {
+                    up |= grid.values[m] > v;
+                    down |= grid.values[m] < v;
+                }
+            }
+        }
+    }
+    if !(up && down) {
+        let parts = Parts {
+            np: up as usize,
+            nn: down as usize,
+            np_free: 0,
+            nn_free: 0,
+        };
+        return region_point(grid, labels, id, region, v, parts);
+    }
+    let mut nodes: FxHashMap<(usize, usize), usize> = FxHashMap::default();
+    let mut sign: Vec<bool> = Vec::new();
+    let cd = grid.cell_dims();
+    // every cell holding a vertex of the region, visited from its smallest such vertex
+    let mut cells: Vec<[usize; 3]> = Vec::new();
+    for &r in region {
+        let p = grid.vertex_ijk(r);
+        for o in 0..8usize {
+            let c: [usize; 3] = std::array::from_fn(|a| {
+                if (o >> a) & 1 == 1 {
+                    p[a]
+                } else {
+                    p[a].wrapping_sub(1)
+                }
+            });
+            if (0..3).any(|a| c[a] >= cd[a]) {
+                continue;
+            }
+            let base = grid.index(c[0], c[1], c[2]);
+            let first = (0..8)
+                .map(|k| {
+                    let q = corner_offset(k);
+                    base + q[0] * stride[0] + q[1] * stride[1] + q[2] * stride[2]
+                })
+                .find(|&g| in_region(g));
+            if first == Some(r) {
+                cells.push(c);
+            }
+        }
+    }
+    let mut links: Vec<(usize, usize)> = Vec::new();
+    let mut node = |a: usize, b: usize, up: bool, sign: &mut Vec<bool>| -> usize {
+        let key = (a.min(b), a.max(b));
+        let n = nodes.len();
+        *nodes.entry(key).or_insert_with(|| {
+            sign.push(up);
+            n
+        })
+    };
+    for c in &cells {
+        let base = grid.index(c[0], c[1], c[2]);
+        let gidx: [usize; 8] = std::array::from_fn(|k| {
+            let o = corner_offset(k);
+            base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2]
+        });
+        let vals = gidx.map(|g| grid.values[g]);
+        let mut rmask = 0u8;
+        for k in 0..8 {
+            if vals[k] == v && in_region(gidx[k]) {
+                rmask |= 1 << k;
+            }
+        }
+        let mut local = Vec::new();
+        join_in_cell(&vals, v, rmask, &mut local);
+        for (e1, e2) in local {
+            let n1 = node(gidx[e1.0], gidx[e1.1], vals[e1.1] > v, &mut sign);
+            let n2 = node(gidx[e2.0], gidx[e2.1], vals[e2.1] > v, &mut sign);
+            links.push((n1, n2));
+        }
+    }
+    let mut uf = Uf((0..sign.len()).collect());
+    for (a, b) in links {
+        uf.union(a, b);
+    }
+    // which nodes lie on the grid box (both ends on one box plane)
+    let mut on_box_node = vec![false; sign.len()];
+    for (&(a, b), &i) in &nodes {
+        let (pa, pb) = (grid.vertex_ijk(a), grid.vertex_ijk(b));
+        on_box_node[i] =
+            (0..3).any(|x| pa[x] == pb[x] && (pa[x] == 0 || pa[x] + 1 == grid.dims[x]));
+    }
+    let mut touch = vec![false; sign.len()];
+    for i in 0..sign.len() {
+        let r = uf.find(i);
+        touch[r] |= on_box_node[i];
+    }
+    let mut parts = Parts::default();
+    for i in 0..sign.len() {
+        if uf.find(i) == i {
+            let (n, free) = if sign[i] {
+                (&mut parts.np, &mut parts.np_free)
+            } else {
+                (&mut parts.nn, &mut parts.nn_free)
+            };
+            *n += 1;
+            *free += !touch[i] as usize;
+        }
+    }
+    region_point(grid, labels, id, region, v, parts)
+}
+
+/// Connected parts of `{f > f(R)}` (`np`) and `{f < f(R)}` (`nn`) near a plateau `R`, and how
+/// many of each do not reach the grid box.
+#[derive(Default)]
+struct Parts {
+    np: usize,
+    nn: usize,
+    np_free: usize,
+    nn_free: usize,
+}
+
+/// The critical point of a plateau, `None` when it is regular.
+///
+/// Inside the box the neighbourhood of a (contractible) plateau is a ball around it, so it is
+/// regular iff `np = nn = 1` (seed 004). On the box it is a half-ball whose link is a disk:
+/// the upper part is contractible iff it is connected and no lower part is enclosed in it
+/// (every lower part reaches the box), and likewise for the lower part; a box plateau may thus
+/// change one filtration only (a lower pocket below a box plateau opens a hole in `{f >= w}`).
+fn region_point(
+    grid: &ScalarGrid,
+    labels: &[u32],
+    id: u32,
+    region: &[usize],
+    v: f64,
+    parts: Parts,
+) -> Option<CriticalPoint> {
+    let mut sum = [0.0; 3];
+    let mut lo = [usize::MAX; 3];
+    let mut hi = [0usize; 3];
+    let mut on_box = false;
+    for &r in region {
+        let p = grid.vertex_ijk(r);
+        for a in 0..3 {
+            sum[a] += p[a] as f64;
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+            on_box |= p[a] == 0 || p[a] + 1 == grid.dims[a];
+        }
+    }
+    let Parts {
+        np,
+        nn,
+        np_free,
+        nn_free,
+    } = parts;
+    let (superlevel, sublevel) = if !is_simple(grid, labels, id, region, on_box) {
+        // not a ball (or a half-ball on the box): component counts cannot say which
+        // filtration changes, so both are flagged (a bound there is reported as unsafe)
+        (true, true)
+    } else if on_box {
+        (np != 1 || nn_free > 0, nn != 1 || np_free > 0)
+    } else {
+        let c = !(np == 1 && nn == 1);
+        (c, c)
+    };
+    if !(superlevel || sublevel) {
+        return None;
+    }
+    let kind = if nn == 0 {
+        CriticalKind::RegionMinimum
+    } else if np == 0 {
+        CriticalKind::RegionMaximum
+    } else {
+        CriticalKind::RegionSaddle
+    };
+    let centroid = sum.map(|s| s / region.len() as f64);
+    let class = LinkClass {
+        upper: [np.min(255) as u8, 0, 0],
+        lower: [nn.min(255) as u8, 0, 0],
+    };
+    let mut pt = make_point(grid, kind, v, centroid, class, false);
+    pt.on_box = on_box;
+    pt.superlevel = superlevel;
+    pt.sublevel = sublevel;
+    let corner = |p: [usize; 3]| grid.to_physical(p.map(|x| x as f64));
+    let (a, b) = (corner(lo), corner(hi));
+    pt.region = Some(RegionInfo {
+        vertices: region.len(),
+        bbox_min: std::array::from_fn(|k| a[k].min(b[k])),
+        bbox_max: std::array::from_fn(|k| a[k].max(b[k])),
+    });
+    pt.keys = region
+        .iter()
+        .map(|&r| crate::keys::vertex_key(r, crate::keys::CORNER))
+        .collect();
+    Some(pt)
+}
+
+/// Whether the plateau is cube-complex contractible as far as Euler characteristics tell
+/// (`χ(R) = 1`) and, when it touches the box, meets the box in one piece with `χ = 1`: then its
+/// neighbourhood is a ball (half-ball) and its link a sphere (disk).
+fn is_simple(grid: &ScalarGrid, labels: &[u32], id: u32, region: &[usize], on_box: bool) -> bool {
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let (mut chi, mut chi_box, mut vb) = (0i64, 0i64, 0usize);
+    for &r in region {
+        let p = grid.vertex_ijk(r);
+        // bit c: the vertex at forward offset c (bit a = +1 along axis a) is in the region
+        let mut present = 1u8;
+        for c in 1..8usize {
+            let fits = (0..3).all(|a| (c >> a) & 1 == 0 || p[a] + 1 < grid.dims[a]);
+            let off: usize = (0..3).map(|a| ((c >> a) & 1) * stride[a]).sum();
+            if fits && labels[r + off] == id {
+                present |= 1 << c;
+            }
+        }
+        let at_box = |a: usize| p[a] == 0 || p[a] + 1 == grid.dims[a];
+        // the cube cell spanned by the axes in `mask` from p is in R when all its corners are
+        for mask in 0usize..8 {
+            let all = (0usize..8)
+                .filter(|c| c & !mask == 0)
+                .all(|c| present & (1 << c) != 0);
+            if !all {
+                continue;
+            }
+            let sign = if mask.count_ones() % 2 == 0 { 1 } else { -1 };
+            chi += sign;
+            // a cell in a box plane: some axis it does not span with p on the box there
+            if (0..3).any(|a| mask & (1 << a) == 0 && at_box(a)) {
+                chi_box += sign;
+                vb += (mask == 0) as usize;
+            }
+        }
+    }
+    chi == 1 && (!on_box || (chi_box == 1 && vb > 0))
+}
+
+/// An exit of the region in a cell: (region corner, far corner), cell-local corner ids.
+type Exit = (usize, usize);
+
+/// The pairs of exits of one cell that lie in one part of `{f > v}` or `{f < v}` near the
+/// region (see the module docs). `vals`: corner values; `rmask`: region corners. Every exit
+/// appears at least once (paired with itself when alone).
+pub fn join_in_cell(vals: &[f64; 8], v: f64, rmask: u8, out: &mut Vec<(Exit, Exit)>) {
+    let pieces = pieces(rmask);
+    for s in pieces {
+        let exits: Vec<Exit> = (0..8)
+            .filter(|&r| s & (1 << r) != 0)
+            .flat_map(|r| (0..3).map(move |a| (r, r ^ (1 << a))))
+            .filter(|&(_, a)| rmask & (1 << a) == 0)
+            .collect();
+        for &e in &exits {
+            out.push((e, e));
+        }
+        let up = |e: Exit| vals[e.1] > v;
+        let mut join = |x: Exit, y: Exit| {
+            if up(x) == up(y) {
+                out.push((x, y));
+            }
+        };
+        match s.count_ones() {
+            1 => {
+                for i in 0..exits.len() {
+                    for j in i + 1..exits.len() {
+                        join(exits[i], exits[j]);
+                    }
+                }
+            }
+            2 => join_along_edge(vals, v, s, &exits, &mut join),
+            _ => join_larger(vals, v, s, &exits, &mut join),
+        }
+    }
+}
+
+/// The cube-edge-connected pieces of a set of corners.
+fn pieces(mask: u8) -> Vec<u8> {
+    let mut left = mask;
+    let mut out = Vec::new();
+    while left != 0 {
+        let first = left.trailing_zeros() as usize;
+        let mut piece = 1u8 << first;
+        loop {
+            let mut grown = piece;
+            for c in 0..8 {
+                if piece & (1 << c) != 0 {
+                    for a in 0..3 {
+                        let n = c ^ (1 << a);
+                        if left & (1 << n) != 0 {
+                            grown |= 1 << n;
+                        }
+                    }
+                }
+            }
+            if grown == piece {
+                break;
+            }
+            piece = grown;
+        }
+        left &= !piece;
+        out.push(piece);
+    }
+    out
+}
+
+/// `S` is one cube edge `r0 – r1` (C2).
+fn join_along_edge(
+    vals: &[f64; 8],
+    v: f64,
+    s: u8,
+    exits: &[Exit],
+    join: &mut impl FnMut(Exit, Exit),
+) {
+    let r0 = s.trailing_zeros() as usize;
+    let r1 = 7 - s.leading_zeros() as usize;
+    let axis = (r0 ^ r1).trailing_zeros() as usize;
+    let others: Vec<usize> = (0..3).filter(|&a| a != axis).collect();
+    // the exits along the same side axis are joined when of one sign (a face of the cell)
+    for &a in &others {
+        join((r0, r0 ^ (1 << a)), (r1, r1 ^ (1 << a)));
+    }
+    // across the two side axes: t-ranges of each sign
+    let (a, b) = (others[0], others[1]);
+    let ya = (vals[r0 ^ (1 << a)] - v, vals[r1 ^ (1 << a)] - v);
+    let zb = (vals[r0 ^ (1 << b)] - v, vals[r1 ^ (1 << b)] - v);
+    for positive in [true, false] {
+        let sgn = if positive { 1.0 } else { -1.0 };
+        let ra = sign_range(sgn * ya.0, sgn * ya.1);
+        let rb = sign_range(sgn * zb.0, sgn * zb.1);
+        let (Some(ra), Some(rb)) = (ra, rb) else {
+            continue;
+        };
+        let overlap = ra.0.max(rb.0) < ra.1.min(rb.1)
+            || (ra.0.max(rb.0) == ra.1.min(rb.1) && ra.1 > ra.0 && rb.1 > rb.0 && {
+                // touching at one t where both cross: the far corner of that slice decides
+                let t = ra.0.max(rb.0);
+                let far0 = vals[r0 ^ (1 << a) ^ (1 << b)];
+                let far1 = vals[r1 ^ (1 << a) ^ (1 << b)];
+                sgn * (far0 + t * (far1 - far0) - v) > 0.0
+            });
+        if overlap {
+            let ea = if sgn * ya.0 > 0.0 {
+                (r0, r0 ^ (1 << a))
+            } else {
+                (r1, r1 ^ (1 << a))
+            };
+            let eb = if sgn * zb.0 > 0.0 {
+                (r0, r0 ^ (1 << b))
+            } else {
+                (r1, r1 ^ (1 << b))
+            };
+            join(ea, eb);
+        }
+    }
+    let _ = exits;
+}
+
+/// The closed `t`-range in `[0, 1]` where `y0 + t (y1 - y0) > 0` (its closure), if any.
+fn sign_range(y0: f64, y1: f64) -> Option<(f64, f64)> {
+    match (y0 > 0.0, y1 > 0.0) {
+        (true, true) => Some((0.0, 1.0)),
+        (false, false) => None,
+        (true, false) => Some((0.0, y0 / (y0 - y1))),
+        (false, true) => Some((y0 / (y0 - y1), 1.0)),
+    }
+}
+
+/// `S` has three or more corners.
+fn join_larger(vals: &[f64; 8], v: f64, s: u8, exits: &[Exit], join: &mut impl FnMut(Exit, Exit)) {
+    for i in 0..exits.len() {
+        for j in i + 1..exits.len() {
+            let (x, y) = (exits[i], exits[j]);
+            // same far corner, or the same region corner, or parallel exits from an edge of S
+            let parallel = (x.0 ^ x.1) == (y.0 ^ y.1) && (x.0 ^ y.0).count_ones() == 1;
+            let same_corner = x.0 == y.0;
+            if x.1 == y.1 || parallel || same_corner {
+                join(x, y);
+            }
+        }
+    }
+    // a whole face of S: the opposite face's contours decide its diagonal pairs
+    for f in 0..6 {
+        let fc = face_corners(f);
+        if !fc.iter().all(|&c| s & (1 << c) != 0) {
+            continue;
+        }
+        let g = f ^ 1;
+        let gc = face_corners(g);
+        if gc.iter().any(|&c| s & (1 << c) != 0) {
+            continue;
+        }
+        let q = gc.map(|c| vals[c]);
+        let Some(sd) = face_saddle_of(q) else {
+            continue;
+        };
+        let positive = sd.value > v;
+        if sd.value == v {
+            continue;
+        }
+        for (i, j) in [(0, 2), (1, 3)] {
+            let (ci, cj) = (gc[i], gc[j]);
+            if (vals[ci] > v) == positive && (vals[cj] > v) == positive {
+                let axis = f / 2;
+                join((ci ^ (1 << axis), ci), (cj ^ (1 << axis), cj));
+            }
+        }
+    }
+}
