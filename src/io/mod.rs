@@ -15,6 +15,6 @@ mod volume;
 pub mod vtu;
 mod write_common;
 
-pub use atomic::{check_writable, write_atomically, WriteError};
+pub use atomic::{check_writable, same_file, write_atomically, WriteError};
 pub use mesh_out::{write_mesh, MeshFormat, WriteOptions};
 pub use volume::{read_volume, ReadError};

@@ -44,6 +44,10 @@ fn c_to_x_fastest(raw: &[f64], [n0, n1, n2]: [usize; 3]) -> Vec<f64> {
     use rayon::prelude::*;
     const KB: usize = 8;
     let plane = n0 * n1;
+    if plane == 0 || n2 == 0 {
+        // An empty axis: nothing to reorder (the grid check rejects the shape).
+        return Vec::new();
+    }
     let mut v = vec![0.0; raw.len()];
     v.par_chunks_mut(plane * KB)
         .enumerate()

@@ -12,8 +12,8 @@ use flate2::read::MultiGzDecoder;
 
 use super::header::{self, Fields};
 use super::volume::{
-    build_grid, data_size, decode_samples, decompress_exact, quote, read_all, read_raw_range,
-    split_linear, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
+    build_grid, data_size, decode_samples, decompress_exact, quote, read_all, read_data_file,
+    read_raw_range, split_linear, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
 
@@ -59,8 +59,7 @@ fn read_data(
         }
         (Some(file), _) => {
             let shown = file.display().to_string();
-            let all = std::fs::read(file)
-                .map_err(|e| ReadError::io(path, format!("cannot read data file {shown}"), e))?;
+            let all = read_data_file(path, file)?;
             extract(path, header, &all, nbytes, &format!("data file {shown}"))
         }
         (None, _) => {

@@ -289,6 +289,30 @@ pub(crate) fn read_all(path: &Path) -> Result<Vec<u8>, ReadError> {
     std::fs::read(path).map_err(|e| ReadError::io(path, "cannot read file", e))
 }
 
+/// Refuses a detached data file that is not a regular file: opening a FIFO would block
+/// forever, and devices or directories hold no volume.
+pub(crate) fn check_data_file(header: &Path, data_path: &Path) -> Result<(), ReadError> {
+    let shown = data_path.display();
+    let meta = std::fs::metadata(data_path)
+        .map_err(|e| ReadError::io(header, format!("cannot open data file {shown}"), e))?;
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(ReadError::invalid(
+            header,
+            format!("data file {shown} is not a regular file (a FIFO, device or directory)"),
+        ))
+    }
+}
+
+/// Reads a whole detached data file (a regular file, see [`check_data_file`]).
+pub(crate) fn read_data_file(header: &Path, data_path: &Path) -> Result<Vec<u8>, ReadError> {
+    check_data_file(header, data_path)?;
+    let shown = data_path.display();
+    std::fs::read(data_path)
+        .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))
+}
+
 /// Where the data of a separate raw data file start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Skip {
@@ -308,6 +332,7 @@ pub(crate) fn read_raw_range(
     len: usize,
     exact: bool,
 ) -> Result<Vec<u8>, ReadError> {
+    check_data_file(header, data_path)?;
     let shown = data_path.display();
     let mut file = File::open(data_path)
         .map_err(|e| ReadError::io(header, format!("cannot open data file {shown}"), e))?;

@@ -10,7 +10,7 @@ use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
 use tptd::improve::quality::{summarize, QualitySummary};
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
-use tptd::io::{check_writable, read_volume, write_atomically, write_mesh, MeshFormat};
+use tptd::io::{check_writable, read_volume, same_file, write_atomically, write_mesh, MeshFormat};
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
 use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid};
 
@@ -107,7 +107,8 @@ fn check_args(cli: &Cli) -> Result<Job> {
         (None, false) => unreachable!("clap requires -o without --demo"),
     };
     let (alpha, beta) = interval(cli, demo, &input_name)?;
-    check_outputs(&output, cli.report.as_deref())?;
+    check_threads(cli.threads)?;
+    check_outputs(cli.input.as_deref(), &output, cli.report.as_deref())?;
     let opts = MeshOptions {
         alpha,
         beta,
@@ -149,19 +150,50 @@ fn interval(cli: &Cli, demo: bool, input_name: &str) -> Result<(f64, f64)> {
     Ok((alpha, beta))
 }
 
-/// Checks the mesh output (a known format, writable) and the report output (writable, not
-/// the mesh's path).
-fn check_outputs(output: &Path, report: Option<&Path>) -> Result<()> {
+/// Checks the mesh output (a known format, writable, not the input) and the report output
+/// (writable, neither the input nor the mesh), comparing files by identity, not spelling.
+fn check_outputs(input: Option<&Path>, output: &Path, report: Option<&Path>) -> Result<()> {
     MeshFormat::from_path(output).map_err(write_error)?;
     check_writable(output).map_err(write_error)?;
+    let clash = |a: &Path, b: &Path, what: &str| {
+        if same_file(a, b) {
+            Err(file_error(
+                a.display(),
+                format_args!(
+                    "{what} cannot be written to the same file as {}",
+                    b.display()
+                ),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    if let Some(i) = input {
+        clash(output, i, "the mesh")?;
+    }
     if let Some(r) = report {
-        if r == output {
-            return Err(file_error(
-                r.display(),
-                "the report and the mesh cannot be written to the same file",
-            ));
+        clash(r, output, "the report")?;
+        if let Some(i) = input {
+            clash(r, i, "the report")?;
         }
         check_writable(r).map_err(write_error)?;
+    }
+    Ok(())
+}
+
+/// Most worker threads `-j` accepts per core: more only adds overhead.
+const MAX_THREADS_PER_CORE: usize = 16;
+
+/// Checks `-j` against the machine at once (a huge pool takes long to start and to fail).
+fn check_threads(threads: Option<u32>) -> Result<()> {
+    let Some(n) = threads else { return Ok(()) };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let max = (cores * MAX_THREADS_PER_CORE).max(MAX_THREADS_PER_CORE);
+    if n as usize > max {
+        return Err(file_error(
+            format_args!("-j {n}"),
+            format_args!("too many worker threads: at most {max} on this machine ({cores} cores)"),
+        ));
     }
     Ok(())
 }

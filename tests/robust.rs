@@ -1,0 +1,197 @@
+//! Failure paths of the `tptd-mesh` binary a new user hits: empty axes, FIFOs as detached
+//! data, a report that names the input or the mesh by another spelling, a huge `-j`, the memory
+//! cap, signals during the write. Each gives one line on stderr, a non-zero exit, never a panic,
+//! and leaves no file behind.
+
+mod common;
+
+use std::fs;
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use common::files::{listing, npy_bytes};
+
+const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
+
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    run_env(dir, args, &[])
+}
+
+fn run_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(BIN);
+    c.current_dir(dir).args(args).stdin(Stdio::null());
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A C-order `<f8` `.npy` of shape `dims` with element `[i, j, k]` = `f(i, j, k)`.
+fn write_npy(path: &Path, dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f64) {
+    let [nx, ny, nz] = dims;
+    let mut data = Vec::with_capacity(nx * ny * nz * 8);
+    for i in 0..nx {
+        for j in 0..ny {
+            for k in 0..nz {
+                data.extend_from_slice(&f(i, j, k).to_le_bytes());
+            }
+        }
+    }
+    let shape = format!("({nx}, {ny}, {nz})");
+    fs::write(path, npy_bytes("<f8", &shape, &data)).unwrap();
+}
+
+/// Distance from an off-centre point: a ball for `--beta r`.
+fn ball(i: usize, j: usize, k: usize) -> f64 {
+    let (x, y, z) = (i as f64 - 4.3, j as f64 - 3.7, k as f64 - 4.1);
+    (x * x + y * y + z * z).sqrt()
+}
+
+/// Checks a failed run: exit 1 (not a signal or a panic's 101), one stderr line
+/// `tptd-mesh: error: …` naming `names`, and `dir` exactly as `before`.
+fn assert_one_line_failure(o: &Output, dir: &Path, before: &[String], names: &str) -> String {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("tptd-mesh: error: "), "{err}");
+    assert!(err.contains(names), "{err} does not name {names}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(listing(dir), before, "files left behind");
+    err
+}
+
+fn fails_cleanly(dir: &Path, args: &[&str], names: &str) -> String {
+    let before = listing(dir);
+    let o = run_in(dir, args);
+    assert_one_line_failure(&o, dir, &before, names)
+}
+
+#[test]
+fn empty_axes_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (n, shape) in ["(0, 5, 5)", "(5, 0, 5)", "(5, 5, 0)", "(0, 0, 0)"]
+        .iter()
+        .enumerate()
+    {
+        let name = format!("empty{n}.npy");
+        fs::write(d.join(&name), npy_bytes("<f8", shape, &[])).unwrap();
+        let e = fails_cleanly(d, &[&name, "-o", "m.vtu", "--alpha", "0"], &name);
+        assert!(e.contains("at least 2"), "{shape}: {e}");
+    }
+}
+
+/// Writes `vol.nhdr` whose detached data file is `data`.
+fn write_nhdr(dir: &Path, data: &str) {
+    let text = format!(
+        "NRRD0004\ntype: double\ndimension: 3\nsizes: 3 3 3\nencoding: raw\nendian: little\n\
+         data file: {data}\n"
+    );
+    fs::write(dir.join("vol.nhdr"), text).unwrap();
+}
+
+#[test]
+fn a_fifo_as_detached_data_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let ok = Command::new("mkfifo")
+        .arg(d.join("pipe.raw"))
+        .status()
+        .expect("mkfifo runs");
+    assert!(ok.success());
+    for (header, text) in [
+        ("vol.nhdr", None),
+        (
+            "vol.mhd",
+            Some(
+                "NDims = 3\nDimSize = 3 3 3\nElementType = MET_DOUBLE\nElementDataFile = pipe.raw\n",
+            ),
+        ),
+    ] {
+        match text {
+            None => write_nhdr(d, "pipe.raw"),
+            Some(t) => fs::write(d.join(header), t).unwrap(),
+        }
+        let before = listing(d);
+        let mut child = Command::new(BIN)
+            .current_dir(d)
+            .args([header, "-o", "m.vtu", "--alpha", "0"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let t = Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            if t.elapsed() > Duration::from_secs(20) {
+                let _ = child.kill();
+                panic!("{header}: blocked on the FIFO");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let o = child.wait_with_output().unwrap();
+        let e = assert_one_line_failure(&o, d, &before, header);
+        assert!(e.contains("not a regular file"), "{e}");
+    }
+}
+
+#[test]
+fn a_report_never_replaces_the_input_or_the_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_npy(&d.join("victim.npy"), [9, 8, 9], ball);
+    let input = fs::read(d.join("victim.npy")).unwrap();
+    fs::create_dir(d.join("out")).unwrap();
+    let args = ["victim.npy", "--beta", "3", "-o", "out/m.vtu"];
+    let o = run_in(d, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mesh = fs::read(d.join("out/m.vtu")).unwrap();
+    fs::hard_link(d.join("victim.npy"), d.join("link.json")).unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink("out/m.vtu", d.join("sym.json")).unwrap();
+    for report in [
+        "victim.npy",
+        "./victim.npy",
+        "out/../victim.npy",
+        "link.json",
+        "out/../out/m.vtu",
+        "./out/m.vtu",
+        "sym.json",
+    ] {
+        let mut a = args.to_vec();
+        a.extend(["--report", report]);
+        let e = fails_cleanly(d, &a, report);
+        assert!(e.contains("same file"), "{report}: {e}");
+        assert_eq!(fs::read(d.join("victim.npy")).unwrap(), input, "{report}");
+        assert_eq!(fs::read(d.join("out/m.vtu")).unwrap(), mesh, "{report}");
+    }
+    // The mesh may not replace the input either (a hard link with a mesh extension).
+    fs::hard_link(d.join("victim.npy"), d.join("alias.vtu")).unwrap();
+    let e = fails_cleanly(
+        d,
+        &["victim.npy", "--beta", "3", "-o", "alias.vtu"],
+        "alias.vtu",
+    );
+    assert!(e.contains("same file"), "{e}");
+    assert_eq!(fs::read(d.join("victim.npy")).unwrap(), input);
+}
+
+#[test]
+fn a_huge_thread_count_fails_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_npy(&d.join("v.npy"), [9, 8, 9], ball);
+    let t = Instant::now();
+    let e = fails_cleanly(
+        d,
+        &["v.npy", "--beta", "3", "-o", "m.msh", "-j", "4096"],
+        "-j 4096",
+    );
+    assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+    assert!(e.contains("worker threads"), "{e}");
+}
