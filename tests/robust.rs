@@ -195,3 +195,92 @@ fn a_huge_thread_count_fails_at_once() {
     assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
     assert!(e.contains("worker threads"), "{e}");
 }
+
+/// Reads each `.vtu` with VTK and (unless raw) meshio and prints one line per reader:
+/// `file reader points cells f-sum point-sum connectivity-sum`.
+const READ_VTU_PY: &str = r#"
+import sys, numpy as np, meshio, vtk
+from vtk.util.numpy_support import vtk_to_numpy
+for path in sys.argv[1:]:
+    r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName(path); r.Update()
+    g = r.GetOutput()
+    pts = vtk_to_numpy(g.GetPoints().GetData()); f = vtk_to_numpy(g.GetPointData().GetArray("f"))
+    conn = vtk_to_numpy(g.GetCells().GetConnectivityArray())
+    rows = [("vtk", pts, f, conn)]
+    if "raw" not in path:
+        m = meshio.read(path)
+        rows.append(("meshio", m.points, m.point_data["f"], m.cells_dict["tetra"].ravel()))
+    for name, p, v, c in rows:
+        print(path, name, len(p), len(c) // 4, repr(float(np.sum(v))), repr(float(np.sum(p))), int(np.sum(c)))
+"#;
+
+/// The MC33 case 3.1 cell (tests/common/mc33_table.rs) as a 2 × 2 × 2 `.npy`.
+fn write_mc33_3_1(path: &Path) {
+    let v = [
+        0.4601, -0.1106, -0.1735, -0.0036, 0.1452, 0.1580, 0.2468, -0.2401,
+    ];
+    write_npy(path, [2, 2, 2], |i, j, k| v[i + 2 * j + 4 * k]);
+}
+
+#[test]
+fn every_vtu_encoding_reads_back_in_meshio_and_vtk() {
+    if !common::external::require_python_with("meshio")
+        || !common::external::require_python_with("vtk")
+    {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_mc33_3_1(&d.join("c31.npy"));
+    // 24³: every array of the mesh spans several 32 KiB zlib blocks
+    write_npy(&d.join("ball.npy"), [24, 24, 24], |i, j, k| {
+        ball(i, j, k) + 0.3 * (i as f64).sin()
+    });
+    let mut files = Vec::new();
+    for (input, interval) in [
+        ("c31.npy", ["--beta", "-0.1283"]),
+        ("ball.npy", ["--beta", "9.5"]),
+    ] {
+        for enc in ["base64", "zlib", "raw"] {
+            let out = format!("{}.{enc}.vtu", &input[..input.len() - 4]);
+            let o = run_in(
+                d,
+                &[
+                    input,
+                    "-o",
+                    &out,
+                    interval[0],
+                    interval[1],
+                    "--vtu-encoding",
+                    enc,
+                ],
+            );
+            assert!(o.status.success(), "{}", stderr(&o));
+            files.push(out);
+        }
+    }
+    // the raw 3.1 mesh holds a CR byte, which meshio's XML parser rewrites (meshio #1324)
+    let raw = fs::read(d.join("c31.raw.vtu")).unwrap();
+    let start = raw.iter().position(|&b| b == b'_').unwrap();
+    assert!(raw[start..].contains(&b'\r'), "no CR in the raw data");
+    let o = Command::new(common::external::python())
+        .current_dir(d)
+        .arg("-c")
+        .arg(READ_VTU_PY)
+        .args(&files)
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(o.status.success(), "{out}{}", stderr(&o));
+    for stem in ["c31", "ball"] {
+        let rows: Vec<&str> = out.lines().filter(|l| l.starts_with(stem)).collect();
+        assert_eq!(rows.len(), 5, "{out}");
+        let summary = |l: &str| l.split_whitespace().skip(2).collect::<Vec<_>>().join(" ");
+        for r in &rows {
+            assert_eq!(summary(r), summary(rows[0]), "{out}");
+        }
+        if stem == "c31" {
+            assert!(rows[0].contains(" 12 6 "), "{out}");
+        }
+    }
+}

@@ -7,7 +7,7 @@ use std::path::Path;
 use super::atomic::{write_atomically, WriteError};
 use super::inp::write_inp;
 use super::msh::{write_msh, MshVersion};
-use super::vtu::write_vtu;
+use super::vtu::{write_vtu_with, VtuEncoding};
 use crate::mesh::TetMesh;
 
 /// An output mesh format.
@@ -17,7 +17,7 @@ pub enum MeshFormat {
     Msh,
     /// Abaqus / CalculiX `.inp` ([`write_inp`]).
     Inp,
-    /// VTK XML UnstructuredGrid `.vtu` ([`write_vtu`]).
+    /// VTK XML UnstructuredGrid `.vtu` ([`super::vtu::write_vtu_with`]).
     Vtu,
 }
 
@@ -55,7 +55,7 @@ impl MeshFormat {
         match self {
             MeshFormat::Msh => write_msh(mesh, w, options.msh_version),
             MeshFormat::Inp => write_inp(mesh, w),
-            MeshFormat::Vtu => write_vtu(mesh, w),
+            MeshFormat::Vtu => write_vtu_with(mesh, w, options.vtu_encoding),
         }
     }
 }
@@ -66,6 +66,8 @@ impl MeshFormat {
 pub struct WriteOptions {
     /// The `.msh` format version (default 4.1); ignored by the other formats.
     pub msh_version: MshVersion,
+    /// The `.vtu` data encoding (default base64); ignored by the other formats.
+    pub vtu_encoding: VtuEncoding,
 }
 
 impl WriteOptions {
@@ -73,6 +75,13 @@ impl WriteOptions {
     #[must_use]
     pub fn with_msh_version(mut self, version: MshVersion) -> Self {
         self.msh_version = version;
+        self
+    }
+
+    /// These options with `.vtu` data in `encoding`.
+    #[must_use]
+    pub fn with_vtu_encoding(mut self, encoding: VtuEncoding) -> Self {
+        self.vtu_encoding = encoding;
         self
     }
 }
@@ -125,6 +134,10 @@ mod tests {
             ("b.msh", v22),
             ("c.inp", WriteOptions::default()),
             ("d.vtu", WriteOptions::default()),
+            (
+                "e.vtu",
+                WriteOptions::default().with_vtu_encoding(VtuEncoding::Raw),
+            ),
         ] {
             let path = dir.path().join(name);
             write_mesh(&path, &mesh, &opts).unwrap();
@@ -132,7 +145,7 @@ mod tests {
             match MeshFormat::from_path(&path).unwrap() {
                 MeshFormat::Msh => write_msh(&mesh, &mut expected, opts.msh_version),
                 MeshFormat::Inp => write_inp(&mesh, &mut expected),
-                MeshFormat::Vtu => write_vtu(&mesh, &mut expected),
+                MeshFormat::Vtu => write_vtu_with(&mesh, &mut expected, opts.vtu_encoding),
             }
             .unwrap();
             assert_eq!(std::fs::read(&path).unwrap(), expected, "{name}");

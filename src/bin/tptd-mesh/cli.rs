@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, ValueEnum};
 use tptd::io::msh::MshVersion;
+use tptd::io::vtu::VtuEncoding;
 use tptd::Method;
 
 /// Mesh the interval volume {alpha <= f <= beta} of a 3-D scalar grid into tetrahedra, with
@@ -46,6 +47,11 @@ pub(crate) struct Cli {
     /// Gmsh file format version for .msh output
     #[arg(long, value_enum, value_name = "VERSION", default_value_t = MshVersionArg::V41)]
     pub(crate) msh_version: MshVersionArg,
+
+    /// Data encoding of .vtu output: base64 (read by meshio, VTK and ParaView), zlib
+    /// (compressed, as VTK writes; smallest, slowest) or raw (fastest; meshio cannot read it)
+    #[arg(long, value_enum, value_name = "ENCODING", default_value_t = VtuEncodingArg::Base64)]
+    pub(crate) vtu_encoding: VtuEncodingArg,
 
     /// Override the grid spacing (physical size of a voxel), e.g. 0.5,0.5,1.2
     #[arg(long, value_name = "SX,SY,SZ", value_parser = parse_spacing)]
@@ -140,6 +146,25 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(t) if t > 0.0 && t.is_finite() => Ok(t),
         _ => Err(format!("expected a positive number of seconds, got '{s}'")),
+    }
+}
+
+/// `--vtu-encoding` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum VtuEncodingArg {
+    Base64,
+    Zlib,
+    Raw,
+}
+
+impl VtuEncodingArg {
+    /// The `.vtu` encoding of this value.
+    pub(crate) fn encoding(self) -> VtuEncoding {
+        match self {
+            VtuEncodingArg::Base64 => VtuEncoding::Base64,
+            VtuEncodingArg::Zlib => VtuEncoding::Zlib,
+            VtuEncodingArg::Raw => VtuEncoding::Raw,
+        }
     }
 }
 

@@ -115,7 +115,9 @@ fn check_args(cli: &Cli) -> Result<Job> {
         method: cli.method.method(),
         threads: cli.threads.map(|n| n as usize),
     };
-    let write = WriteOptions::default().with_msh_version(cli.msh_version.version());
+    let write = WriteOptions::default()
+        .with_msh_version(cli.msh_version.version())
+        .with_vtu_encoding(cli.vtu_encoding.encoding());
     Ok(Job {
         input_name,
         output,
