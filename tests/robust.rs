@@ -284,3 +284,99 @@ fn every_vtu_encoding_reads_back_in_meshio_and_vtk() {
         }
     }
 }
+
+#[test]
+fn sigterm_during_the_write_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // a ball of radius 45 in 110³: a few million tets, zlib-compressed for a slow write
+    write_npy(&d.join("big.npy"), [110, 110, 110], |i, j, k| {
+        let (x, y, z) = (i as f64 - 54.7, j as f64 - 55.2, k as f64 - 54.9);
+        (x * x + y * y + z * z).sqrt()
+    });
+    let before = listing(d);
+    let mut caught = false;
+    for attempt in 0..3 {
+        let mut child = Command::new(BIN)
+            .current_dir(d)
+            .args([
+                "big.npy",
+                "--beta",
+                "45.3",
+                "-o",
+                "m.vtu",
+                "--vtu-encoding",
+                "zlib",
+            ])
+            .args(["--report", "r.json", "--no-analysis", "-j", "1"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let t = Instant::now();
+        let seen = loop {
+            if child.try_wait().unwrap().is_some() || t.elapsed() > Duration::from_secs(120) {
+                break false;
+            }
+            if listing(d).iter().any(|n| n.starts_with(".m.vtu.tmp-")) {
+                break true;
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        };
+        if !seen {
+            let _ = child.kill();
+            let _ = child.wait();
+            eprintln!("attempt {attempt}: the write ended before the signal");
+            for f in ["m.vtu", "r.json"] {
+                let _ = fs::remove_file(d.join(f));
+            }
+            continue;
+        }
+        let ok = Command::new("kill")
+            .args(["-TERM", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(ok.success());
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        if o.status.success() {
+            // the rename beat the signal: the outputs are complete, try again
+            for f in ["m.vtu", "r.json"] {
+                let _ = fs::remove_file(d.join(f));
+            }
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(128 + 15), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("interrupted by SIGTERM"), "{err}");
+        assert_eq!(listing(d), before, "SIGTERM left files behind");
+        caught = true;
+        break;
+    }
+    assert!(caught, "never caught the write in progress");
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_failed_report_writes_no_mesh_either() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_npy(&d.join("v.npy"), [9, 8, 9], ball);
+    // /proc exists, so the early check passes, but no file can be created in it
+    let e = fails_cleanly(
+        d,
+        &[
+            "v.npy",
+            "--beta",
+            "3",
+            "-o",
+            "m.vtu",
+            "--report",
+            "/proc/tptd-report.json",
+        ],
+        "/proc/tptd-report.json",
+    );
+    assert!(e.contains("cannot write"), "{e}");
+    assert!(!d.join("m.vtu").exists());
+}

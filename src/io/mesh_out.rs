@@ -4,7 +4,7 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use super::atomic::{write_atomically, WriteError};
+use super::atomic::{write_pending, PendingFile, WriteError};
 use super::inp::write_inp;
 use super::msh::{write_msh, MshVersion};
 use super::vtu::{write_vtu_with, VtuEncoding};
@@ -86,15 +86,28 @@ impl WriteOptions {
     }
 }
 
-/// Writes `mesh` to `path` atomically (see [`write_atomically`]), in the format chosen by
+/// Writes `mesh` to `path` atomically (see [`super::write_atomically`]), in the format chosen by
 /// the extension of `path` ([`MeshFormat::from_path`]).
 ///
 /// # Errors
 /// [`WriteError::UnknownFormat`] for an unknown extension (nothing is created), otherwise
-/// whatever [`write_atomically`] returns; a writer's error is reported as [`WriteError::Io`].
+/// whatever [`super::write_atomically`] returns; a writer's error is reported as [`WriteError::Io`].
 pub fn write_mesh(path: &Path, mesh: &TetMesh, options: &WriteOptions) -> Result<(), WriteError> {
+    write_mesh_pending(path, mesh, options)?.commit()
+}
+
+/// As [`write_mesh`], but leaves the complete file under its temporary name until
+/// [`PendingFile::commit`] (see [`write_pending`]).
+///
+/// # Errors
+/// As [`write_mesh`].
+pub fn write_mesh_pending(
+    path: &Path,
+    mesh: &TetMesh,
+    options: &WriteOptions,
+) -> Result<PendingFile, WriteError> {
     let format = MeshFormat::from_path(path)?;
-    write_atomically(path, |w| format.write(mesh, w, options))
+    write_pending(path, |w| format.write(mesh, w, options))
 }
 
 #[cfg(test)]

@@ -15,6 +15,9 @@ mod volume;
 pub mod vtu;
 mod write_common;
 
-pub use atomic::{check_writable, same_file, write_atomically, WriteError};
-pub use mesh_out::{write_mesh, MeshFormat, WriteOptions};
+pub use atomic::{
+    check_writable, remove_pending_temporaries, same_file, write_atomically, write_pending,
+    PendingFile, WriteError,
+};
+pub use mesh_out::{write_mesh, write_mesh_pending, MeshFormat, WriteOptions};
 pub use volume::{read_volume, ReadError};

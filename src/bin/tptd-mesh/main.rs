@@ -17,9 +17,27 @@ mod summary;
 
 fn main() {
     let cli = cli::parse_or_exit();
+    clean_up_on_signals();
     if let Err(e) = run::run(cli) {
         let msg = e.to_string().replace(['\n', '\r'], " ");
         eprintln!("tptd-mesh: error: {msg}");
         std::process::exit(1);
     }
+}
+
+/// On SIGINT or SIGTERM: remove the temporaries of unfinished outputs, print one line and
+/// exit with status 128 + the signal number.
+fn clean_up_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            tptd::io::remove_pending_temporaries();
+            let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
+            eprintln!("tptd-mesh: error: interrupted by {name}; unfinished outputs removed");
+            std::process::exit(128 + sig);
+        }
+    });
 }

@@ -10,13 +10,16 @@ use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
 use tptd::improve::quality::{summarize, QualitySummary};
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
-use tptd::io::{check_writable, read_volume, same_file, write_atomically, write_mesh, MeshFormat};
+use tptd::io::{
+    check_writable, read_volume, same_file, write_mesh_pending, write_pending, MeshFormat,
+    PendingFile,
+};
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
 use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid};
 
 use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
-use crate::progress::{improve_with_progress, mesh_with_progress};
+use crate::progress::{improve_with_progress, mesh_with_progress, Stage};
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
 
 /// Output written by `--demo` when no `-o` is given.
@@ -53,7 +56,9 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let job = check_args(&cli)?;
 
     let t = Instant::now();
+    let stage = Stage::start(format!("reading {}", job.input_name), cli.quiet);
     let grid = read_grid(&cli, &job.input_name)?;
+    stage.finish();
     let t_read = secs(t);
     warn_exact_bounds(&grid, &job);
 
@@ -64,7 +69,9 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let (quality, t_quality) = improve_mesh(&cli, &grid, &job, &mut out);
 
     let t = Instant::now();
+    let stage = Stage::start("analysing the mesh".into(), cli.quiet);
     let analysis = analyse(&out, cli.no_analysis, cli.quality);
+    stage.finish();
     let t_analysis = secs(t);
     let quality = quality.map(|mut q| {
         q.after = analysis.quality.clone();
@@ -72,8 +79,11 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     });
     let comparison = compare_demo(&cli, &grid, &job)?;
 
+    // The mesh stays under its temporary name until the report is written too (`finish`).
     let t = Instant::now();
-    write_mesh(&job.output, &out.mesh, &job.write).map_err(write_error)?;
+    let stage = Stage::start(format!("writing {}", job.output.display()), cli.quiet);
+    let mesh_file = write_mesh_pending(&job.output, &out.mesh, &job.write).map_err(write_error)?;
+    stage.finish();
     let t_write = secs(t);
 
     let timings = Timings {
@@ -85,7 +95,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         total: secs(t_total),
     };
     let report = make_report(&job, &grid, &out, analysis, quality, timings);
-    finish(&cli, &report, comparison.as_ref())?;
+    finish(&cli, &report, comparison.as_ref(), mesh_file)?;
     // The process ends here: let the OS reclaim the mesh and the grid at exit instead of
     // freeing hundreds of megabytes page by page first.
     std::mem::forget(out);
@@ -386,12 +396,26 @@ fn make_report(
     )
 }
 
-/// Writes the JSON report (with `--report`) and prints the summary (unless `--quiet`).
-fn finish(cli: &Cli, report: &Report, comparison: Option<&DemoComparison>) -> Result<()> {
-    if let Some(path) = &cli.report {
-        let mut json = report.to_json_pretty();
-        json.push('\n');
-        write_atomically(path, |w| w.write_all(json.as_bytes())).map_err(write_error)?;
+/// Writes the JSON report (with `--report`), then renames the mesh and the report onto their
+/// names, and prints the summary (unless `--quiet`). When the report cannot be written,
+/// neither file is: dropping `mesh_file` removes the mesh's temporary.
+fn finish(
+    cli: &Cli,
+    report: &Report,
+    comparison: Option<&DemoComparison>,
+    mesh_file: PendingFile,
+) -> Result<()> {
+    let report_file = match &cli.report {
+        Some(path) => {
+            let mut json = report.to_json_pretty();
+            json.push('\n');
+            Some(write_pending(path, |w| w.write_all(json.as_bytes())).map_err(write_error)?)
+        }
+        None => None,
+    };
+    mesh_file.commit().map_err(write_error)?;
+    if let Some(f) = report_file {
+        f.commit().map_err(write_error)?;
     }
     if !cli.quiet {
         let text = summary(report, comparison, cli.report.as_deref());
