@@ -21,6 +21,7 @@ pub mod grid;
 pub mod improve;
 pub mod io;
 pub(crate) mod keys;
+pub mod memory;
 pub mod mesh;
 pub mod report;
 pub mod topology;

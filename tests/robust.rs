@@ -380,3 +380,53 @@ fn a_failed_report_writes_no_mesh_either() {
     assert!(e.contains("cannot write"), "{e}");
     assert!(!d.join("m.vtu").exists());
 }
+
+#[test]
+fn the_memory_cap_gives_one_line_at_every_stage() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 40³ f64 (512 kB): reading needs about 1.5 MB, meshing the ball about 10 MB
+    write_npy(&d.join("v.npy"), [40, 40, 40], |i, j, k| {
+        let (x, y, z) = (i as f64 - 19.6, j as f64 - 20.2, k as f64 - 19.9);
+        (x * x + y * y + z * z).sqrt()
+    });
+    let args = [
+        "v.npy", "--beta", "15.5", "-o", "m.vtu", "--report", "r.json",
+    ];
+    let before = listing(d);
+    // below the file itself: an allocation fails outside any estimate (the allocator's line)
+    let o = run_env(d, &args, &[("TPTD_MEMORY_LIMIT", "200K")]);
+    let e = assert_one_line_failure(&o, d, &before, "out of memory");
+    assert!(e.contains("memory limit of 0.2 MiB"), "{e}");
+    // the samples do not fit: refused after the header, before the data are decoded
+    let mut a = args.to_vec();
+    a.extend(["--memory-limit", "1200K"]);
+    let o = run_in(d, &a);
+    let e = assert_one_line_failure(&o, d, &before, "v.npy");
+    assert!(e.contains("reading 40×40×40 samples needs about"), "{e}");
+    // the mesh does not fit: refused before meshing, naming the estimate
+    let o = run_env(d, &args, &[("TPTD_MEMORY_LIMIT", "4M")]);
+    let e = assert_one_line_failure(&o, d, &before, "v.npy");
+    assert!(
+        e.contains("tetrahedra) needs about") && e.contains("memory limit is 4.0 MiB"),
+        "{e}"
+    );
+    // a generous cap changes nothing
+    let o = run_env(d, &args, &[("TPTD_MEMORY_LIMIT", "1G")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run_in(
+        d,
+        &[
+            "v.npy",
+            "--beta",
+            "1",
+            "-o",
+            "x.vtu",
+            "--memory-limit",
+            "lots",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2), "a usage error");
+    assert_eq!(stderr(&o).lines().count(), 1);
+    assert!(stderr(&o).contains("is not a size"), "{}", stderr(&o));
+}

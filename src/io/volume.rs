@@ -277,11 +277,18 @@ pub(crate) fn data_size(
     dims: [usize; 3],
     ty: SampleType,
 ) -> Result<(usize, usize), ReadError> {
-    dims[0]
+    let (n, bytes) = dims[0]
         .checked_mul(dims[1])
         .and_then(|n| n.checked_mul(dims[2]))
         .and_then(|n| n.checked_mul(ty.size()).map(|b| (n, b)))
-        .ok_or_else(|| ReadError::invalid(path, format!("dimensions {dims:?} are too large")))
+        .ok_or_else(|| ReadError::invalid(path, format!("dimensions {dims:?} are too large")))?;
+    let need = crate::memory::read_bytes(n as u64, ty.size() as u64);
+    crate::memory::check(
+        need,
+        format!("reading {}×{}×{} samples", dims[0], dims[1], dims[2]),
+    )
+    .map_err(|e| ReadError::invalid(path, format!("{e}; crop or downsample the volume")))?;
+    Ok((n, bytes))
 }
 
 /// Reads a whole file.
@@ -366,7 +373,10 @@ pub(crate) fn read_raw_range(
     }
     file.seek(SeekFrom::Start(start))
         .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))?;
-    let mut buf = vec![0u8; len];
+    let mut buf = Vec::new();
+    crate::memory::try_reserve(&mut buf, len)
+        .map_err(|e| ReadError::invalid(header, format!("cannot hold {len} bytes of data: {e}")))?;
+    buf.resize(len, 0);
     file.read_exact(&mut buf)
         .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))?;
     Ok(buf)
@@ -405,6 +415,8 @@ pub(crate) fn decompress_exact(
 ) -> Result<Vec<u8>, ReadError> {
     let corrupt = |e: std::io::Error| ReadError::invalid(path, format!("{what} is corrupt: {e}"));
     let mut out = Vec::new();
+    crate::memory::try_reserve(&mut out, want)
+        .map_err(|e| ReadError::invalid(path, format!("cannot hold {want} bytes of data: {e}")))?;
     (&mut reader)
         .take(want as u64)
         .read_to_end(&mut out)

@@ -85,6 +85,12 @@ pub(crate) struct Cli {
     #[arg(long, conflicts_with = "input")]
     pub(crate) demo: bool,
 
+    /// Memory limit, e.g. 8G or 512M: runs whose estimate exceeds it stop before the work,
+    /// and allocations beyond it end the run with an error [default: the available memory,
+    /// for the estimates only]
+    #[arg(long, value_name = "SIZE", env = "TPTD_MEMORY_LIMIT", value_parser = parse_memory)]
+    pub(crate) memory_limit: Option<u64>,
+
     /// Print nothing on stdout and no progress bar (warnings and errors still go to stderr)
     #[arg(short, long)]
     pub(crate) quiet: bool,
@@ -180,6 +186,12 @@ impl MshVersionArg {
             MshVersionArg::V22 => MshVersion::V22,
         }
     }
+}
+
+/// Parses `--memory-limit`: a size such as `512M`, `8G` or a number of bytes.
+fn parse_memory(s: &str) -> Result<u64, String> {
+    tptd::memory::parse_size(s)
+        .ok_or_else(|| format!("'{s}' is not a size (use e.g. 512M, 8G or a number of bytes)"))
 }
 
 /// Parses an interval bound: a number, `inf`/`-inf`; NaN is rejected.

@@ -6,17 +6,22 @@
 //! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1; outputs are written
 //! atomically, so a failed run leaves no (partial) output file behind.
 //!
-//! Modules: [`cli`] (arguments), [`run`] (the run, step by step), [`summary`] (stdout),
+//! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`run`] (the run, step by step), [`summary`] (stdout),
 //! [`progress`] (the progress bar), [`error`] (`{file}: {problem}` errors).
 
+mod alloc;
 mod cli;
 mod error;
 mod progress;
 mod run;
 mod summary;
 
+#[global_allocator]
+static ALLOC: alloc::CappedAlloc = alloc::CappedAlloc;
+
 fn main() {
     let cli = cli::parse_or_exit();
+    tptd::memory::set_limit(cli.memory_limit);
     clean_up_on_signals();
     if let Err(e) = run::run(cli) {
         let msg = e.to_string().replace(['\n', '\r'], " ");

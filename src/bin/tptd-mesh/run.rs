@@ -61,6 +61,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     stage.finish();
     let t_read = secs(t);
     warn_exact_bounds(&grid, &job);
+    check_memory(&grid, &job)?;
 
     let t = Instant::now();
     let mut out = mesh(&grid, &job, cli.quiet)?;
@@ -272,6 +273,24 @@ fn inside_value(values: &[f64], bound: f64, lower: bool) -> Option<f64> {
             .fold(f64::INFINITY, f64::min)
     };
     next.is_finite().then(|| bound + (next - bound) / 2.0)
+}
+
+/// Checks the memory estimate of meshing and analysis before the work (see
+/// [`tptd::memory`]).
+fn check_memory(grid: &ScalarGrid, job: &Job) -> Result<()> {
+    let tets = tptd::memory::estimate_tets(grid, job.opts.alpha, job.opts.beta);
+    let need = tptd::memory::mesh_bytes(grid.num_vertices() as u64, tets);
+    let what = format!(
+        "meshing {} (about {:.1} M tetrahedra)",
+        fmt_interval(job.opts.alpha, job.opts.beta),
+        tets as f64 / 1e6
+    );
+    tptd::memory::check(need, what).map_err(|e| {
+        file_error(
+            &job.input_name,
+            format_args!("{e}; narrow the interval, crop the volume or raise --memory-limit"),
+        )
+    })
 }
 
 /// Meshes the interval; an empty mesh is an error.
