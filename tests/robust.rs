@@ -403,7 +403,7 @@ fn the_memory_cap_gives_one_line_at_every_stage() {
     a.extend(["--memory-limit", "1200K"]);
     let o = run_in(d, &a);
     let e = assert_one_line_failure(&o, d, &before, "v.npy");
-    assert!(e.contains("reading 40×40×40 samples needs about"), "{e}");
+    assert!(e.contains("reading 64000 samples needs about"), "{e}");
     // the mesh does not fit: refused before meshing, naming the estimate
     let o = run_env(d, &args, &[("TPTD_MEMORY_LIMIT", "4M")]);
     let e = assert_one_line_failure(&o, d, &before, "v.npy");

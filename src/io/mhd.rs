@@ -18,7 +18,7 @@ use flate2::read::ZlibDecoder;
 
 use super::header::{self, Fields};
 use super::volume::{
-    build_grid, data_size, decode_samples, decompress_exact, quote, read_all, read_data_file,
+    build_grid, checked_decode, data_size, decompress_exact, quote, read_all, read_data_file,
     read_raw_range, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
@@ -53,7 +53,7 @@ pub fn read_mhd(path: &Path) -> Result<ScalarGrid, ReadError> {
         }
         (DataLocation::File(file), true) => read_zlib_file(path, &h, file, nbytes)?,
     };
-    let values = decode_samples(&data, h.ty, h.endian);
+    let values = checked_decode(path, &data, h.ty, h.endian)?;
     build_grid(path, h.dims, h.spacing, h.origin, h.direction, values)
 }
 

@@ -12,7 +12,7 @@ use flate2::read::MultiGzDecoder;
 
 use super::header::{self, Fields};
 use super::volume::{
-    build_grid, data_size, decode_samples, decompress_exact, quote, read_all, read_data_file,
+    build_grid, checked_decode, data_size, decompress_exact, quote, read_all, read_data_file,
     read_raw_range, split_linear, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
@@ -32,7 +32,12 @@ pub fn read_nrrd(path: &Path) -> Result<ScalarGrid, ReadError> {
     let data = read_data(path, &header, &bytes, nbytes)?;
     let values = match header.encoding {
         Encoding::Ascii => parse_ascii(path, &data, count)?,
-        _ => decode_samples(&data, header.ty, header.endian.unwrap_or(Endian::Little)),
+        _ => checked_decode(
+            path,
+            &data,
+            header.ty,
+            header.endian.unwrap_or(Endian::Little),
+        )?,
     };
     build_grid(
         path,

@@ -234,6 +234,21 @@ pub(crate) fn decode_samples(bytes: &[u8], ty: SampleType, endian: Endian) -> Ve
     out
 }
 
+/// [`decode_samples`] after checking the memory estimate of the decoded samples (see
+/// [`crate::memory::read_bytes`]): a volume that cannot fit is an error naming `path`.
+pub(crate) fn checked_decode(
+    path: &Path,
+    bytes: &[u8],
+    ty: SampleType,
+    endian: Endian,
+) -> Result<Vec<f64>, ReadError> {
+    let count = (bytes.len() / ty.size()) as u64;
+    let need = crate::memory::read_bytes(count, ty.size() as u64);
+    crate::memory::check(need, format!("reading {count} samples"))
+        .map_err(|e| ReadError::invalid(path, format!("{e}; crop or downsample the volume")))?;
+    Ok(decode_samples(bytes, ty, endian))
+}
+
 /// Decodes `out.len()` samples from the start of `bytes` into `out`.
 fn decode_into(bytes: &[u8], ty: SampleType, endian: Endian, out: &mut [f64]) {
     fn each(bytes: &[u8], size: usize, out: &mut [f64], f: impl Fn(&[u8]) -> f64) {
@@ -282,12 +297,6 @@ pub(crate) fn data_size(
         .and_then(|n| n.checked_mul(dims[2]))
         .and_then(|n| n.checked_mul(ty.size()).map(|b| (n, b)))
         .ok_or_else(|| ReadError::invalid(path, format!("dimensions {dims:?} are too large")))?;
-    let need = crate::memory::read_bytes(n as u64, ty.size() as u64);
-    crate::memory::check(
-        need,
-        format!("reading {}×{}×{} samples", dims[0], dims[1], dims[2]),
-    )
-    .map_err(|e| ReadError::invalid(path, format!("{e}; crop or downsample the volume")))?;
     Ok((n, bytes))
 }
 
