@@ -430,3 +430,54 @@ fn the_memory_cap_gives_one_line_at_every_stage() {
     assert_eq!(stderr(&o).lines().count(), 1);
     assert!(stderr(&o).contains("is not a size"), "{}", stderr(&o));
 }
+
+/// Writes `name` (a `.nhdr` with `space directions` `dirs`) and its data `name.raw`: a ball
+/// in 9³.
+fn write_nhdr_with_directions(dir: &Path, name: &str, dirs: &str) {
+    let mut data = Vec::new();
+    for k in 0..9 {
+        for j in 0..9 {
+            for i in 0..9 {
+                data.extend_from_slice(&ball(i, j, k).to_le_bytes());
+            }
+        }
+    }
+    fs::write(dir.join(format!("{name}.raw")), data).unwrap();
+    let text = format!(
+        "NRRD0004\ntype: double\ndimension: 3\nspace dimension: 3\nsizes: 9 9 9\n\
+         space directions: {dirs}\nencoding: raw\nendian: little\ndata file: {name}.raw\n"
+    );
+    fs::write(dir.join(name), text).unwrap();
+}
+
+#[test]
+fn near_singular_directions_warn_and_singular_ones_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_nhdr_with_directions(d, "sheared.nhdr", "(1,0,0) (1,0.0001,0) (0,0,1)");
+    let o = run_in(d, &["sheared.nhdr", "--beta", "3", "-o", "s.vtu"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with(
+            "tptd-mesh: warning: sheared.nhdr: the direction matrix is nearly singular"
+        ),
+        "{err}"
+    );
+    write_nhdr_with_directions(d, "upright.nhdr", "(0,1,0) (-1,0,0) (0,0,2)");
+    let o = run_in(d, &["upright.nhdr", "--beta", "3", "-o", "u.vtu"]);
+    assert!(
+        o.status.success() && stderr(&o).is_empty(),
+        "{}",
+        stderr(&o)
+    );
+    for (name, dirs) in [
+        ("flat.nhdr", "(1,0,0) (2,0,0) (0,0,1)"),
+        ("almost.nhdr", "(1,0,0) (1,1e-17,0) (0,0,1)"),
+    ] {
+        write_nhdr_with_directions(d, name, dirs);
+        let e = fails_cleanly(d, &[name, "--beta", "3", "-o", "f.vtu"], name);
+        assert!(e.contains("singular"), "{e}");
+    }
+}

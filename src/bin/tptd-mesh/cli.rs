@@ -10,7 +10,9 @@ use tptd::Method;
 /// Mesh the interval volume {alpha <= f <= beta} of a 3-D scalar grid into tetrahedra, with
 /// the topology of the trilinear interpolant.
 ///
-/// Grid values equal to a bound count as outside the interval.
+/// Grid values equal to a bound count as outside the interval. Lengths and volumes are in the
+/// units of the file's coordinates (millimetres for NIfTI and most NRRD and MetaImage
+/// images; voxels for .npy, whose spacing is 1 unless --spacing says otherwise).
 #[derive(Parser, Debug)]
 #[command(name = "tptd-mesh", version)]
 pub(crate) struct Cli {
@@ -53,7 +55,8 @@ pub(crate) struct Cli {
     #[arg(long, value_enum, value_name = "ENCODING", default_value_t = VtuEncodingArg::Base64)]
     pub(crate) vtu_encoding: VtuEncodingArg,
 
-    /// Override the grid spacing (physical size of a voxel), e.g. 0.5,0.5,1.2
+    /// Override the grid spacing (physical size of a voxel, in the file's units, e.g. mm),
+    /// e.g. 0.5,0.5,1.2
     #[arg(long, value_name = "SX,SY,SZ", value_parser = parse_spacing)]
     pub(crate) spacing: Option<Spacing>,
 

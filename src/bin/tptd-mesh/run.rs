@@ -61,6 +61,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     stage.finish();
     let t_read = secs(t);
     warn_exact_bounds(&grid, &job);
+    warn_near_singular(&grid, &job);
     check_memory(&grid, &job)?;
 
     let t = Instant::now();
@@ -222,6 +223,20 @@ fn read_grid(cli: &Cli, input_name: &str) -> Result<ScalarGrid> {
             .map_err(|e| file_error(input_name, format_args!("--spacing: {e}")))?;
     }
     Ok(grid)
+}
+
+/// Warns on stderr when the direction matrix is nearly singular (the mesh comes out nearly
+/// flat); an exactly singular one was refused by the reader.
+fn warn_near_singular(grid: &ScalarGrid, job: &Job) {
+    let k = tptd::grid::condition_number(&grid.direction);
+    if k > tptd::grid::NEAR_SINGULAR_CONDITION {
+        eprintln!(
+            "tptd-mesh: warning: {}: the direction matrix is nearly singular (condition number \
+             {k:.2e}): the index axes are almost dependent, so the tetrahedra are nearly flat; \
+             check the file's direction/orientation fields",
+            job.input_name
+        );
+    }
 }
 
 /// Warns on stderr about each bound that equals grid values exactly.
