@@ -481,3 +481,39 @@ fn near_singular_directions_warn_and_singular_ones_are_refused() {
         assert!(e.contains("singular"), "{e}");
     }
 }
+
+#[test]
+fn every_vtu_encoding_is_identical_for_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 40³ ball: the arrays span many parallel base64 pieces and zlib blocks
+    write_npy(&d.join("v.npy"), [40, 40, 40], |i, j, k| {
+        let (x, y, z) = (i as f64 - 19.6, j as f64 - 20.2, k as f64 - 19.9);
+        (x * x + y * y + z * z).sqrt() + 0.4 * (0.7 * x).sin()
+    });
+    for enc in ["base64", "zlib", "raw"] {
+        let mut outs = Vec::new();
+        for j in ["1", "2"] {
+            let out = format!("m{j}.{enc}.vtu");
+            let o = run_in(
+                d,
+                &[
+                    "v.npy",
+                    "--beta",
+                    "16.5",
+                    "-o",
+                    &out,
+                    "-j",
+                    j,
+                    "-q",
+                    "--vtu-encoding",
+                    enc,
+                ],
+            );
+            assert!(o.status.success(), "{}", stderr(&o));
+            outs.push(fs::read(d.join(&out)).unwrap());
+        }
+        assert!(outs[0].len() > 1 << 20, "{enc}: {} bytes", outs[0].len());
+        assert!(outs[0] == outs[1], "{enc}: -j 1 and -j 2 differ");
+    }
+}
