@@ -59,16 +59,16 @@ fn out_of_memory(size: usize) -> ! {
     let mut cur = std::io::Cursor::new(&mut buf[..]);
     let mib = size as f64 / (1024.0 * 1024.0);
     let _ = match explicit_limit() {
-        Some(l) => write!(
+        Some(l) => writeln!(
             cur,
             "tptd-mesh: error: out of memory: {mib:.1} MiB more would exceed the memory limit of \
-             {:.1} MiB; raise --memory-limit, crop the volume or narrow the interval\n",
+             {:.1} MiB; raise --memory-limit, crop the volume or narrow the interval",
             l as f64 / (1024.0 * 1024.0)
         ),
-        None => write!(
+        None => writeln!(
             cur,
             "tptd-mesh: error: out of memory: the system refused {mib:.1} MiB; crop the volume, \
-             narrow the interval or use --no-analysis\n"
+             narrow the interval or use --no-analysis"
         ),
     };
     let n = cur.position() as usize;
