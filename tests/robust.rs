@@ -84,6 +84,15 @@ fn empty_axes_are_one_line_errors() {
         let e = fails_cleanly(d, &[&name, "-o", "m.vtu", "--alpha", "0"], &name);
         assert!(e.contains("at least 2"), "{shape}: {e}");
     }
+    let nrrd =
+        "NRRD0004\ntype: double\ndimension: 3\nsizes: 0 3 3\nencoding: raw\nendian: little\n\n";
+    fs::write(d.join("empty.nrrd"), nrrd).unwrap();
+    let mha = "NDims = 3\nDimSize = 3 0 3\nElementType = MET_DOUBLE\nElementDataFile = LOCAL\n";
+    fs::write(d.join("empty.mha"), mha).unwrap();
+    for name in ["empty.nrrd", "empty.mha"] {
+        let e = fails_cleanly(d, &[name, "-o", "m.vtu", "--alpha", "0"], name);
+        assert!(e.contains("at least 2"), "{name}: {e}");
+    }
 }
 
 /// Writes `vol.nhdr` whose detached data file is `data`.
