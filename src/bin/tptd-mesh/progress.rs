@@ -112,8 +112,12 @@ impl Stage {
         Stage { pb, done }
     }
 
-    /// Ends the stage and clears its spinner.
-    pub(crate) fn finish(self) {
+    /// Ends the stage and clears its spinner (as dropping it does, e.g. on an error).
+    pub(crate) fn finish(self) {}
+}
+
+impl Drop for Stage {
+    fn drop(&mut self) {
         let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
         *done = true;
         self.pb.finish_and_clear();
