@@ -6,6 +6,7 @@
 mod common;
 
 use std::fs;
+use std::io::Write as _;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -525,4 +526,28 @@ fn every_vtu_encoding_is_identical_for_one_and_two_threads() {
         assert!(outs[0].len() > 1 << 20, "{enc}: {} bytes", outs[0].len());
         assert!(outs[0] == outs[1], "{enc}: -j 1 and -j 2 differ");
     }
+}
+
+#[test]
+fn pending_files_appear_only_when_committed() {
+    use tptd::io::{same_file, write_pending};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let a = write_pending(&d.join("a.txt"), |w| w.write_all(b"a")).unwrap();
+    let b = write_pending(&d.join("b.txt"), |w| w.write_all(b"b")).unwrap();
+    assert_eq!(listing(d).len(), 2, "{:?}", listing(d));
+    assert!(listing(d)
+        .iter()
+        .all(|n| n.starts_with('.') && n.contains(".tmp-")));
+    drop(b);
+    a.commit().unwrap();
+    assert_eq!(listing(d), ["a.txt"]);
+    assert_eq!(fs::read(d.join("a.txt")).unwrap(), b"a");
+    let failed = write_pending(&d.join("c.txt"), |_| Err(std::io::Error::other("no")));
+    assert!(failed.is_err());
+    assert_eq!(listing(d), ["a.txt"]);
+    fs::create_dir(d.join("sub")).unwrap();
+    assert!(same_file(&d.join("a.txt"), &d.join("sub/../a.txt")));
+    assert!(same_file(&d.join("new.txt"), &d.join("sub/../new.txt")));
+    assert!(!same_file(&d.join("a.txt"), &d.join("sub/a.txt")));
 }
