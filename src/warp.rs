@@ -75,9 +75,20 @@ pub(crate) fn snap_vertices(
         .filter_map(|&(v, snap)| Star::new(grid, planner, iv, v, snap, eps))
         .collect();
     let mut snaps = vec![SNAP_NONE; grid.num_vertices()];
+    let star_of: FxHashMap<usize, usize> =
+        stars.iter().enumerate().map(|(i, s)| (s.v, i)).collect();
     let mut open: Vec<usize> = (0..stars.len()).collect();
+    let mut passes = vec![false; stars.len()];
+    let mut dirty = open.clone();
     for _ in 0..ROUNDS {
-        let chosen = snap_round(&stars, &open, &snaps, iv);
+        let tested: Vec<(usize, bool)> = dirty
+            .par_iter()
+            .map(|&s| (s, stars[s].regular(&snaps, iv)))
+            .collect();
+        for (s, p) in tested {
+            passes[s] = p;
+        }
+        let chosen = snap_round(&stars, &open, &passes);
         if chosen.is_empty() {
             break;
         }
@@ -85,18 +96,24 @@ pub(crate) fn snap_vertices(
             snaps[stars[s].v] = stars[s].snap;
         }
         open.retain(|&s| snaps[stars[s].v] == SNAP_NONE);
+        // A star's test reads only the states of its link's grid vertices, and links are
+        // symmetric: only the stars around this round's snaps can change their answer.
+        dirty = chosen
+            .iter()
+            .flat_map(|&s| stars[s].link.grid_nodes())
+            .filter_map(|n| star_of.get(&n).copied())
+            .filter(|&s| snaps[stars[s].v] == SNAP_NONE)
+            .collect();
+        dirty.sort_unstable();
+        dirty.dedup();
     }
     snaps
 }
 
-/// One round: the stars that pass the test in the current state and have the smallest `t`
-/// among the passing grid vertices of their link.
-fn snap_round(stars: &[Star], open: &[usize], snaps: &[u8], iv: &Interval) -> Vec<usize> {
-    let passing: Vec<usize> = open
-        .par_iter()
-        .copied()
-        .filter(|&s| stars[s].regular(snaps, iv))
-        .collect();
+/// One round: the open stars that pass the test in the current state (`passes`) and have the
+/// smallest `t` among the passing grid vertices of their link.
+fn snap_round(stars: &[Star], open: &[usize], passes: &[bool]) -> Vec<usize> {
+    let passing: Vec<usize> = open.iter().copied().filter(|&s| passes[s]).collect();
     let best: FxHashMap<usize, f64> = passing.iter().map(|&s| (stars[s].v, stars[s].t)).collect();
     passing
         .par_iter()
