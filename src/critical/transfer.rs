@@ -202,26 +202,9 @@ pub fn transfer_function(
             .sum();
         opts.hue_start - linear * (x - lo) / (hi - lo) - drop * steps
     };
-    let bump = |x: f64, c: f64| {
-        let d = (x - c).abs();
-        if details {
-            ((wo / 2.0 - d) / eps).clamp(0.0, 1.0)
-        } else {
-            (1.0 - d / (wo / 2.0)).clamp(0.0, 1.0)
-        }
-    };
-    let alpha = |x: f64| {
-        let b = cvs.iter().map(|&c| bump(x, c)).fold(0.0, f64::max);
-        opts.opacity_base + opts.opacity_peak * b
-    };
     let mut hue_x = vec![lo, hi];
-    let mut alpha_x = vec![lo, hi];
     for &c in &cvs {
         hue_x.extend([c - ramp_width / 2.0, c, c + ramp_width / 2.0]);
-        alpha_x.extend([c - wo / 2.0, c, c + wo / 2.0]);
-        if details {
-            alpha_x.extend([c - wo / 2.0 + eps, c + wo / 2.0 - eps]);
-        }
     }
     let colors = densify(sorted_in(hue_x, lo, hi), &hue)
         .into_iter()
@@ -230,10 +213,7 @@ pub fn transfer_function(
             [x, r, g, b]
         })
         .collect();
-    let opacity = sorted_in(alpha_x, lo, hi)
-        .into_iter()
-        .map(|x| [x, alpha(x)])
-        .collect();
+    let opacity = opacity_points(&cvs, (lo, hi), opts, wo, details.then_some(eps));
     Ok(TransferFunction {
         design: opts.design,
         range,
@@ -241,6 +221,38 @@ pub fn transfer_function(
         colors,
         opacity,
     })
+}
+
+/// Opacity control points: `opacity_base` except at each critical value `c`, where it rises to
+/// `opacity_base + opacity_peak` as a hat over `c ± ωo/2` (`edge` `None`) or as a box over
+/// `c ± ωo/2` with ramps of width `edge` inside it. The values are exact (no rounding noise).
+fn opacity_points(
+    cvs: &[f64],
+    (lo, hi): (f64, f64),
+    opts: &TransferOptions,
+    wo: f64,
+    edge: Option<f64>,
+) -> Vec<[f64; 2]> {
+    let (base, top) = (opts.opacity_base, opts.opacity_base + opts.opacity_peak);
+    let mut pts = vec![[lo, base]];
+    for &c in cvs {
+        let (a, b) = (c - wo / 2.0, c + wo / 2.0);
+        if pts.last().is_some_and(|p| p[0] < a) {
+            pts.push([a, base]);
+        }
+        if let Some(e) = edge {
+            pts.push([a + e, top]);
+        }
+        pts.push([c, top]);
+        if let Some(e) = edge {
+            pts.push([b - e, top]);
+        }
+        pts.push([b, base]);
+    }
+    if pts.last().is_some_and(|p| p[0] < hi) {
+        pts.push([hi, base]);
+    }
+    pts
 }
 
 /// `ωh` and `ωo` (defaults: 2 % of the range), after checking every option.
@@ -500,6 +512,27 @@ mod tests {
         let tf = transfer_function(&[], (-1.0, 1.0), &TransferOptions::default()).unwrap();
         check_points(&tf);
         assert!(tf.opacity.iter().all(|p| p[1] == 0.05));
+    }
+
+    #[test]
+    fn touching_intervals_share_their_end_point() {
+        for design in [TransferDesign::Intervals, TransferDesign::Details] {
+            let o = TransferOptions {
+                hue_width: Some(2.0),
+                ..opts(design)
+            };
+            let tf = transfer_function(&[10.0, 12.0, 14.0], (0.0, 100.0), &o).unwrap();
+            check_points(&tf);
+            assert_eq!(tf.values, vec![10.0, 12.0, 14.0]);
+            assert!((tf.opacity_at(11.0) - 0.05).abs() < 1e-12, "{design:?}");
+            let n = if design == TransferDesign::Details {
+                5
+            } else {
+                3
+            };
+            // lo, then n points per value minus the two shared ends, then hi
+            assert_eq!(tf.opacity.len(), 2 + 3 * n - 2, "{design:?}");
+        }
     }
 
     #[test]
