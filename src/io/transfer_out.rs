@@ -104,10 +104,11 @@ fn write_csv(w: &mut dyn Write, t: &TransferTable) -> io::Result<()> {
 
 /// The value of the piecewise-linear function with control points `pts` (first entry the
 /// abscissa, `get` the ordinates) at `x`, constant beyond the ends.
-fn interpolate<const N: usize, P: Copy>(pts: &[P], x: f64, get: impl Fn(&P) -> [f64; N]) -> [f64; N]
-where
-    P: AsRef<[f64]>,
-{
+fn interpolate<const N: usize, P: AsRef<[f64]>>(
+    pts: &[P],
+    x: f64,
+    get: impl Fn(&P) -> [f64; N],
+) -> [f64; N] {
     let at = |p: &P| p.as_ref()[0];
     let Some(i) = pts.iter().position(|p| at(p) >= x) else {
         return pts.last().map_or([0.0; N], &get);
