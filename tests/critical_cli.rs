@@ -272,7 +272,7 @@ fn transfer_functions_as_paraview_preset_and_csv() {
         "0.15",
     ]);
     assert!(
-        ok && stdout.contains("transfer function (details, 1 of"),
+        ok && stdout.contains("transfer function (details, 1 critical values from"),
         "{stdout}{stderr}"
     );
     let text = fs::read_to_string(&csv).unwrap();

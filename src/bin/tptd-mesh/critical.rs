@@ -107,7 +107,7 @@ fn write_transfer_function(
     write_transfer(path, format, &table).map_err(write_error)?;
     if !cli.quiet {
         println!(
-            "transfer function ({}, {} of {} critical values): {}",
+            "transfer function ({}, {} critical values from {} points): {}",
             design.name(),
             tf.values.len(),
             points.len(),
