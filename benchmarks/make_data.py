@@ -147,8 +147,9 @@ def t1_grey_matter_band(values):
     left = gm
     while left > 0 and s[left - 1] >= 0.5 * s[gm]:
         left -= 1
-    alpha = float(round(centers[left]))
-    beta = float(round(centers[valley]))
+    # Half-integer bounds lie between the uint8 data values: no vertex equals a bound.
+    alpha = float(round(centers[left])) - 0.5
+    beta = float(round(centers[valley])) - 0.5
     return alpha, beta, {"gm_mode": float(centers[gm]), "wm_mode": float(centers[wm]),
                          "valley": float(centers[valley])}
 

@@ -122,6 +122,9 @@ def interval_str(iv):
     return lo + ", " + hi
 
 
+VTU_ENCODING = "base64"   # set from --vtu-encoding in main()
+
+
 def tptd_cmd(binary, inp, out, iv, method, threads, report):
     a, b = iv
     cmd = [binary, inp, "-o", out]
@@ -129,7 +132,8 @@ def tptd_cmd(binary, inp, out, iv, method, threads, report):
     cmd.append("--alpha=" + ("-inf" if a is None else fmt_num(a)))
     if b is not None:
         cmd.append("--beta=" + fmt_num(b))
-    cmd += ["--method", method, "-j", str(threads), "--report", report, "--no-analysis"]
+    cmd += ["--method", method, "-j", str(threads), "--report", report, "--no-analysis",
+            "--vtu-encoding", VTU_ENCODING]
     return cmd
 
 
@@ -271,10 +275,15 @@ def main():
                     help="tptd-mesh binary (default $TPTD_BIN or target/release/tptd-mesh)")
     ap.add_argument("--timeout", type=float, default=1800.0, help="per-run timeout, seconds")
     ap.add_argument("--keep-outputs", action="store_true", help="keep the .vtu files in benchmarks/out/")
+    ap.add_argument("--vtu-encoding", default="base64", choices=["base64", "zlib", "raw"],
+                    help="tptd-mesh --vtu-encoding (default base64, the binary's default; the "
+                         "README's table was measured with raw)")
     ap.add_argument("--out", default=None,
                     help="results path prefix; writes PREFIX.md and PREFIX.json "
                          "(default benchmarks/results, or benchmarks/results_quick with --quick)")
     args = ap.parse_args()
+    global VTU_ENCODING
+    VTU_ENCODING = args.vtu_encoding
 
     reps = args.reps if args.reps is not None else (1 if args.quick else 3)
     if args.out is None:

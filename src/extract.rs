@@ -311,6 +311,8 @@ fn run(
     opts: &MeshOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<MeshOutput, MeshError> {
+    let tied = without_near_ties(grid, opts.alpha, opts.beta);
+    let grid = tied.as_ref().unwrap_or(grid);
     let [_, _, cz] = grid.cell_dims();
     let mut ctx = Ctx {
         grid,
@@ -345,6 +347,33 @@ fn run(
     }
     let mesh = merge(grid, slabs)?;
     Ok(MeshOutput { mesh, stats })
+}
+
+/// Values within this fraction of the data range of a level, but not equal to it, are set
+/// onto the level before meshing.
+pub const NEAR_TIE: f64 = 1e-9;
+
+/// A copy of `grid` with every value within [`NEAR_TIE`] × (data range) of `alpha` or `beta`
+/// set exactly to it, or `None` when there is none. Such values (e.g. 0.9999999999999999 for a
+/// distance sampled on a sphere of radius 1) would put cuts within rounding of a grid vertex:
+/// the cut point and the vertex coincide in floating point, and tets between them vanish. As
+/// exact ties they follow the ties rule (`clip`), which keeps every tet non-degenerate.
+fn without_near_ties(grid: &ScalarGrid, alpha: f64, beta: f64) -> Option<ScalarGrid> {
+    let (lo, hi) = grid.value_range();
+    let tol = NEAR_TIE * (hi - lo);
+    let near = |v: f64| -> Option<f64> {
+        [alpha, beta]
+            .into_iter()
+            .find(|&l| l.is_finite() && v != l && (v - l).abs() <= tol)
+    };
+    if !grid.values.par_iter().any(|&v| near(v).is_some()) {
+        return None;
+    }
+    let mut g = grid.clone();
+    g.values
+        .par_iter_mut()
+        .for_each(|v| *v = near(*v).unwrap_or(*v));
+    Some(g)
 }
 
 /// Global numbering in slab order; returns the mesh in physical coordinates.
@@ -823,6 +852,40 @@ mod tests {
     }
 
     /// A linear field is its own trilinear interpolant: the mesh volume is exact.
+    #[test]
+    fn values_within_rounding_of_a_level_give_a_closed_mesh() {
+        // |p| sampled at multiples of 0.2: some vertices are 1.0, others 1 ± 1 ulp.
+        let g = grid([13, 13, 13], |i, j, k| {
+            let c = |n: usize| -1.2 + n as f64 * 0.2;
+            (c(i) * c(i) + c(j) * c(j) + c(k) * c(k)).sqrt()
+        });
+        assert!(g
+            .values
+            .iter()
+            .any(|&v| v != 1.0 && (v - 1.0).abs() < 1e-15));
+        for method in ALL {
+            let m = mesh_interval(&g, &MeshOptions::new(f64::NEG_INFINITY, 1.0, method))
+                .unwrap()
+                .mesh;
+            let mut faces = std::collections::HashMap::new();
+            for (t, tet) in m.tets.iter().enumerate() {
+                assert!(m.tet_volume(t) > 0.0, "{method:?}: tet {t} not positive");
+                for skip in 0..4 {
+                    let mut f: Vec<u32> = (0..4).filter(|&i| i != skip).map(|i| tet[i]).collect();
+                    f.sort_unstable();
+                    *faces.entry(f).or_insert(0usize) += 1;
+                }
+            }
+            for b in &m.boundary {
+                let mut f = b.to_vec();
+                f.sort_unstable();
+                assert_eq!(faces.get(&f), Some(&1), "{method:?}: boundary {b:?}");
+            }
+            let open = faces.values().filter(|&&n| n == 1).count();
+            assert_eq!(open, m.boundary.len(), "{method:?}: unlabelled open faces");
+        }
+    }
+
     #[test]
     fn volume_of_a_linear_field() {
         let c = [1.0, 2.0, 0.5];

@@ -50,7 +50,7 @@ pub enum GridError {
     #[error("spacing {0:?} must be finite and non-zero")]
     BadSpacing([f64; 3]),
     /// The direction matrix (or the origin) is singular or not finite.
-    #[error("direction matrix is singular or not finite")]
+    #[error("direction matrix is singular (its axes are linearly dependent) or not finite")]
     BadDirection,
 }
 
@@ -154,7 +154,11 @@ impl ScalarGrid {
             values,
         };
         let det = g.affine_determinant();
-        if !det.is_finite() || det == 0.0 || origin.iter().any(|o| !o.is_finite()) {
+        if !det.is_finite()
+            || det == 0.0
+            || condition_number(&direction) >= SINGULAR_CONDITION
+            || origin.iter().any(|o| !o.is_finite())
+        {
             return Err(GridError::BadDirection);
         }
         use rayon::prelude::*;
@@ -265,6 +269,35 @@ impl ScalarGrid {
     }
 }
 
+/// Condition number at which a direction matrix counts as singular: its inverse has lost
+/// every significant digit of an `f64`.
+pub const SINGULAR_CONDITION: f64 = 1e15;
+
+/// Condition number above which a direction matrix is *nearly* singular: its tetrahedra come
+/// out nearly flat (the CLI warns).
+pub const NEAR_SINGULAR_CONDITION: f64 = 1e3;
+
+/// Condition number of a 3×3 matrix in the Frobenius norm, divided by 3 so that a rotation
+/// gives 1 (within a factor of 3 of the 2-norm condition number); infinite when singular.
+pub fn condition_number(m: &[[f64; 3]; 3]) -> f64 {
+    let det = det3(m);
+    if det == 0.0 || !det.is_finite() {
+        return f64::INFINITY;
+    }
+    // The inverse's Frobenius norm is the cofactors' divided by |det|.
+    let mut cof = 0.0;
+    for r in 0..3 {
+        for c in 0..3 {
+            let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+            let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+            let x = m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1];
+            cof += x * x;
+        }
+    }
+    let norm: f64 = m.iter().flatten().map(|x| x * x).sum();
+    (norm.sqrt() * cof.sqrt() / det.abs()) / 3.0
+}
+
 /// Determinant of a row-major 3×3 matrix.
 pub fn det3(m: &[[f64; 3]; 3]) -> f64 {
     m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
@@ -325,6 +358,18 @@ impl CurvilinearGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn condition_number_of_rotations_shears_and_singular_matrices() {
+        let (c, s) = (0.6, 0.8);
+        let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+        assert!((condition_number(&IDENTITY) - 1.0).abs() < 1e-12);
+        assert!((condition_number(&rot) - 1.0).abs() < 1e-12);
+        let shear = [[1.0, 1.0, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1.0]];
+        assert!(condition_number(&shear) > NEAR_SINGULAR_CONDITION);
+        let flat = [[1.0, 2.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+        assert_eq!(condition_number(&flat), f64::INFINITY);
+    }
 
     #[test]
     fn face_corners_lie_on_their_face_and_cycle() {

@@ -25,6 +25,7 @@ pub mod grid;
 pub mod improve;
 pub mod io;
 pub(crate) mod keys;
+pub mod memory;
 pub mod mesh;
 pub mod report;
 pub mod surface;

@@ -323,9 +323,12 @@ fn transfer_bad_paths_are_one_line_errors_without_output() {
     assert!(!ok && stderr.contains("is a directory"), "{stderr}");
     // a width as large as the data range
     let csv = dir.path().join("t.csv");
+    let json = dir.path().join("c.json");
     let (ok, _, stderr) = run(&[
         inp,
         "--critical",
+        "--json",
+        json.to_str().unwrap(),
         "--transfer",
         csv.to_str().unwrap(),
         "--transfer-width",
@@ -335,7 +338,10 @@ fn transfer_bad_paths_are_one_line_errors_without_output() {
         !ok && stderr.contains("widths must be") && stderr.lines().count() == 1,
         "{stderr}"
     );
-    assert!(!csv.exists());
+    assert!(
+        !csv.exists() && !json.exists(),
+        "no output after a bad parameter"
+    );
     let (ok, _, _) = run(&[
         inp,
         "--transfer-design",

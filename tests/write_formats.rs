@@ -194,7 +194,7 @@ fn golden_files_match() {
     let bless = std::env::var("TPTD_BLESS").is_ok_and(|v| v == "1");
     let mut mismatches = Vec::new();
     for (stem, mesh) in [("cube6", cube6()), ("slab12", slab12())] {
-        for format in Format::ALL {
+        for format in Format::ALL.into_iter().chain(Format::OTHER_VTU) {
             let bytes = render(&mesh, format);
             assert_eq!(
                 bytes,
@@ -375,7 +375,7 @@ fn inp_fields_stay_within_20_characters() {
 #[test]
 fn vtu_header_and_sizes() {
     let m = cube6();
-    let bytes = render(&m, Format::Vtu);
+    let bytes = render(&m, Format::VtuRaw);
     let text = String::from_utf8_lossy(&bytes);
     assert!(text.contains("header_type=\"UInt64\"") && text.contains("format=\"appended\""));
     assert!(text.contains("NumberOfPoints=\"8\" NumberOfCells=\"6\""));
@@ -400,7 +400,7 @@ fn invalid_meshes_are_rejected() {
             Format::Msh41 => write_msh(&m, &mut out, MshVersion::V41),
             Format::Msh22 => write_msh(&m, &mut out, MshVersion::V22),
             Format::Inp => write_inp(&m, &mut out),
-            Format::Vtu => write_vtu(&m, &mut out),
+            Format::Vtu | Format::VtuZlib | Format::VtuRaw => write_vtu(&m, &mut out),
         };
         assert_eq!(r.unwrap_err().kind(), std::io::ErrorKind::InvalidInput);
     }
@@ -533,6 +533,17 @@ fn meshio_reads_vtu() {
 #[test]
 fn vtk_reads_vtu() {
     python_check("vtk", Format::Vtu);
+}
+
+#[test]
+fn meshio_reads_zlib_vtu() {
+    python_check("meshio", Format::VtuZlib);
+}
+
+#[test]
+fn vtk_reads_zlib_and_raw_vtu() {
+    python_check("vtk", Format::VtuZlib);
+    python_check("vtk", Format::VtuRaw);
 }
 
 #[test]

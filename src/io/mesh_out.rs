@@ -6,13 +6,13 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use super::atomic::{write_atomically, WriteError};
+use super::atomic::{write_atomically, write_pending, PendingFile, WriteError};
 use super::inp::write_inp;
 use super::msh::{write_msh, MshVersion};
 use super::obj::write_obj;
 use super::ply::write_ply;
 use super::stl::write_stl;
-use super::vtu::write_vtu;
+use super::vtu::{write_vtu_with, VtuEncoding};
 use crate::mesh::{TetMesh, TriSurface};
 
 /// An output mesh format.
@@ -22,7 +22,7 @@ pub enum MeshFormat {
     Msh,
     /// Abaqus / CalculiX `.inp` ([`write_inp`]).
     Inp,
-    /// VTK XML UnstructuredGrid `.vtu` ([`write_vtu`]).
+    /// VTK XML UnstructuredGrid `.vtu` ([`super::vtu::write_vtu_with`]).
     Vtu,
 }
 
@@ -60,7 +60,7 @@ impl MeshFormat {
         match self {
             MeshFormat::Msh => write_msh(mesh, w, options.msh_version),
             MeshFormat::Inp => write_inp(mesh, w),
-            MeshFormat::Vtu => write_vtu(mesh, w),
+            MeshFormat::Vtu => write_vtu_with(mesh, w, options.vtu_encoding),
         }
     }
 }
@@ -73,6 +73,8 @@ pub struct WriteOptions {
     pub msh_version: MshVersion,
     /// ASCII instead of binary `.ply` / `.stl` (default binary); ignored by the other formats.
     pub ascii: bool,
+    /// The `.vtu` data encoding (default base64); ignored by the other formats.
+    pub vtu_encoding: VtuEncoding,
 }
 
 impl WriteOptions {
@@ -80,6 +82,13 @@ impl WriteOptions {
     #[must_use]
     pub fn with_msh_version(mut self, version: MshVersion) -> Self {
         self.msh_version = version;
+        self
+    }
+
+    /// These options with `.vtu` data in `encoding`.
+    #[must_use]
+    pub fn with_vtu_encoding(mut self, encoding: VtuEncoding) -> Self {
+        self.vtu_encoding = encoding;
         self
     }
 }
@@ -154,15 +163,44 @@ pub fn write_surface(
     write_atomically(path, |w| format.write(s, w, options))
 }
 
-/// Writes `mesh` to `path` atomically (see [`write_atomically`]), in the format chosen by
+/// Writes the surface `s` to a temporary of `path` (see [`write_pending`]), in the format
+/// chosen by the extension of `path`; the caller commits it.
+///
+/// # Errors
+/// As [`write_surface`].
+pub fn write_surface_pending(
+    path: &Path,
+    s: &TriSurface,
+    options: &WriteOptions,
+) -> Result<PendingFile, WriteError> {
+    let format = SurfaceFormat::from_path(path).ok_or_else(|| WriteError::UnknownFormat {
+        path: path.to_path_buf(),
+    })?;
+    write_pending(path, |w| format.write(s, w, options))
+}
+
+/// Writes `mesh` to `path` atomically (see [`super::write_atomically`]), in the format chosen by
 /// the extension of `path` ([`MeshFormat::from_path`]).
 ///
 /// # Errors
 /// [`WriteError::UnknownFormat`] for an unknown extension (nothing is created), otherwise
-/// whatever [`write_atomically`] returns; a writer's error is reported as [`WriteError::Io`].
+/// whatever [`super::write_atomically`] returns; a writer's error is reported as [`WriteError::Io`].
 pub fn write_mesh(path: &Path, mesh: &TetMesh, options: &WriteOptions) -> Result<(), WriteError> {
+    write_mesh_pending(path, mesh, options)?.commit()
+}
+
+/// As [`write_mesh`], but leaves the complete file under its temporary name until
+/// [`PendingFile::commit`] (see [`write_pending`]).
+///
+/// # Errors
+/// As [`write_mesh`].
+pub fn write_mesh_pending(
+    path: &Path,
+    mesh: &TetMesh,
+    options: &WriteOptions,
+) -> Result<PendingFile, WriteError> {
     let format = MeshFormat::from_path(path)?;
-    write_atomically(path, |w| format.write(mesh, w, options))
+    write_pending(path, |w| format.write(mesh, w, options))
 }
 
 #[cfg(test)]
@@ -202,6 +240,10 @@ mod tests {
             ("b.msh", v22),
             ("c.inp", WriteOptions::default()),
             ("d.vtu", WriteOptions::default()),
+            (
+                "e.vtu",
+                WriteOptions::default().with_vtu_encoding(VtuEncoding::Raw),
+            ),
         ] {
             let path = dir.path().join(name);
             write_mesh(&path, &mesh, &opts).unwrap();
@@ -209,7 +251,7 @@ mod tests {
             match MeshFormat::from_path(&path).unwrap() {
                 MeshFormat::Msh => write_msh(&mesh, &mut expected, opts.msh_version),
                 MeshFormat::Inp => write_inp(&mesh, &mut expected),
-                MeshFormat::Vtu => write_vtu(&mesh, &mut expected),
+                MeshFormat::Vtu => write_vtu_with(&mesh, &mut expected, opts.vtu_encoding),
             }
             .unwrap();
             assert_eq!(std::fs::read(&path).unwrap(), expected, "{name}");

@@ -18,8 +18,8 @@ use flate2::read::ZlibDecoder;
 
 use super::header::{self, Fields};
 use super::volume::{
-    build_grid, data_size, decode_samples, decompress_exact, quote, read_all, read_raw_range,
-    take_exact, Endian, Geometry, ReadError, SampleType, Skip,
+    build_grid, checked_decode, data_size, decompress_exact, quote, read_all, read_data_file,
+    read_raw_range, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
 
@@ -53,7 +53,7 @@ pub fn read_mhd(path: &Path) -> Result<ScalarGrid, ReadError> {
         }
         (DataLocation::File(file), true) => read_zlib_file(path, &h, file, nbytes)?,
     };
-    let values = decode_samples(&data, h.ty, h.endian);
+    let values = checked_decode(path, &data, h.ty, h.endian)?;
     build_grid(path, h.dims, h.spacing, h.origin, h.direction, values)
 }
 
@@ -100,8 +100,7 @@ fn read_zlib_file(
     nbytes: usize,
 ) -> Result<Vec<u8>, ReadError> {
     let shown = file.display().to_string();
-    let all = std::fs::read(file)
-        .map_err(|e| ReadError::io(path, format!("cannot read data file {shown}"), e))?;
+    let all = read_data_file(path, file)?;
     check_compressed_size(
         path,
         h.compressed_size,

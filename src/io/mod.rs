@@ -21,8 +21,14 @@ pub mod vts;
 pub mod vtu;
 mod write_common;
 
-pub use atomic::{check_writable, write_atomically, WriteError};
-pub use mesh_out::{write_mesh, write_surface, MeshFormat, SurfaceFormat, WriteOptions};
+pub use atomic::{
+    check_writable, remove_pending_temporaries, same_file, write_atomically, write_pending,
+    PendingFile, WriteError,
+};
+pub use mesh_out::{
+    write_mesh, write_mesh_pending, write_surface, write_surface_pending, MeshFormat,
+    SurfaceFormat, WriteOptions,
+};
 pub use transfer_out::{write_transfer, TransferFormat, TransferTable};
 pub use volume::{is_curvilinear, read_curvilinear, read_volume, ReadError};
 

@@ -18,7 +18,7 @@ use std::path::Path;
 use flate2::read::MultiGzDecoder;
 
 use super::volume::{
-    build_grid, data_size, decode_samples, decompress_exact, read_all, split_linear, take_exact,
+    build_grid, checked_decode, data_size, decompress_exact, read_all, split_linear, take_exact,
     to_dim, Endian, Geometry, ReadError, SampleType,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
@@ -65,7 +65,7 @@ pub fn read_nifti(path: &Path) -> Result<ScalarGrid, ReadError> {
         )?
         .to_vec()
     };
-    let mut values = decode_samples(&data, h.ty, h.endian);
+    let mut values = checked_decode(path, &data, h.ty, h.endian)?;
     if let Some((slope, inter)) = h.scale {
         for v in &mut values {
             *v = *v * slope + inter;

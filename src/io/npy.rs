@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use super::volume::{
-    build_grid, data_size, decode_samples, quote, read_all, take_exact, Endian, ReadError,
+    build_grid, checked_decode, data_size, quote, read_all, take_exact, Endian, ReadError,
     SampleType,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
@@ -27,7 +27,7 @@ pub fn read_npy(path: &Path) -> Result<ScalarGrid, ReadError> {
     let header = parse_npy(path, &bytes)?;
     let (_count, nbytes) = data_size(path, header.shape, header.ty)?;
     let data = take_exact(path, &bytes[header.data_start..], nbytes, true, "the file")?;
-    let raw = decode_samples(data, header.ty, header.endian);
+    let raw = checked_decode(path, data, header.ty, header.endian)?;
     let [n0, n1, n2] = header.shape;
     let values = if header.fortran_order {
         raw
@@ -44,6 +44,10 @@ fn c_to_x_fastest(raw: &[f64], [n0, n1, n2]: [usize; 3]) -> Vec<f64> {
     use rayon::prelude::*;
     const KB: usize = 8;
     let plane = n0 * n1;
+    if plane == 0 || n2 == 0 {
+        // An empty axis: nothing to reorder (the grid check rejects the shape).
+        return Vec::new();
+    }
     let mut v = vec![0.0; raw.len()];
     v.par_chunks_mut(plane * KB)
         .enumerate()

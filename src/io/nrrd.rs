@@ -12,8 +12,8 @@ use flate2::read::MultiGzDecoder;
 
 use super::header::{self, Fields};
 use super::volume::{
-    build_grid, data_size, decode_samples, decompress_exact, quote, read_all, read_raw_range,
-    split_linear, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
+    build_grid, checked_decode, data_size, decompress_exact, quote, read_all, read_data_file,
+    read_raw_range, split_linear, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
 };
 use crate::grid::{ScalarGrid, IDENTITY};
 
@@ -32,7 +32,12 @@ pub fn read_nrrd(path: &Path) -> Result<ScalarGrid, ReadError> {
     let data = read_data(path, &header, &bytes, nbytes)?;
     let values = match header.encoding {
         Encoding::Ascii => parse_ascii(path, &data, count)?,
-        _ => decode_samples(&data, header.ty, header.endian.unwrap_or(Endian::Little)),
+        _ => checked_decode(
+            path,
+            &data,
+            header.ty,
+            header.endian.unwrap_or(Endian::Little),
+        )?,
     };
     build_grid(
         path,
@@ -59,8 +64,7 @@ fn read_data(
         }
         (Some(file), _) => {
             let shown = file.display().to_string();
-            let all = std::fs::read(file)
-                .map_err(|e| ReadError::io(path, format!("cannot read data file {shown}"), e))?;
+            let all = read_data_file(path, file)?;
             extract(path, header, &all, nbytes, &format!("data file {shown}"))
         }
         (None, _) => {

@@ -268,6 +268,21 @@ pub(crate) fn decode_samples(bytes: &[u8], ty: SampleType, endian: Endian) -> Ve
     out
 }
 
+/// [`decode_samples`] after checking the memory estimate of the decoded samples (see
+/// [`crate::memory::read_bytes`]): a volume that cannot fit is an error naming `path`.
+pub(crate) fn checked_decode(
+    path: &Path,
+    bytes: &[u8],
+    ty: SampleType,
+    endian: Endian,
+) -> Result<Vec<f64>, ReadError> {
+    let count = (bytes.len() / ty.size()) as u64;
+    let need = crate::memory::read_bytes(count, ty.size() as u64);
+    crate::memory::check(need, format!("reading {count} samples"))
+        .map_err(|e| ReadError::invalid(path, format!("{e}; crop or downsample the volume")))?;
+    Ok(decode_samples(bytes, ty, endian))
+}
+
 /// Decodes `out.len()` samples from the start of `bytes` into `out`.
 fn decode_into(bytes: &[u8], ty: SampleType, endian: Endian, out: &mut [f64]) {
     fn each(bytes: &[u8], size: usize, out: &mut [f64], f: impl Fn(&[u8]) -> f64) {
@@ -311,16 +326,41 @@ pub(crate) fn data_size(
     dims: [usize; 3],
     ty: SampleType,
 ) -> Result<(usize, usize), ReadError> {
-    dims[0]
+    let (n, bytes) = dims[0]
         .checked_mul(dims[1])
         .and_then(|n| n.checked_mul(dims[2]))
         .and_then(|n| n.checked_mul(ty.size()).map(|b| (n, b)))
-        .ok_or_else(|| ReadError::invalid(path, format!("dimensions {dims:?} are too large")))
+        .ok_or_else(|| ReadError::invalid(path, format!("dimensions {dims:?} are too large")))?;
+    Ok((n, bytes))
 }
 
 /// Reads a whole file.
 pub(crate) fn read_all(path: &Path) -> Result<Vec<u8>, ReadError> {
     std::fs::read(path).map_err(|e| ReadError::io(path, "cannot read file", e))
+}
+
+/// Refuses a detached data file that is not a regular file: opening a FIFO would block
+/// forever, and devices or directories hold no volume.
+pub(crate) fn check_data_file(header: &Path, data_path: &Path) -> Result<(), ReadError> {
+    let shown = data_path.display();
+    let meta = std::fs::metadata(data_path)
+        .map_err(|e| ReadError::io(header, format!("cannot open data file {shown}"), e))?;
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(ReadError::invalid(
+            header,
+            format!("data file {shown} is not a regular file (a FIFO, device or directory)"),
+        ))
+    }
+}
+
+/// Reads a whole detached data file (a regular file, see [`check_data_file`]).
+pub(crate) fn read_data_file(header: &Path, data_path: &Path) -> Result<Vec<u8>, ReadError> {
+    check_data_file(header, data_path)?;
+    let shown = data_path.display();
+    std::fs::read(data_path)
+        .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))
 }
 
 /// Where the data of a separate raw data file start.
@@ -342,6 +382,7 @@ pub(crate) fn read_raw_range(
     len: usize,
     exact: bool,
 ) -> Result<Vec<u8>, ReadError> {
+    check_data_file(header, data_path)?;
     let shown = data_path.display();
     let mut file = File::open(data_path)
         .map_err(|e| ReadError::io(header, format!("cannot open data file {shown}"), e))?;
@@ -375,7 +416,10 @@ pub(crate) fn read_raw_range(
     }
     file.seek(SeekFrom::Start(start))
         .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))?;
-    let mut buf = vec![0u8; len];
+    let mut buf = Vec::new();
+    crate::memory::try_reserve(&mut buf, len)
+        .map_err(|e| ReadError::invalid(header, format!("cannot hold {len} bytes of data: {e}")))?;
+    buf.resize(len, 0);
     file.read_exact(&mut buf)
         .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))?;
     Ok(buf)
@@ -414,6 +458,8 @@ pub(crate) fn decompress_exact(
 ) -> Result<Vec<u8>, ReadError> {
     let corrupt = |e: std::io::Error| ReadError::invalid(path, format!("{what} is corrupt: {e}"));
     let mut out = Vec::new();
+    crate::memory::try_reserve(&mut out, want)
+        .map_err(|e| ReadError::invalid(path, format!("cannot hold {want} bytes of data: {e}")))?;
     (&mut reader)
         .take(want as u64)
         .read_to_end(&mut out)

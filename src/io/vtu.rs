@@ -1,14 +1,24 @@
-//! VTK XML UnstructuredGrid (`.vtu`) writer, binary appended data.
+//! VTK XML UnstructuredGrid (`.vtu`) writer, appended data in one of three encodings.
 //!
 //! Layout: `header_type="UInt64"`, `byte_order="LittleEndian"` (always, independent of the
-//! host), every array stored raw in `<AppendedData encoding="raw">` as a UInt64 byte count
-//! followed by the data, in the order `f`, `Points`, `connectivity`, `offsets`, `types`.
+//! host), every array stored in `<AppendedData>` in the order `f`, `Points`, `connectivity`,
+//! `offsets`, `types`:
 //! * `Points`: Float64 × 3;
 //! * `connectivity`, `offsets`: Int32 when every id and offset fits in an `i32`, Int64
 //!   otherwise;
 //! * `types`: UInt8, all 10 (`VTK_TETRA`, whose node order equals the mesh's positive
 //!   orientation);
 //! * point data `f`: Float64, the field values (the active scalars).
+//!
+//! Encodings ([`VtuEncoding`]):
+//! * `Base64` (default): each array is its UInt64 byte count followed by the data, base64
+//!   encoded as one stream; offsets count characters. meshio, VTK and ParaView read it.
+//! * `Zlib`: as VTK writes by default (`compressor="vtkZLibDataCompressor"`): each array is
+//!   cut into 32 KiB blocks compressed with zlib (level 5, in parallel); the block header
+//!   (`[blocks, block size, last partial block size, compressed sizes…]`, UInt64) and the
+//!   compressed blocks are base64 encoded as two streams. Smallest, slowest to write.
+//! * `Raw`: the byte count and the data unencoded (`encoding="raw"`). Fastest to write, but
+//!   meshio refuses it: its XML parser rewrites CR LF byte pairs (meshio issue #1324).
 //!
 //! [`write_vtu_fields`] writes other named Float64 point and cell fields instead of `f`
 //! (point fields before `Points`, cell fields after `types`), e.g. a solution and its
@@ -17,7 +27,14 @@
 //! Only the tetrahedra are written: the labelled boundary triangles are **not** part of the
 //! `.vtu` (use the `.msh` or `.inp` writers when the boundary groups are needed).
 
+use std::borrow::Cow;
 use std::io::{self, Write};
+
+use base64::engine::general_purpose::STANDARD;
+use base64::Engine as _;
+use flate2::write::ZlibEncoder;
+use flate2::Compression;
+use rayon::prelude::*;
 
 use super::write_common::{check_lengths, invalid};
 use crate::mesh::TetMesh;
@@ -25,8 +42,40 @@ use crate::mesh::TetMesh;
 /// VTK cell type of a linear tetrahedron.
 const VTK_TETRA: u8 = 10;
 
-/// Bytes converted per `write_all` call for the binary arrays.
-const CHUNK: usize = 1 << 16;
+/// Uncompressed size of a zlib block (VTK's default).
+const ZLIB_BLOCK: usize = 1 << 15;
+
+/// zlib level of the `Zlib` encoding (VTK's default).
+const ZLIB_LEVEL: u32 = 5;
+
+/// Bytes base64-encoded per parallel task (a multiple of 3, so pieces concatenate).
+const B64_PIECE: usize = 3 << 16;
+
+/// Pieces encoded in parallel before they are written.
+const B64_BATCH: usize = 32;
+
+/// How the appended arrays of a `.vtu` file are stored (see the module documentation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum VtuEncoding {
+    /// Base64 of the raw arrays: every reader takes it (default).
+    #[default]
+    Base64,
+    /// zlib-compressed 32 KiB blocks, base64 encoded, as VTK writes by default.
+    Zlib,
+    /// Raw bytes: fastest, but meshio cannot read it.
+    Raw,
+}
+
+impl VtuEncoding {
+    /// The encoding's name as the CLI spells it (`base64`, `zlib`, `raw`).
+    pub fn name(self) -> &'static str {
+        match self {
+            VtuEncoding::Base64 => "base64",
+            VtuEncoding::Zlib => "zlib",
+            VtuEncoding::Raw => "raw",
+        }
+    }
+}
 
 /// A named Float64 array written as point or cell data by [`write_vtu_fields`].
 #[derive(Clone, Copy, Debug)]
@@ -39,270 +88,342 @@ pub struct VtuField<'a> {
     pub data: &'a [f64],
 }
 
-/// Sizes of the appended arrays, in file order, and the integer type of the cell arrays.
-struct Layout {
-    /// Whether `connectivity` and `offsets` need Int64 (an id or offset exceeds `i32`).
+/// Whether `connectivity` and `offsets` need Int64 (an id or offset exceeds `i32`).
+fn is_wide(mesh: &TetMesh) -> bool {
+    mesh.points.len() as u64 > i32::MAX as u64
+        || mesh.tets.len().saturating_mul(4) > i32::MAX as usize
+}
+
+/// The little-endian bytes of `v`: borrowed on a little-endian host.
+fn le_f64(v: &[f64]) -> Cow<'_, [u8]> {
+    if NATIVE {
+        Cow::Borrowed(bytemuck::cast_slice(v))
+    } else {
+        Cow::Owned(v.iter().flat_map(|x| x.to_le_bytes()).collect())
+    }
+}
+
+/// The little-endian bytes of the arrays, in file order (point fields, `Points`,
+/// `connectivity`, `offsets`, `types`, cell fields): borrowed from the mesh where its memory
+/// already holds them, built otherwise.
+fn arrays<'a>(
+    mesh: &'a TetMesh,
     wide: bool,
-    /// Byte sizes of the point fields, `Points`, `connectivity`, `offsets`, `types` and the
-    /// cell fields, in file order.
-    sizes: Vec<u64>,
+    point: &[VtuField<'a>],
+    cell: &[VtuField<'a>],
+) -> Vec<Cow<'a, [u8]>> {
+    let n_tets = mesh.tets.len();
+    let ids = mesh.tets.iter().flatten();
+    let conn: Cow<'_, [u8]> = match (NATIVE, wide) {
+        (true, false) => Cow::Borrowed(bytemuck::cast_slice(&mesh.tets)),
+        (_, true) => Cow::Owned(ids.flat_map(|&v| i64::from(v).to_le_bytes()).collect()),
+        (false, false) => Cow::Owned(ids.flat_map(|&v| (v as i32).to_le_bytes()).collect()),
+    };
+    let offsets: Vec<u8> = if wide {
+        (1..=n_tets as i64)
+            .flat_map(|t| (4 * t).to_le_bytes())
+            .collect()
+    } else {
+        (1..=n_tets as i32)
+            .flat_map(|t| (4 * t).to_le_bytes())
+            .collect()
+    };
+    let mut out: Vec<Cow<'a, [u8]>> = point.iter().map(|f| le_f64(f.data)).collect();
+    out.extend([
+        le_f64(bytemuck::cast_slice(&mesh.points)),
+        conn,
+        Cow::Owned(offsets),
+        Cow::Owned(vec![VTK_TETRA; n_tets]),
+    ]);
+    out.extend(cell.iter().map(|f| le_f64(f.data)));
+    out
 }
 
-impl Layout {
-    fn new(mesh: &TetMesh, point: &[VtuField], cell: &[VtuField]) -> Self {
-        let n_points = mesh.points.len() as u64;
-        let n_tets = mesh.tets.len();
-        let wide = n_points > i32::MAX as u64 || n_tets.saturating_mul(4) > i32::MAX as usize;
-        let int_size = if wide { 8 } else { 4 };
-        let n_tets = n_tets as u64;
-        let mut sizes: Vec<u64> = point.iter().map(|f| 8 * f.data.len() as u64).collect();
-        sizes.extend([
-            24 * n_points,
-            int_size * 4 * n_tets,
-            int_size * n_tets,
-            n_tets,
-        ]);
-        sizes.extend(cell.iter().map(|f| 8 * f.data.len() as u64));
-        Layout { wide, sizes }
-    }
+/// Length of the base64 encoding of `n` bytes.
+fn b64_len(n: u64) -> u64 {
+    n.div_ceil(3) * 4
+}
 
-    /// VTK name of the integer type of `connectivity` and `offsets`.
-    fn int_type(&self) -> &'static str {
-        if self.wide {
-            "Int64"
-        } else {
-            "Int32"
+/// One array as stored in the appended data.
+enum Stored<'a> {
+    /// The bytes, written after their UInt64 count (raw, or base64 as one stream).
+    Plain(Cow<'a, [u8]>),
+    /// The zlib block header and the compressed blocks.
+    Blocks(Vec<u64>, Vec<Vec<u8>>),
+}
+
+impl Stored<'_> {
+    /// Its size in the appended data (bytes for `Raw`, characters otherwise).
+    fn stored_len(&self, encoding: VtuEncoding) -> u64 {
+        match (self, encoding) {
+            (Stored::Plain(b), VtuEncoding::Raw) => 8 + b.len() as u64,
+            (Stored::Plain(b), _) => b64_len(8 + b.len() as u64),
+            (Stored::Blocks(h, blocks), _) => {
+                let data: u64 = blocks.iter().map(|b| b.len() as u64).sum();
+                b64_len(8 * h.len() as u64) + b64_len(data)
+            }
         }
     }
 
-    /// Offsets of the arrays in the appended data (each preceded by its UInt64 byte count).
-    fn offsets(&self) -> Vec<u64> {
-        let mut offsets = vec![0u64; self.sizes.len()];
-        for k in 1..offsets.len() {
-            offsets[k] = offsets[k - 1] + 8 + self.sizes[k - 1];
+    /// Writes it to `w`.
+    fn write(&self, w: &mut dyn Write, encoding: VtuEncoding) -> io::Result<()> {
+        match (self, encoding) {
+            (Stored::Plain(b), VtuEncoding::Raw) => {
+                w.write_all(&(b.len() as u64).to_le_bytes())?;
+                w.write_all(b)
+            }
+            (Stored::Plain(b), _) => {
+                let mut out = Base64Out::new(w);
+                out.put(&(b.len() as u64).to_le_bytes())?;
+                out.put(b)?;
+                out.finish()
+            }
+            (Stored::Blocks(h, blocks), _) => {
+                let mut out = Base64Out::new(&mut *w);
+                for x in h {
+                    out.put(&x.to_le_bytes())?;
+                }
+                out.finish()?;
+                let mut out = Base64Out::new(w);
+                for b in blocks {
+                    out.put(b)?;
+                }
+                out.finish()
+            }
         }
-        offsets
     }
 }
 
-/// One `<DataArray>` line of a Float64 field stored at `offset`.
-fn field_line(f: &VtuField, offset: u64) -> String {
-    format!(
-        "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" offset=\"{offset}\"/>\n",
-        f.name, f.components
-    )
+/// Compresses `bytes` into VTK's zlib blocks (in parallel): the header and the blocks.
+fn compress(bytes: &[u8]) -> io::Result<Stored<'static>> {
+    let blocks = bytes
+        .par_chunks(ZLIB_BLOCK)
+        .map(|block| {
+            let mut z = ZlibEncoder::new(Vec::new(), Compression::new(ZLIB_LEVEL));
+            z.write_all(block)?;
+            z.finish()
+        })
+        .collect::<io::Result<Vec<_>>>()?;
+    let mut header = vec![
+        blocks.len() as u64,
+        ZLIB_BLOCK as u64,
+        (bytes.len() % ZLIB_BLOCK) as u64,
+    ];
+    header.extend(blocks.iter().map(|b| b.len() as u64));
+    Ok(Stored::Blocks(header, blocks))
 }
 
-/// The XML part of the file, up to and including the `_` that starts the appended data.
-fn xml_header(mesh: &TetMesh, layout: &Layout, point: &[VtuField], cell: &[VtuField]) -> String {
-    let o = layout.offsets();
+/// A base64 stream: bytes put in any pieces encode as one stream (a carry of up to two
+/// bytes joins the pieces); large pieces are encoded in parallel.
+struct Base64Out<'a> {
+    w: &'a mut dyn Write,
+    carry: Vec<u8>,
+}
+
+impl<'a> Base64Out<'a> {
+    fn new(w: &'a mut dyn Write) -> Self {
+        Base64Out {
+            w,
+            carry: Vec::with_capacity(3),
+        }
+    }
+
+    /// Appends `data` to the stream.
+    fn put(&mut self, mut data: &[u8]) -> io::Result<()> {
+        if !self.carry.is_empty() {
+            let take = (3 - self.carry.len()).min(data.len());
+            self.carry.extend_from_slice(&data[..take]);
+            data = &data[take..];
+            if self.carry.len() < 3 {
+                return Ok(());
+            }
+            self.w.write_all(STANDARD.encode(&self.carry).as_bytes())?;
+            self.carry.clear();
+        }
+        let whole = data.len() / 3 * 3;
+        for batch in data[..whole].chunks(B64_PIECE * B64_BATCH) {
+            let encoded: Vec<String> = batch
+                .par_chunks(B64_PIECE)
+                .map(|piece| STANDARD.encode(piece))
+                .collect();
+            for e in &encoded {
+                self.w.write_all(e.as_bytes())?;
+            }
+        }
+        self.carry.extend_from_slice(&data[whole..]);
+        Ok(())
+    }
+
+    /// Ends the stream (with `=` padding when needed).
+    fn finish(self) -> io::Result<()> {
+        self.w.write_all(STANDARD.encode(&self.carry).as_bytes())
+    }
+}
+
+/// The XML part of the file, up to and including the `_` that starts the appended data;
+/// `o` are the offsets of the arrays in the appended data, in file order.
+fn xml_header(
+    mesh: &TetMesh,
+    wide: bool,
+    o: &[u64],
+    encoding: VtuEncoding,
+    point: &[VtuField],
+    cell: &[VtuField],
+) -> String {
+    let compressor = match encoding {
+        VtuEncoding::Zlib => " compressor=\"vtkZLibDataCompressor\"",
+        _ => "",
+    };
+    let data_encoding = match encoding {
+        VtuEncoding::Raw => "raw",
+        _ => "base64",
+    };
     let np = point.len();
-    let mut x = String::from(concat!(
-        "<?xml version=\"1.0\"?>\n",
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
-        "  <UnstructuredGrid>\n",
-    ));
-    x += &format!(
-        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
-        mesh.points.len(),
-        mesh.tets.len()
+    let it = if wide { "Int64" } else { "Int32" };
+    let mut h = format!(
+        concat!(
+            "<?xml version=\"1.0\"?>\n",
+            "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"{compressor}>\n",
+            "  <UnstructuredGrid>\n",
+            "    <Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{nc}\">\n",
+        ),
+        compressor = compressor,
+        np = mesh.points.len(),
+        nc = mesh.tets.len(),
     );
     if let Some(first) = point.first() {
-        x += &format!("      <PointData Scalars=\"{}\">\n", first.name);
-        for (f, &off) in point.iter().zip(&o) {
-            x += &field_line(f, off);
-        }
-        x += "      </PointData>\n";
+        h += &format!("      <PointData Scalars=\"{}\">\n", first.name);
+        h += &data_arrays(point, &o[..np]);
+        h += "      </PointData>\n";
     }
-    if !cell.is_empty() {
-        x += "      <CellData>\n";
-        for (f, &off) in cell.iter().zip(&o[np + 4..]) {
-            x += &field_line(f, off);
-        }
-        x += "      </CellData>\n";
-    }
-    let it = layout.int_type();
-    x += &format!(
+    h += &format!(
         concat!(
             "      <Points>\n",
-            "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"{}\"/>\n",
+            "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"{o1}\"/>\n",
             "      </Points>\n",
             "      <Cells>\n",
-            "        <DataArray type=\"{it}\" Name=\"connectivity\" format=\"appended\" offset=\"{}\"/>\n",
-            "        <DataArray type=\"{it}\" Name=\"offsets\" format=\"appended\" offset=\"{}\"/>\n",
-            "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{}\"/>\n",
+            "        <DataArray type=\"{it}\" Name=\"connectivity\" format=\"appended\" offset=\"{o2}\"/>\n",
+            "        <DataArray type=\"{it}\" Name=\"offsets\" format=\"appended\" offset=\"{o3}\"/>\n",
+            "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{o4}\"/>\n",
             "      </Cells>\n",
+        ),
+        it = it,
+        o1 = o[np],
+        o2 = o[np + 1],
+        o3 = o[np + 2],
+        o4 = o[np + 3],
+    );
+    if !cell.is_empty() {
+        h += "      <CellData>\n";
+        h += &data_arrays(cell, &o[np + 4..]);
+        h += "      </CellData>\n";
+    }
+    h += &format!(
+        concat!(
             "    </Piece>\n",
             "  </UnstructuredGrid>\n",
-            "  <AppendedData encoding=\"raw\">\n",
+            "  <AppendedData encoding=\"{enc}\">\n",
             "   _"
         ),
-        o[np],
-        o[np + 1],
-        o[np + 2],
-        o[np + 3],
-        it = it,
+        enc = data_encoding
     );
-    x
+    h
 }
 
-/// The binary appended data: small pieces are collected in a buffer that is handed to the
-/// writer in [`CHUNK`]-sized pieces; large native arrays go to the writer directly.
-struct Appended<'a> {
-    w: &'a mut dyn Write,
-    buf: Vec<u8>,
-}
-
-impl Appended<'_> {
-    /// Appends `bytes`, passing the buffer on when it is full.
-    fn put(&mut self, bytes: &[u8]) -> io::Result<()> {
-        self.buf.extend_from_slice(bytes);
-        if self.buf.len() >= CHUNK {
-            self.flush()?;
-        }
-        Ok(())
-    }
-
-    /// Hands the pending bytes to the writer.
-    fn flush(&mut self) -> io::Result<()> {
-        self.w.write_all(&self.buf)?;
-        self.buf.clear();
-        Ok(())
-    }
-
-    /// Writes `bytes` after whatever is pending, bypassing the buffer.
-    fn put_direct(&mut self, bytes: &[u8]) -> io::Result<()> {
-        self.flush()?;
-        self.w.write_all(bytes)
-    }
-
-    /// The UInt64 byte count that precedes each appended array.
-    fn array_size(&mut self, size: u64) -> io::Result<()> {
-        self.put(&size.to_le_bytes())
-    }
-
-    /// A Float64 array (a field).
-    fn values(&mut self, data: &[f64], size: u64) -> io::Result<()> {
-        self.array_size(size)?;
-        if NATIVE {
-            return self.put_direct(bytemuck::cast_slice(data));
-        }
-        for &v in data {
-            self.put(&v.to_le_bytes())?;
-        }
-        Ok(())
-    }
-
-    /// The node coordinates as Float64 × 3.
-    fn points(&mut self, mesh: &TetMesh, size: u64) -> io::Result<()> {
-        self.array_size(size)?;
-        if NATIVE {
-            return self.put_direct(bytemuck::cast_slice(&mesh.points));
-        }
-        for &x in mesh.points.iter().flatten() {
-            self.put(&x.to_le_bytes())?;
-        }
-        Ok(())
-    }
-
-    /// The tets' node ids as Int32, or Int64 when `wide`.
-    fn connectivity(&mut self, mesh: &TetMesh, size: u64, wide: bool) -> io::Result<()> {
-        self.array_size(size)?;
-        if NATIVE && !wide {
-            return self.put_direct(bytemuck::cast_slice(&mesh.tets));
-        }
-        for &v in mesh.tets.iter().flatten() {
-            if wide {
-                self.put(&i64::from(v).to_le_bytes())?;
-            } else {
-                self.put(&(v as i32).to_le_bytes())?;
-            }
-        }
-        Ok(())
-    }
-
-    /// The end offset `4 t` of every tet `t` (1-based) in `connectivity`.
-    fn offsets(&mut self, n_tets: usize, size: u64, wide: bool) -> io::Result<()> {
-        self.array_size(size)?;
-        for t in 1..=n_tets as u64 {
-            if wide {
-                self.put(&(4 * t as i64).to_le_bytes())?;
-            } else {
-                self.put(&(4 * t as i32).to_le_bytes())?;
-            }
-        }
-        Ok(())
-    }
-
-    /// The cell types, all [`VTK_TETRA`].
-    fn types(&mut self, n_tets: usize, size: u64) -> io::Result<()> {
-        self.array_size(size)?;
-        for _ in 0..n_tets {
-            self.put(&[VTK_TETRA])?;
-        }
-        Ok(())
-    }
+/// The `DataArray` lines of `fields` at offsets `o`.
+fn data_arrays(fields: &[VtuField], o: &[u64]) -> String {
+    fields
+        .iter()
+        .zip(o)
+        .map(|(f, o)| {
+            format!(
+                "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" offset=\"{o}\"/>\n",
+                f.name, f.components
+            )
+        })
+        .collect()
 }
 
 /// On a little-endian host the in-memory f64 and u32 arrays already are the file's bytes
 /// (ids fit in Int32 unless the layout is wide): they are written as they are.
 const NATIVE: bool = cfg!(target_endian = "little");
 
+/// Writes `mesh` as `.vtu` in the default encoding ([`VtuEncoding::Base64`]); see
+/// [`write_vtu_with`].
+///
+/// # Errors
+/// As [`write_vtu_with`].
+pub fn write_vtu(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
+    write_vtu_with(mesh, w, VtuEncoding::default())
+}
+
 /// Writes the tetrahedra and the nodal field `f` of `mesh` as a VTK XML UnstructuredGrid
-/// with raw appended binary data (see the module documentation; boundary triangles are not
-/// written). The output is deterministic and independent of the host's byte order.
+/// with appended data in `encoding` (see the module documentation; boundary triangles are
+/// not written). The output is deterministic, independent of the thread count and of the
+/// host's byte order.
 ///
 /// # Errors
 /// Returns the first error of `w`, or [`io::ErrorKind::InvalidInput`] when the mesh is
 /// inconsistent (`values` or `boundary_labels` of the wrong length, an out-of-range index).
-pub fn write_vtu(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
+pub fn write_vtu_with(mesh: &TetMesh, w: &mut dyn Write, encoding: VtuEncoding) -> io::Result<()> {
     let f = VtuField {
         name: "f",
         components: 1,
         data: &mesh.values,
     };
-    write_vtu_fields(mesh, &[f], &[], w)
+    write_vtu_fields_with(mesh, &[f], &[], w, encoding)
 }
 
-/// Writes the tetrahedra of `mesh` with the given point and cell fields (instead of `f`) as
-/// a VTK XML UnstructuredGrid, like [`write_vtu`]: point fields first, then `Points`, the
-/// cell arrays and the cell fields in the appended data; the first point field is the
-/// active scalar.
+/// Writes the tetrahedra of `mesh` with the given point and cell fields (instead of `f`) in
+/// the default encoding; see [`write_vtu_fields_with`].
 ///
 /// # Errors
-/// As [`write_vtu`], and [`io::ErrorKind::InvalidInput`] when a field does not have
-/// `components` values per point (cell).
+/// As [`write_vtu_fields_with`].
 pub fn write_vtu_fields(
     mesh: &TetMesh,
     point: &[VtuField],
     cell: &[VtuField],
     w: &mut dyn Write,
 ) -> io::Result<()> {
+    write_vtu_fields_with(mesh, point, cell, w, VtuEncoding::default())
+}
+
+/// Writes the tetrahedra of `mesh` with the given point and cell fields (instead of `f`) as
+/// a VTK XML UnstructuredGrid, like [`write_vtu_with`]: point fields first, then `Points`,
+/// the cell arrays and the cell fields in the appended data; the first point field is the
+/// active scalar.
+///
+/// # Errors
+/// As [`write_vtu_with`], and [`io::ErrorKind::InvalidInput`] when a field does not have
+/// `components` values per point (cell).
+pub fn write_vtu_fields_with(
+    mesh: &TetMesh,
+    point: &[VtuField],
+    cell: &[VtuField],
+    w: &mut dyn Write,
+    encoding: VtuEncoding,
+) -> io::Result<()> {
     check_lengths(mesh)?;
     check_fields(point, mesh.points.len())?;
     check_fields(cell, mesh.tets.len())?;
-    let layout = Layout::new(mesh, point, cell);
-    let np = point.len();
-    let n_tets = mesh.tets.len();
-    w.write_all(xml_header(mesh, &layout, point, cell).as_bytes())?;
-    let mut out = Appended {
-        w,
-        buf: Vec::with_capacity(CHUNK + 64),
-    };
-    let s = &layout.sizes;
-    for (f, &size) in point.iter().zip(s) {
-        out.values(f.data, size)?;
+    let wide = is_wide(mesh);
+    let stored = arrays(mesh, wide, point, cell)
+        .into_iter()
+        .map(|a| match encoding {
+            VtuEncoding::Zlib => compress(&a),
+            _ => Ok(Stored::Plain(a)),
+        })
+        .collect::<io::Result<Vec<_>>>()?;
+    let mut offsets = vec![0u64; stored.len()];
+    for k in 1..stored.len() {
+        offsets[k] = offsets[k - 1] + stored[k - 1].stored_len(encoding);
     }
-    out.points(mesh, s[np])?;
-    out.connectivity(mesh, s[np + 1], layout.wide)?;
-    out.offsets(n_tets, s[np + 2], layout.wide)?;
-    out.types(n_tets, s[np + 3])?;
-    for (f, &size) in cell.iter().zip(&s[np + 4..]) {
-        out.values(f.data, size)?;
+    w.write_all(xml_header(mesh, wide, &offsets, encoding, point, cell).as_bytes())?;
+    for a in &stored {
+        a.write(w, encoding)?;
     }
-    out.put(b"\n  </AppendedData>\n</VTKFile>\n")?;
-    out.flush()?;
-    out.w.flush()
+    w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")?;
+    w.flush()
 }
 
 /// Checks that every field has `components` values for each of `n` points or cells.

@@ -14,7 +14,7 @@ use std::process::Command;
 use tptd::io::atomic::write_atomically;
 use tptd::io::inp::write_inp;
 use tptd::io::msh::{write_msh, MshVersion};
-use tptd::io::vtu::write_vtu;
+use tptd::io::vtu::{write_vtu, write_vtu_with, VtuEncoding};
 use tptd::{BoundaryLabel, TetMesh};
 
 // ---------------------------------------------------------------------------------------
@@ -26,11 +26,18 @@ pub enum Format {
     Msh41,
     Msh22,
     Inp,
+    /// `.vtu` in the default encoding (base64).
     Vtu,
+    /// `.vtu` with zlib-compressed data.
+    VtuZlib,
+    /// `.vtu` with raw appended data.
+    VtuRaw,
 }
 
 impl Format {
     pub const ALL: [Format; 4] = [Format::Msh41, Format::Msh22, Format::Inp, Format::Vtu];
+    /// The `.vtu` encodings other than the default.
+    pub const OTHER_VTU: [Format; 2] = [Format::VtuZlib, Format::VtuRaw];
 
     /// The format argument of `check_mesh.py`.
     pub fn key(self) -> &'static str {
@@ -38,7 +45,7 @@ impl Format {
             Format::Msh41 => "msh41",
             Format::Msh22 => "msh22",
             Format::Inp => "inp",
-            Format::Vtu => "vtu",
+            Format::Vtu | Format::VtuZlib | Format::VtuRaw => "vtu",
         }
     }
 
@@ -48,6 +55,8 @@ impl Format {
             Format::Msh22 => format!("{stem}.v22.msh"),
             Format::Inp => format!("{stem}.inp"),
             Format::Vtu => format!("{stem}.vtu"),
+            Format::VtuZlib => format!("{stem}.zlib.vtu"),
+            Format::VtuRaw => format!("{stem}.raw.vtu"),
         }
     }
 
@@ -58,6 +67,8 @@ impl Format {
             Format::Msh22 => write_msh(mesh, w, MshVersion::V22),
             Format::Inp => write_inp(mesh, w),
             Format::Vtu => write_vtu(mesh, w),
+            Format::VtuZlib => write_vtu_with(mesh, w, VtuEncoding::Zlib),
+            Format::VtuRaw => write_vtu_with(mesh, w, VtuEncoding::Raw),
         }
     }
 }

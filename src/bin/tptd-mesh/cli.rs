@@ -5,12 +5,15 @@ use std::path::PathBuf;
 use clap::{Parser, ValueEnum};
 use tptd::critical::{CriticalKind, TransferDesign};
 use tptd::io::msh::MshVersion;
+use tptd::io::vtu::VtuEncoding;
 use tptd::Method;
 
 /// Mesh the interval volume {alpha <= f <= beta} of a 3-D scalar grid into tetrahedra, with
 /// the topology of the trilinear interpolant.
 ///
-/// Grid values equal to a bound count as outside the interval.
+/// Grid values equal to a bound count as outside the interval. Lengths and volumes are in the
+/// units of the file's coordinates (millimetres for NIfTI and most NRRD and MetaImage
+/// images; voxels for .npy, whose spacing is 1 unless --spacing says otherwise).
 #[derive(Parser, Debug)]
 #[command(name = "tptd-mesh", version)]
 pub(crate) struct Cli {
@@ -51,7 +54,13 @@ pub(crate) struct Cli {
     #[arg(long, value_enum, value_name = "VERSION", default_value_t = MshVersionArg::V41)]
     pub(crate) msh_version: MshVersionArg,
 
-    /// Override the grid spacing (physical size of a voxel), e.g. 0.5,0.5,1.2
+    /// Data encoding of .vtu output: base64 (read by meshio, VTK and ParaView), zlib
+    /// (compressed, as VTK writes; smallest, slowest) or raw (fastest; meshio cannot read it)
+    #[arg(long, value_enum, value_name = "ENCODING", default_value_t = VtuEncodingArg::Base64)]
+    pub(crate) vtu_encoding: VtuEncodingArg,
+
+    /// Override the grid spacing (physical size of a voxel, in the file's units, e.g. mm),
+    /// e.g. 0.5,0.5,1.2
     #[arg(long, value_name = "SX,SY,SZ", value_parser = parse_spacing)]
     pub(crate) spacing: Option<Spacing>,
 
@@ -99,6 +108,12 @@ pub(crate) struct Cli {
     /// [0.5, inf) and show what the decomposition preserves
     #[arg(long, conflicts_with = "input")]
     pub(crate) demo: bool,
+
+    /// Memory limit, e.g. 8G or 512M: runs whose estimate exceeds it stop before the work,
+    /// and allocations beyond it end the run with an error [default: the available memory,
+    /// for the estimates only]
+    #[arg(long, value_name = "SIZE", env = "TPTD_MEMORY_LIMIT", value_parser = parse_memory)]
+    pub(crate) memory_limit: Option<u64>,
 
     /// Print nothing on stdout and no progress bar (warnings and errors still go to stderr)
     #[arg(short, long)]
@@ -273,6 +288,25 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `--vtu-encoding` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum VtuEncodingArg {
+    Base64,
+    Zlib,
+    Raw,
+}
+
+impl VtuEncodingArg {
+    /// The `.vtu` encoding of this value.
+    pub(crate) fn encoding(self) -> VtuEncoding {
+        match self {
+            VtuEncodingArg::Base64 => VtuEncoding::Base64,
+            VtuEncodingArg::Zlib => VtuEncoding::Zlib,
+            VtuEncodingArg::Raw => VtuEncoding::Raw,
+        }
+    }
+}
+
 /// A parsed `--spacing`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Spacing(pub(crate) [f64; 3]);
@@ -285,6 +319,12 @@ impl MshVersionArg {
             MshVersionArg::V22 => MshVersion::V22,
         }
     }
+}
+
+/// Parses `--memory-limit`: a size such as `512M`, `8G` or a number of bytes.
+fn parse_memory(s: &str) -> Result<u64, String> {
+    tptd::memory::parse_size(s)
+        .ok_or_else(|| format!("'{s}' is not a size (use e.g. 512M, 8G or a number of bytes)"))
 }
 
 /// Parses an interval bound: a number, `inf`/`-inf`; NaN is rejected.

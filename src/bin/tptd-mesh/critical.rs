@@ -11,7 +11,7 @@ use tptd::critical::face::face_saddles_in;
 use tptd::critical::find::critical_in_windows;
 use tptd::critical::{
     contour_spectrum, find_critical_with_options, near_critical, transfer_function, CriticalKind,
-    CriticalOptions, CriticalPoint, TransferOptions,
+    CriticalOptions, CriticalPoint, TransferFunction, TransferOptions,
 };
 use tptd::io::{check_writable, write_atomically, write_transfer, TransferFormat, TransferTable};
 use tptd::ScalarGrid;
@@ -46,6 +46,11 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     };
     let points = find_critical_with_options(&grid, &opts).map_err(|e| file_error(&input, e))?;
     let secs = t.elapsed().as_secs_f64();
+    // built before any file is written, so that bad parameters leave no output
+    let transfer = match &cli.transfer {
+        Some(path) => Some(build_transfer(&cli, &grid, &points, path)?),
+        None => None,
+    };
     if let Some(path) = &cli.json {
         write_atomically(path, |w| {
             serde_json::to_writer_pretty(&mut *w, &points).map_err(std::io::Error::other)?;
@@ -56,8 +61,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     if let Some(path) = &cli.spectrum {
         write_spectrum(&grid, path, &opts)?;
     }
-    if let (Some(path), Some(format)) = (&cli.transfer, transfer_format) {
-        write_transfer_function(&cli, &grid, &points, &input, path, format)?;
+    if let (Some(path), Some(format), Some(tf)) = (&cli.transfer, transfer_format, &transfer) {
+        write_transfer_function(&cli, tf, points.len(), &input, path, format)?;
     }
     if !cli.quiet {
         print_table(&input, &points, secs)?;
@@ -75,30 +80,38 @@ fn transfer_format(path: &Path) -> Result<TransferFormat> {
     })
 }
 
-/// Writes the transfer function of `--transfer-design` built from the critical values of
-/// `points` over the data range.
-fn write_transfer_function(
+/// The transfer function of `--transfer-design` built from the critical values of `points`
+/// over the data range (errors name the output `path`).
+fn build_transfer(
     cli: &Cli,
     grid: &ScalarGrid,
     points: &[CriticalPoint],
-    input: &str,
     path: &Path,
-    format: TransferFormat,
-) -> Result<()> {
-    let design = cli.transfer_design.design();
+) -> Result<TransferFunction> {
     let opts = TransferOptions {
-        design,
+        design: cli.transfer_design.design(),
         hue_width: cli.transfer_width,
         opacity_width: cli.transfer_width,
         ..TransferOptions::default()
     };
     let values: Vec<f64> = points.iter().map(|p| p.value).collect();
-    let tf = transfer_function(&values, grid.value_range(), &opts)
-        .map_err(|e| file_error(path.display(), e))?;
+    transfer_function(&values, grid.value_range(), &opts).map_err(|e| file_error(path.display(), e))
+}
+
+/// Writes `tf` (built from `n_points` critical points of `input`) to `path`.
+fn write_transfer_function(
+    cli: &Cli,
+    tf: &TransferFunction,
+    n_points: usize,
+    input: &str,
+    path: &Path,
+    format: TransferFormat,
+) -> Result<()> {
+    let design = tf.design.name();
     let base = Path::new(input)
         .file_name()
         .map_or(input.into(), |n| n.to_string_lossy());
-    let name = format!("tptd {} {base}", design.name());
+    let name = format!("tptd {design} {base}");
     let table = TransferTable {
         name: &name,
         colors: &tf.colors,
@@ -107,10 +120,8 @@ fn write_transfer_function(
     write_transfer(path, format, &table).map_err(write_error)?;
     if !cli.quiet {
         println!(
-            "transfer function ({}, {} critical values from {} points): {}",
-            design.name(),
+            "transfer function ({design}, {} critical values from {n_points} points): {}",
             tf.values.len(),
-            points.len(),
             path.display()
         );
     }

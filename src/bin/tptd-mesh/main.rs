@@ -7,11 +7,12 @@
 //! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1; outputs are written
 //! atomically, so a failed run leaves no (partial) output file behind.
 //!
-//! Modules: [`cli`] (arguments), [`run`] (the run, step by step), [`critical`] (`--critical`
-//! and the check of the bounds against the critical values), [`summary`] (stdout),
-//! [`progress`] (the progress bar), [`error`] (`{file}: {problem}` errors), [`surface`]
-//! (isosurface output).
+//! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`run`] (the run,
+//! step by step), [`critical`] (`--critical` and the check of the bounds against the critical
+//! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
+//! (`{file}: {problem}` errors), [`surface`] (isosurface output).
 
+mod alloc;
 mod cli;
 mod critical;
 mod error;
@@ -20,8 +21,13 @@ mod run;
 mod summary;
 mod surface;
 
+#[global_allocator]
+static ALLOC: alloc::CappedAlloc = alloc::CappedAlloc;
+
 fn main() {
     let cli = cli::parse_or_exit();
+    tptd::memory::set_limit(cli.memory_limit);
+    clean_up_on_signals();
     let result = if cli.critical {
         critical::run(cli)
     } else {
@@ -32,4 +38,21 @@ fn main() {
         eprintln!("tptd-mesh: error: {msg}");
         std::process::exit(1);
     }
+}
+
+/// On SIGINT or SIGTERM: remove the temporaries of unfinished outputs, print one line and
+/// exit with status 128 + the signal number.
+fn clean_up_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            tptd::io::remove_pending_temporaries();
+            let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
+            eprintln!("tptd-mesh: error: interrupted by {name}; unfinished outputs removed");
+            std::process::exit(128 + sig);
+        }
+    });
 }

@@ -1,7 +1,10 @@
-//! Progress on stderr: the bar of the meshing stage and the spinner of the quality pass.
+//! Progress on stderr: the bar of the meshing stage, the spinner of the quality pass, and a
+//! spinner for every other stage (read, analysis, write) that takes more than a second.
 
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tptd::improve::{improve, ImproveReport, QualityOptions};
@@ -73,4 +76,50 @@ pub(crate) fn improve_with_progress(
     };
     pb.finish_and_clear();
     report
+}
+
+/// How long a stage runs before its spinner appears.
+const SHOW_AFTER: Duration = Duration::from_secs(1);
+
+/// A spinner `{msg} {elapsed}` on stderr for one stage, shown once the stage has run for
+/// [`SHOW_AFTER`] (never with `quiet` or when stderr is not a terminal).
+pub(crate) struct Stage {
+    pb: ProgressBar,
+    done: Arc<Mutex<bool>>,
+}
+
+impl Stage {
+    /// Starts the stage `msg` (e.g. `writing m.vtu`).
+    pub(crate) fn start(msg: String, quiet: bool) -> Stage {
+        let pb = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
+        pb.set_style(
+            ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        );
+        pb.set_message(msg);
+        let done = Arc::new(Mutex::new(false));
+        if !quiet && std::io::stderr().is_terminal() {
+            let (pb, done) = (pb.clone(), Arc::clone(&done));
+            std::thread::spawn(move || {
+                std::thread::sleep(SHOW_AFTER);
+                let done = done.lock().unwrap_or_else(PoisonError::into_inner);
+                if !*done {
+                    pb.set_draw_target(ProgressDrawTarget::stderr());
+                    pb.enable_steady_tick(Duration::from_millis(200));
+                }
+            });
+        }
+        Stage { pb, done }
+    }
+
+    /// Ends the stage and clears its spinner (as dropping it does, e.g. on an error).
+    pub(crate) fn finish(self) {}
+}
+
+impl Drop for Stage {
+    fn drop(&mut self) {
+        let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
+        *done = true;
+        self.pb.finish_and_clear();
+    }
 }

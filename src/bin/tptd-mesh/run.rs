@@ -11,14 +11,15 @@ use tptd::improve::quality::{summarize, QualitySummary};
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
 use tptd::io::{
-    check_writable, read_volume, write_atomically, write_mesh, MeshFormat, SurfaceFormat,
+    check_writable, read_volume, same_file, write_mesh_pending, write_pending, MeshFormat,
+    PendingFile, SurfaceFormat,
 };
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
 use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid};
 
 use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
-use crate::progress::{improve_with_progress, mesh_with_progress};
+use crate::progress::{improve_with_progress, mesh_with_progress, Stage};
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
 use crate::surface::{read_curvilinear_input, write_level_surface};
 use tptd::curvilinear::map_mesh;
@@ -57,17 +58,23 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let job = check_args(&cli)?;
 
     let t = Instant::now();
+    let stage = Stage::start(format!("reading {}", job.input_name), cli.quiet);
     let curvilinear = read_curvilinear_input(&cli, &job.input_name)?;
     let grid = match &curvilinear {
         Some(c) => c.values.clone(),
         None => read_grid(&cli, &job.input_name)?,
     };
+    stage.finish();
     let t_read = secs(t);
     warn_exact_bounds(&grid, &job);
+    if curvilinear.is_none() {
+        warn_near_singular(&grid, &job);
+    }
     if !cli.no_critical_check {
         let (a, b) = (job.opts.alpha, job.opts.beta);
         crate::critical::warn_critical_bounds(&grid, &job.input_name, a, b, cli.critical_tol);
     }
+    check_memory(&grid, &job)?;
 
     let t = Instant::now();
     let mut out = mesh(&grid, &job, cli.quiet)?;
@@ -79,7 +86,9 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     }
 
     let t = Instant::now();
+    let stage = Stage::start("analysing the mesh".into(), cli.quiet);
     let analysis = analyse(&out, cli.no_analysis, cli.quality);
+    stage.finish();
     let t_analysis = secs(t);
     let quality = quality.map(|mut q| {
         q.after = analysis.quality.clone();
@@ -87,14 +96,20 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     });
     let comparison = compare_demo(&cli, &grid, &job)?;
 
+    // The mesh stays under its temporary name until the report is written too (`finish`).
     let t = Instant::now();
-    let surface = match SurfaceFormat::from_path(&job.output) {
-        Some(_) => Some(write_level_surface(&cli, &job, &out.mesh)?),
+    let stage = Stage::start(format!("writing {}", job.output.display()), cli.quiet);
+    let (surface, mesh_file) = match SurfaceFormat::from_path(&job.output) {
+        Some(_) => {
+            let (analysis, file) = write_level_surface(&cli, &job, &out.mesh)?;
+            (Some(analysis), file)
+        }
         None => {
-            write_mesh(&job.output, &out.mesh, &job.write).map_err(write_error)?;
-            None
+            let file = write_mesh_pending(&job.output, &out.mesh, &job.write);
+            (None, file.map_err(write_error)?)
         }
     };
+    stage.finish();
     let t_write = secs(t);
 
     let timings = Timings {
@@ -107,7 +122,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     };
     let mut report = make_report(&job, &grid, &out, analysis, quality, timings);
     report.surface = surface;
-    finish(&cli, &report, comparison.as_ref())?;
+    finish(&cli, &report, comparison.as_ref(), mesh_file)?;
     // The process ends here: let the OS reclaim the mesh and the grid at exit instead of
     // freeing hundreds of megabytes page by page first.
     std::mem::forget(out);
@@ -129,7 +144,8 @@ fn check_args(cli: &Cli) -> Result<Job> {
         (None, false) => unreachable!("clap requires -o without --demo"),
     };
     let (alpha, beta) = interval(cli, demo, &input_name)?;
-    check_outputs(&output, cli.report.as_deref())?;
+    check_threads(cli.threads)?;
+    check_outputs(cli.input.as_deref(), &output, cli.report.as_deref())?;
     let opts = MeshOptions {
         alpha,
         beta,
@@ -143,7 +159,8 @@ fn check_args(cli: &Cli) -> Result<Job> {
     };
     let write = WriteOptions::default()
         .with_msh_version(cli.msh_version.version())
-        .with_ascii(cli.ascii);
+        .with_ascii(cli.ascii)
+        .with_vtu_encoding(cli.vtu_encoding.encoding());
     Ok(Job {
         input_name,
         output,
@@ -178,21 +195,53 @@ fn interval(cli: &Cli, demo: bool, input_name: &str) -> Result<(f64, f64)> {
     Ok((alpha, beta))
 }
 
-/// Checks the mesh output (a known format, writable) and the report output (writable, not
-/// the mesh's path).
-fn check_outputs(output: &Path, report: Option<&Path>) -> Result<()> {
+/// Checks the output (a known mesh or surface format, writable, not the input) and the report
+/// output (writable, neither the input nor the output), comparing files by identity, not
+/// spelling.
+fn check_outputs(input: Option<&Path>, output: &Path, report: Option<&Path>) -> Result<()> {
     if SurfaceFormat::from_path(output).is_none() {
         MeshFormat::from_path(output).map_err(write_error)?;
     }
     check_writable(output).map_err(write_error)?;
+    let clash = |a: &Path, b: &Path, what: &str| {
+        if same_file(a, b) {
+            Err(file_error(
+                a.display(),
+                format_args!(
+                    "{what} cannot be written to the same file as {}",
+                    b.display()
+                ),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    if let Some(i) = input {
+        clash(output, i, "the mesh")?;
+    }
     if let Some(r) = report {
-        if r == output {
-            return Err(file_error(
-                r.display(),
-                "the report and the mesh cannot be written to the same file",
-            ));
+        clash(r, output, "the report")?;
+        if let Some(i) = input {
+            clash(r, i, "the report")?;
         }
         check_writable(r).map_err(write_error)?;
+    }
+    Ok(())
+}
+
+/// Most worker threads `-j` accepts per core: more only adds overhead.
+const MAX_THREADS_PER_CORE: usize = 16;
+
+/// Checks `-j` against the machine at once (a huge pool takes long to start and to fail).
+fn check_threads(threads: Option<u32>) -> Result<()> {
+    let Some(n) = threads else { return Ok(()) };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let max = (cores * MAX_THREADS_PER_CORE).max(MAX_THREADS_PER_CORE);
+    if n as usize > max {
+        return Err(file_error(
+            format_args!("-j {n}"),
+            format_args!("too many worker threads: at most {max} on this machine ({cores} cores)"),
+        ));
     }
     Ok(())
 }
@@ -208,6 +257,20 @@ pub(crate) fn read_grid(cli: &Cli, input_name: &str) -> Result<ScalarGrid> {
             .map_err(|e| file_error(input_name, format_args!("--spacing: {e}")))?;
     }
     Ok(grid)
+}
+
+/// Warns on stderr when the direction matrix is nearly singular (the mesh comes out nearly
+/// flat); an exactly singular one was refused by the reader.
+fn warn_near_singular(grid: &ScalarGrid, job: &Job) {
+    let k = tptd::grid::condition_number(&grid.direction);
+    if k > tptd::grid::NEAR_SINGULAR_CONDITION {
+        eprintln!(
+            "tptd-mesh: warning: {}: the direction matrix is nearly singular (condition number \
+             {k:.2e}): the index axes are almost dependent, so the tetrahedra are nearly flat; \
+             check the file's direction/orientation fields",
+            job.input_name
+        );
+    }
 }
 
 /// Warns on stderr about each bound that equals grid values exactly.
@@ -259,6 +322,24 @@ fn inside_value(values: &[f64], bound: f64, lower: bool) -> Option<f64> {
             .fold(f64::INFINITY, f64::min)
     };
     next.is_finite().then(|| bound + (next - bound) / 2.0)
+}
+
+/// Checks the memory estimate of meshing and analysis before the work (see
+/// [`tptd::memory`]).
+fn check_memory(grid: &ScalarGrid, job: &Job) -> Result<()> {
+    let tets = tptd::memory::estimate_tets(grid, job.opts.alpha, job.opts.beta);
+    let need = tptd::memory::mesh_bytes(grid.num_vertices() as u64, tets);
+    let what = format!(
+        "meshing {} (about {:.1} M tetrahedra)",
+        fmt_interval(job.opts.alpha, job.opts.beta),
+        tets as f64 / 1e6
+    );
+    tptd::memory::check(need, what).map_err(|e| {
+        file_error(
+            &job.input_name,
+            format_args!("{e}; narrow the interval, crop the volume or raise --memory-limit"),
+        )
+    })
 }
 
 /// Meshes the interval; an empty mesh is an error.
@@ -384,12 +465,26 @@ fn make_report(
     )
 }
 
-/// Writes the JSON report (with `--report`) and prints the summary (unless `--quiet`).
-fn finish(cli: &Cli, report: &Report, comparison: Option<&DemoComparison>) -> Result<()> {
-    if let Some(path) = &cli.report {
-        let mut json = report.to_json_pretty();
-        json.push('\n');
-        write_atomically(path, |w| w.write_all(json.as_bytes())).map_err(write_error)?;
+/// Writes the JSON report (with `--report`), then renames the mesh and the report onto their
+/// names, and prints the summary (unless `--quiet`). When the report cannot be written,
+/// neither file is: dropping `mesh_file` removes the mesh's temporary.
+fn finish(
+    cli: &Cli,
+    report: &Report,
+    comparison: Option<&DemoComparison>,
+    mesh_file: PendingFile,
+) -> Result<()> {
+    let report_file = match &cli.report {
+        Some(path) => {
+            let mut json = report.to_json_pretty();
+            json.push('\n');
+            Some(write_pending(path, |w| w.write_all(json.as_bytes())).map_err(write_error)?)
+        }
+        None => None,
+    };
+    mesh_file.commit().map_err(write_error)?;
+    if let Some(f) = report_file {
+        f.commit().map_err(write_error)?;
     }
     if !cli.quiet {
         let text = summary(report, comparison, cli.report.as_deref());

@@ -76,7 +76,7 @@ fn input_lines(s: &mut String, r: &Report) {
     let _ = writeln!(s, "tptd-mesh: {} -> {}", r.input, r.output);
     let _ = writeln!(
         s,
-        "  grid      {nx} x {ny} x {nz} vertices, spacing {} x {} x {}, {} cells",
+        "  grid      {nx} x {ny} x {nz} vertices, spacing {} x {} x {} (file units), {} cells",
         r.spacing[0], r.spacing[1], r.spacing[2], r.cells_total
     );
     let _ = writeln!(
@@ -90,7 +90,7 @@ fn input_lines(s: &mut String, r: &Report) {
 fn mesh_lines(s: &mut String, r: &Report) {
     let _ = writeln!(
         s,
-        "  mesh      {} nodes, {} tets, volume {:.6}",
+        "  mesh      {} nodes, {} tets, volume {:.6} (file units^3)",
         r.nodes, r.tets, r.volume
     );
     let bt = |k: &str| r.boundary_triangles.get(k).copied().unwrap_or(0);

@@ -2,7 +2,7 @@
 //! curvilinear input (`.vts`, Plot3D), whose mesh is made in parameter space and mapped.
 
 use anyhow::Result;
-use tptd::io::{is_curvilinear, read_curvilinear, write_surface};
+use tptd::io::{is_curvilinear, read_curvilinear, write_surface_pending, PendingFile};
 use tptd::surface::analysis::{analyse_surface, SurfaceAnalysis};
 use tptd::CurvilinearGrid;
 use tptd::{level_surface, SurfaceOptions, TetMesh};
@@ -11,16 +11,21 @@ use crate::cli::Cli;
 use crate::error::{file_error, write_error};
 use crate::run::Job;
 
-/// Writes the level sets of `mesh` (with `--caps` the box triangles too) to the job's output
-/// and returns their analysis for the report.
-pub(crate) fn write_level_surface(cli: &Cli, job: &Job, mesh: &TetMesh) -> Result<SurfaceAnalysis> {
+/// Writes the level sets of `mesh` (with `--caps` the box triangles too) to a temporary of
+/// the job's output (renamed by the caller once the report is written too) and returns their
+/// analysis for the report.
+pub(crate) fn write_level_surface(
+    cli: &Cli,
+    job: &Job,
+    mesh: &TetMesh,
+) -> Result<(SurfaceAnalysis, PendingFile)> {
     let opts = SurfaceOptions {
         caps: cli.caps,
         beta: job.opts.beta,
     };
     let s = level_surface(mesh, &opts);
-    write_surface(&job.output, &s, &job.write).map_err(write_error)?;
-    Ok(analyse_surface(&s))
+    let file = write_surface_pending(&job.output, &s, &job.write).map_err(write_error)?;
+    Ok((analyse_surface(&s), file))
 }
 
 /// The curvilinear grid of a `.vts` / `.xyz` input (`None` for other inputs).
