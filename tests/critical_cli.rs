@@ -163,3 +163,196 @@ fn bad_input_gets_one_line_errors() {
     assert!(!ok && stderr.contains("does not exist"), "{stderr}");
     assert!(!json.exists());
 }
+
+/// The numbers of `v[key]` (a JSON array) in groups of `n`.
+fn groups(v: &serde_json::Value, key: &str, n: usize) -> Vec<Vec<f64>> {
+    let flat: Vec<f64> = v[key]
+        .as_array()
+        .unwrap_or_else(|| panic!("no array {key}"))
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(flat.len() % n, 0, "{key} has {} numbers", flat.len());
+    flat.chunks(n).map(|c| c.to_vec()).collect()
+}
+
+#[test]
+fn transfer_functions_as_paraview_preset_and_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("g.npy");
+    let dims = [13, 9, 9];
+    write_npy(&input, dims, gaussians);
+    let all = (0..dims[0]).flat_map(|i| {
+        (0..dims[1]).flat_map(move |j| (0..dims[2]).map(move |k| gaussians(i, j, k)))
+    });
+    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    let saddle = 2.0 * (-2.25f64).exp();
+    let inp = input.to_str().unwrap();
+    let (json, preset, csv) = (
+        dir.path().join("c.json"),
+        dir.path().join("t.json"),
+        dir.path().join("t.csv"),
+    );
+    let path = |p: &std::path::PathBuf| p.to_str().unwrap().to_string();
+    let (ok, stdout, stderr) = run(&[
+        inp,
+        "--critical",
+        "--json",
+        &path(&json),
+        "--transfer",
+        &path(&preset),
+        "-q",
+    ]);
+    assert!(ok && stdout.is_empty(), "{stderr}");
+    let critical: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(&json).unwrap()).unwrap();
+    let values: Vec<f64> = critical
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["value"].as_f64().unwrap())
+        .collect();
+    // the ParaView preset: one object, control points sorted over the data range
+    let v: serde_json::Value = serde_json::from_str(&fs::read_to_string(&preset).unwrap()).unwrap();
+    let p = &v.as_array().unwrap()[0];
+    assert_eq!(v.as_array().unwrap().len(), 1);
+    assert!(p["Name"].as_str().unwrap().contains("intervals"));
+    assert_eq!(p["ColorSpace"], "RGB");
+    for (key, n) in [("RGBPoints", 4), ("Points", 4)] {
+        let pts = groups(p, key, n);
+        assert_eq!((pts[0][0], pts[pts.len() - 1][0]), (lo, hi), "{key}");
+        assert!(
+            pts.windows(2).all(|w| w[0][0] < w[1][0]),
+            "{key} not increasing"
+        );
+        assert!(
+            pts.iter()
+                .all(|q| q[1..].iter().all(|c| (0.0..=1.0).contains(c))),
+            "{key}"
+        );
+    }
+    let opacity = groups(p, "Points", 4);
+    assert!(opacity.iter().all(|q| q[2] == 0.5 && q[3] == 0.0));
+    let top = opacity.iter().fold(0.0f64, |m, q| m.max(q[1]));
+    let peaks: Vec<f64> = opacity
+        .iter()
+        .filter(|q| q[1] == top)
+        .map(|q| q[0])
+        .collect();
+    assert!(
+        peaks.iter().all(|x| values.contains(x)),
+        "{peaks:?} not in {values:?}"
+    );
+    assert!(
+        peaks.iter().any(|&x| (x - saddle).abs() < 1e-12),
+        "{peaks:?}"
+    );
+    // hue bands: the colour just below and just above the saddle differ
+    let colors = groups(p, "RGBPoints", 4);
+    let near = |x: f64| {
+        colors
+            .iter()
+            .min_by(|a, b| (a[0] - x).abs().total_cmp(&(b[0] - x).abs()))
+            .unwrap()
+            .clone()
+    };
+    assert_ne!(near(saddle - 1e-3)[1..], near(saddle + 1e-3)[1..]);
+
+    // CSV, the other design, filtered: only the saddle is left inside the range
+    let (ok, stdout, stderr) = run(&[
+        inp,
+        "--critical",
+        "--transfer",
+        &path(&csv),
+        "--transfer-design",
+        "details",
+        "--min-value",
+        "0.15",
+    ]);
+    assert!(
+        ok && stdout.contains("transfer function (details, 1 critical values from"),
+        "{stdout}{stderr}"
+    );
+    let text = fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("value,r,g,b,opacity"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.iter().all(|r| r.len() == 5));
+    assert_eq!((rows[0][0], rows[rows.len() - 1][0]), (lo, hi));
+    assert!(rows.windows(2).all(|w| w[0][0] < w[1][0]));
+    let raised: Vec<&Vec<f64>> = rows.iter().filter(|r| r[4] > 0.05).collect();
+    assert!(
+        raised
+            .iter()
+            .all(|r| (r[0] - saddle).abs() <= 0.01 * (hi - lo) && r[4] == 0.65),
+        "{raised:?}"
+    );
+    assert!(raised.iter().any(|r| r[0] == saddle));
+    assert_eq!((rows[0][4], rows[rows.len() - 1][4]), (0.05, 0.05));
+}
+
+#[test]
+fn transfer_bad_paths_are_one_line_errors_without_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("g.npy");
+    write_npy(&input, [5, 5, 5], gaussians);
+    let inp = input.to_str().unwrap();
+    let xml = dir.path().join("t.xml");
+    let (ok, _, stderr) = run(&[inp, "--critical", "--transfer", xml.to_str().unwrap()]);
+    assert!(
+        !ok && stderr.contains("unknown transfer-function format") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    assert!(!xml.exists());
+    let missing = dir.path().join("none/t.csv");
+    let (ok, _, stderr) = run(&[inp, "--critical", "--transfer", missing.to_str().unwrap()]);
+    assert!(
+        !ok && stderr.contains("does not exist") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    let (ok, _, stderr) = run(&[
+        inp,
+        "--critical",
+        "--transfer",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("is a directory"), "{stderr}");
+    // a width as large as the data range
+    let csv = dir.path().join("t.csv");
+    let json = dir.path().join("c.json");
+    let (ok, _, stderr) = run(&[
+        inp,
+        "--critical",
+        "--json",
+        json.to_str().unwrap(),
+        "--transfer",
+        csv.to_str().unwrap(),
+        "--transfer-width",
+        "5",
+    ]);
+    assert!(
+        !ok && stderr.contains("widths must be") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    assert!(
+        !csv.exists() && !json.exists(),
+        "no output after a bad parameter"
+    );
+    let (ok, _, _) = run(&[
+        inp,
+        "--transfer-design",
+        "details",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert_eq!(
+        fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "only the input is left"
+    );
+}

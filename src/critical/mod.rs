@@ -13,6 +13,7 @@
 //! * [`persistence`]: union–find over the superlevel and sublevel sets of that complex.
 //! * [`spectrum`]: Betti numbers between consecutive critical values.
 //! * [`safe`]: the critical values near a chosen bound and the nearest safe bounds.
+//! * [`transfer`]: colour/opacity transfer functions from the critical values (seed 002 §5).
 //!
 //! Points on the grid box are classified with the part of their neighbourhood inside the box,
 //! so the box itself creates critical points (a box vertex whose inward neighbour is lower
@@ -27,11 +28,13 @@ pub mod persistence;
 pub mod region;
 pub mod safe;
 pub mod spectrum;
+pub mod transfer;
 pub mod vertex;
 
 pub use find::{find_critical, find_critical_with_options};
 pub use safe::{near_critical, NearCritical};
 pub use spectrum::{contour_spectrum, SpectrumStep};
+pub use transfer::{transfer_function, TransferDesign, TransferFunction, TransferOptions};
 
 use serde::Serialize;
 

@@ -15,6 +15,7 @@ pub mod obj;
 pub mod plot3d;
 pub mod ply;
 pub mod stl;
+pub mod transfer_out;
 mod volume;
 pub mod vts;
 pub mod vtu;
@@ -28,6 +29,7 @@ pub use mesh_out::{
     write_mesh, write_mesh_pending, write_surface, write_surface_pending, MeshFormat,
     SurfaceFormat, WriteOptions,
 };
+pub use transfer_out::{write_transfer, TransferFormat, TransferTable};
 pub use volume::{is_curvilinear, read_curvilinear, read_volume, ReadError};
 
 // Mesh readers (the twins of the writers above), used by `solver-demo`.

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Parser, ValueEnum};
-use tptd::critical::CriticalKind;
+use tptd::critical::{CriticalKind, TransferDesign};
 use tptd::io::msh::MshVersion;
 use tptd::io::vtu::VtuEncoding;
 use tptd::Method;
@@ -133,6 +133,28 @@ pub(crate) struct Cli {
     #[arg(long, value_name = "FILE.csv", requires = "critical")]
     pub(crate) spectrum: Option<PathBuf>,
 
+    /// With --critical: write a transfer function built from the (filtered) critical values
+    /// (seed 002 §5) as a ParaView colour-map/opacity preset (.json) or as CSV (.csv)
+    #[arg(long, value_name = "FILE.json|FILE.csv", requires = "critical")]
+    pub(crate) transfer: Option<PathBuf>,
+
+    /// With --transfer: `intervals` (a band of hues per interval between critical values,
+    /// opacity hats at them) or `details` (constant except near critical values)
+    #[arg(
+        long,
+        value_enum,
+        value_name = "DESIGN",
+        default_value = "intervals",
+        requires = "transfer"
+    )]
+    pub(crate) transfer_design: TransferDesignArg,
+
+    /// With --transfer: width (in data units) of the opacity elevations and hue descents
+    /// around each critical value; closer critical values are dropped [default: 2% of the
+    /// data range]
+    #[arg(long, value_name = "W", requires = "transfer", value_parser = parse_nonnegative)]
+    pub(crate) transfer_width: Option<f64>,
+
     /// With --critical: compute the persistence of each point (a union-find over the whole
     /// grid; implied by --min-persistence)
     #[arg(long, requires = "critical")]
@@ -163,6 +185,23 @@ pub(crate) struct Cli {
     /// Skip the check of --alpha/--beta against the critical values before meshing
     #[arg(long)]
     pub(crate) no_critical_check: bool,
+}
+
+/// `--transfer-design` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum TransferDesignArg {
+    Intervals,
+    Details,
+}
+
+impl TransferDesignArg {
+    /// The library's design of this value.
+    pub(crate) fn design(self) -> TransferDesign {
+        match self {
+            TransferDesignArg::Intervals => TransferDesign::Intervals,
+            TransferDesignArg::Details => TransferDesign::Details,
+        }
+    }
 }
 
 /// A parsed `--kind` list.

@@ -1,18 +1,19 @@
 //! `--critical`: the critical points and regions of the input as a table (stdout), JSON and a
-//! contour-spectrum CSV; and the check of `--alpha`/`--beta` against the critical values
+//! contour-spectrum CSV, a transfer function (ParaView preset or CSV); and the check of `--alpha`/`--beta` against the critical values
 //! before meshing.
 
 use std::io::Write;
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Result;
 use tptd::critical::face::face_saddles_in;
 use tptd::critical::find::critical_in_windows;
 use tptd::critical::{
-    contour_spectrum, find_critical_with_options, near_critical, CriticalKind, CriticalOptions,
-    CriticalPoint,
+    contour_spectrum, find_critical_with_options, near_critical, transfer_function, CriticalKind,
+    CriticalOptions, CriticalPoint, TransferFunction, TransferOptions,
 };
-use tptd::io::{check_writable, write_atomically};
+use tptd::io::{check_writable, write_atomically, write_transfer, TransferFormat, TransferTable};
 use tptd::ScalarGrid;
 
 use crate::cli::Cli;
@@ -27,9 +28,13 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Some(p) => p.display().to_string(),
         None => "demo".to_string(),
     };
-    for out in [&cli.json, &cli.spectrum].into_iter().flatten() {
+    for out in [&cli.json, &cli.spectrum, &cli.transfer]
+        .into_iter()
+        .flatten()
+    {
         check_writable(out).map_err(write_error)?;
     }
+    let transfer_format = cli.transfer.as_deref().map(transfer_format).transpose()?;
     let grid = read_grid(&cli, &input)?;
     let opts = CriticalOptions {
         min_value: cli.min_value.unwrap_or(f64::NEG_INFINITY),
@@ -41,6 +46,11 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     };
     let points = find_critical_with_options(&grid, &opts).map_err(|e| file_error(&input, e))?;
     let secs = t.elapsed().as_secs_f64();
+    // built before any file is written, so that bad parameters leave no output
+    let transfer = match &cli.transfer {
+        Some(path) => Some(build_transfer(&cli, &grid, &points, path)?),
+        None => None,
+    };
     if let Some(path) = &cli.json {
         write_atomically(path, |w| {
             serde_json::to_writer_pretty(&mut *w, &points).map_err(std::io::Error::other)?;
@@ -51,8 +61,69 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     if let Some(path) = &cli.spectrum {
         write_spectrum(&grid, path, &opts)?;
     }
+    if let (Some(path), Some(format), Some(tf)) = (&cli.transfer, transfer_format, &transfer) {
+        write_transfer_function(&cli, tf, points.len(), &input, path, format)?;
+    }
     if !cli.quiet {
         print_table(&input, &points, secs)?;
+    }
+    Ok(())
+}
+
+/// The format of `--transfer FILE` from its extension.
+fn transfer_format(path: &Path) -> Result<TransferFormat> {
+    TransferFormat::from_path(path).ok_or_else(|| {
+        file_error(
+            path.display(),
+            "unknown transfer-function format; use .json (ParaView preset) or .csv",
+        )
+    })
+}
+
+/// The transfer function of `--transfer-design` built from the critical values of `points`
+/// over the data range (errors name the output `path`).
+fn build_transfer(
+    cli: &Cli,
+    grid: &ScalarGrid,
+    points: &[CriticalPoint],
+    path: &Path,
+) -> Result<TransferFunction> {
+    let opts = TransferOptions {
+        design: cli.transfer_design.design(),
+        hue_width: cli.transfer_width,
+        opacity_width: cli.transfer_width,
+        ..TransferOptions::default()
+    };
+    let values: Vec<f64> = points.iter().map(|p| p.value).collect();
+    transfer_function(&values, grid.value_range(), &opts).map_err(|e| file_error(path.display(), e))
+}
+
+/// Writes `tf` (built from `n_points` critical points of `input`) to `path`.
+fn write_transfer_function(
+    cli: &Cli,
+    tf: &TransferFunction,
+    n_points: usize,
+    input: &str,
+    path: &Path,
+    format: TransferFormat,
+) -> Result<()> {
+    let design = tf.design.name();
+    let base = Path::new(input)
+        .file_name()
+        .map_or(input.into(), |n| n.to_string_lossy());
+    let name = format!("tptd {design} {base}");
+    let table = TransferTable {
+        name: &name,
+        colors: &tf.colors,
+        opacity: &tf.opacity,
+    };
+    write_transfer(path, format, &table).map_err(write_error)?;
+    if !cli.quiet {
+        println!(
+            "transfer function ({design}, {} critical values from {n_points} points): {}",
+            tf.values.len(),
+            path.display()
+        );
     }
     Ok(())
 }
