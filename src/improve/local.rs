@@ -397,7 +397,9 @@ impl LocalMesh {
 /// Writes the regions back into `mesh`: moved points, the regions' tets (after the tets
 /// outside them, which keep their order; regions in order) and boundary faces; merged points
 /// are dropped and the points renumbered in order.
-pub fn splice(mesh: &mut TetMesh, regions: Vec<LocalMesh>, bookkeeping: Regions) {
+/// Returns the points merged away: no tet or face uses them any more, and the caller drops
+/// them ([`drop_points`]) once, at the end of the pass.
+pub fn splice(mesh: &mut TetMesh, regions: Vec<LocalMesh>, bookkeeping: Regions) -> Vec<u32> {
     let mut tets: Vec<[u32; 4]> = mesh
         .tets
         .iter()
@@ -421,8 +423,7 @@ pub fn splice(mesh: &mut TetMesh, regions: Vec<LocalMesh>, bookkeeping: Regions)
     mesh.tets = tets;
     mesh.boundary = boundary;
     mesh.boundary_labels = labels;
-    removed.sort_unstable();
-    drop_points(mesh, &removed);
+    removed
 }
 
 impl LocalMesh {
@@ -460,7 +461,7 @@ impl LocalMesh {
 }
 
 /// Removes the points `removed` (sorted ascending, used by no tet) and renumbers the rest.
-fn drop_points(mesh: &mut TetMesh, removed: &[u32]) {
+pub fn drop_points(mesh: &mut TetMesh, removed: &[u32]) {
     if removed.is_empty() {
         return;
     }

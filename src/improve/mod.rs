@@ -161,6 +161,9 @@ pub fn improve(
     let start = Instant::now();
     let ctx = context(grid, alpha, beta, opts, start);
     let mut report = ImproveReport::default();
+    // Points merged away stay (unused) until the end: renumbering once keeps every
+    // round's work proportional to what it touches, and keeps the relative order of ids.
+    let mut removed: Vec<u32> = Vec::new();
     for _ in 0..opts.max_rounds {
         if ctx.out_of_time() {
             report.out_of_time = true;
@@ -191,9 +194,11 @@ pub fn improve(
             for c in counts {
                 report.add(&c);
             }
-            local::splice(mesh, regions, bookkeeping);
+            removed.extend(local::splice(mesh, regions, bookkeeping));
         }
     }
+    removed.sort_unstable();
+    local::drop_points(mesh, &removed);
     report.unprojected = project::off_level_points(mesh, &ctx)
         .iter()
         .filter(|&&o| o)
