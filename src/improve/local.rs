@@ -157,18 +157,32 @@ pub fn extract_regions(
         .zip(&shared)
         .map(|(&o, &s)| if s { NONE } else { o })
         .collect();
+    // A boundary face with a free vertex lies in a tet of that vertex's region (all free
+    // vertices of a face are in one region): bucket the faces once, in mesh order.
+    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); n_regions as usize];
+    for (i, tri) in mesh.boundary.iter().enumerate() {
+        if let Some(r) = tri
+            .iter()
+            .map(|&v| free_in[v as usize])
+            .find(|&r| r != NONE)
+        {
+            faces_of[r as usize].push(i as u32);
+        }
+    }
     let regions = tets_of
         .into_par_iter()
-        .map(|tets| LocalMesh::from_tets(mesh, &tets, &free_in, ctx))
+        .zip(faces_of)
+        .map(|(tets, faces)| LocalMesh::from_tets(mesh, &tets, &faces, &free_in, ctx))
         .filter(|lm| !lm.tets.is_empty())
         .collect();
     (regions, Regions { of_tet, free_in })
 }
 
 impl LocalMesh {
-    /// The region made of the mesh tets `tets`; `free_in` tells which points are free (those
-    /// with a region: all their tets are in it).
-    fn from_tets(mesh: &TetMesh, tets: &[u32], free_in: &[u32], ctx: &Ctx) -> Self {
+    /// The region made of the mesh tets `tets` and the boundary faces `faces` (indices into
+    /// `mesh.boundary`: those with a free vertex of this region); `free_in` tells which points
+    /// are free (those with a region: all their tets are in it).
+    fn from_tets(mesh: &TetMesh, tets: &[u32], faces: &[u32], free_in: &[u32], ctx: &Ctx) -> Self {
         let mut global: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
         global.sort_unstable();
         global.dedup();
@@ -177,20 +191,11 @@ impl LocalMesh {
             .iter()
             .map(|&t| mesh.tets[t as usize].map(local))
             .collect();
-        // A face with a free vertex of this region lies in one of its tets.
-        let faces: Vec<BoundaryFace> = mesh
-            .boundary
+        let faces: Vec<BoundaryFace> = faces
             .iter()
-            .zip(&mesh.boundary_labels)
-            .filter(|(tri, _)| tri.iter().any(|&v| free_in[v as usize] != NONE))
-            .map(|(tri, &label)| BoundaryFace {
-                tri: tri.map(local),
-                label,
-            })
-            .filter(|f| {
-                f.tri
-                    .iter()
-                    .any(|&v| v != NONE && free_in[global[v as usize] as usize] != NONE)
+            .map(|&i| BoundaryFace {
+                tri: mesh.boundary[i as usize].map(local),
+                label: mesh.boundary_labels[i as usize],
             })
             .collect();
         let frozen: Vec<bool> = global
