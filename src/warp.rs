@@ -544,6 +544,8 @@ fn union(uf: &mut [usize], a: usize, b: usize) {
 
 #[cfg(test)]
 mod tests {
+    use std::collections::HashMap;
+
     use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
 
     fn noise(dims: [usize; 3], seed: u64, levels: f64) -> ScalarGrid {
@@ -569,16 +571,20 @@ mod tests {
     /// Faces of the tets seen once must be exactly the boundary triangles; boundary edges
     /// in exactly two triangles; each boundary vertex's fan one cycle.
     fn manifold_problems(m: &crate::TetMesh) -> Vec<String> {
-        use std::collections::HashMap;
+        let mut out = open_faces_problems(m);
+        out.extend(boundary_fan_problems(m));
+        out
+    }
+
+    /// Faces used by one tet must be the boundary triangles, and none by more than two.
+    fn open_faces_problems(m: &crate::TetMesh) -> Vec<String> {
         let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
         for t in &m.tets {
-            for f in [
-                [t[1], t[2], t[3]],
-                [t[0], t[2], t[3]],
-                [t[0], t[1], t[3]],
-                [t[0], t[1], t[2]],
-            ] {
-                let mut f = f;
+            for skip in 0..4 {
+                let mut f = [0u32; 3];
+                for (slot, i) in f.iter_mut().zip((0..4).filter(|&i| i != skip)) {
+                    *slot = t[i];
+                }
                 f.sort();
                 *faces.entry(f).or_default() += 1;
             }
@@ -602,7 +608,7 @@ mod tests {
         bnd.sort();
         if once != bnd {
             out.push(format!(
-                "boundary mismatch: {} once-faces vs {} boundary",
+                "{} once-used faces vs {} boundary",
                 once.len(),
                 bnd.len()
             ));
@@ -610,40 +616,43 @@ mod tests {
         if faces.values().any(|&c| c > 2) {
             out.push("face in >2 tets".into());
         }
+        out
+    }
+
+    /// Boundary edges in exactly two triangles; each boundary vertex's fan one cycle.
+    fn boundary_fan_problems(m: &crate::TetMesh) -> Vec<String> {
         let mut edges: HashMap<[u32; 2], usize> = HashMap::new();
-        let mut fan: HashMap<u32, Vec<[u32; 2]>> = HashMap::new();
+        let mut fan: HashMap<u32, HashMap<u32, u32>> = HashMap::new();
+        let mut count: HashMap<u32, usize> = HashMap::new();
         for b in &m.boundary {
             for i in 0..3 {
                 let (a, c) = (b[i], b[(i + 1) % 3]);
                 *edges.entry([a.min(c), a.max(c)]).or_default() += 1;
+                *count.entry(b[i]).or_default() += 1;
                 fan.entry(b[i])
                     .or_default()
-                    .push([b[(i + 1) % 3], b[(i + 2) % 3]]);
+                    .insert(b[(i + 1) % 3], b[(i + 2) % 3]);
             }
         }
+        let mut out = Vec::new();
         if edges.values().any(|&c| c != 2) {
             out.push("boundary edge not in 2 triangles".into());
         }
-        for (v, f) in &fan {
-            // one cycle: walk
-            let mut next: HashMap<u32, u32> = HashMap::new();
-            for e in f {
-                next.insert(e[0], e[1]);
-            }
-            let start = f[0][0];
+        for (v, next) in &fan {
+            let start = *next.keys().min().expect("a fan has a triangle");
             let (mut cur, mut n) = (start, 0);
-            loop {
-                cur = match next.get(&cur) {
-                    Some(&x) => x,
-                    None => break,
-                };
+            while let Some(&x) = next.get(&cur) {
+                cur = x;
                 n += 1;
-                if cur == start || n > f.len() {
+                if cur == start || n > count[v] {
                     break;
                 }
             }
-            if n != f.len() {
-                out.push(format!("vertex {v} fan not one cycle ({n} of {})", f.len()));
+            if n != next.len() {
+                out.push(format!(
+                    "vertex {v} fan not one cycle ({n} of {})",
+                    next.len()
+                ));
             }
         }
         out

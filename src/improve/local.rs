@@ -157,9 +157,20 @@ pub fn extract_regions(
         .zip(&shared)
         .map(|(&o, &s)| if s { NONE } else { o })
         .collect();
-    // A boundary face with a free vertex lies in a tet of that vertex's region (all free
-    // vertices of a face are in one region): bucket the faces once, in mesh order.
-    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); n_regions as usize];
+    let faces_of = faces_by_region(mesh, &free_in, n_regions as usize);
+    let regions = tets_of
+        .into_par_iter()
+        .zip(faces_of)
+        .map(|(tets, faces)| LocalMesh::from_tets(mesh, &tets, &faces, &free_in, ctx))
+        .filter(|lm| !lm.tets.is_empty())
+        .collect();
+    (regions, Regions { of_tet, free_in })
+}
+
+/// Indices of the boundary faces of each region, in mesh order: a face with a free vertex
+/// lies in a tet of that vertex's region (all free vertices of a face are in one region).
+fn faces_by_region(mesh: &TetMesh, free_in: &[u32], n_regions: usize) -> Vec<Vec<u32>> {
+    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); n_regions];
     for (i, tri) in mesh.boundary.iter().enumerate() {
         if let Some(r) = tri
             .iter()
@@ -169,13 +180,7 @@ pub fn extract_regions(
             faces_of[r as usize].push(i as u32);
         }
     }
-    let regions = tets_of
-        .into_par_iter()
-        .zip(faces_of)
-        .map(|(tets, faces)| LocalMesh::from_tets(mesh, &tets, &faces, &free_in, ctx))
-        .filter(|lm| !lm.tets.is_empty())
-        .collect();
-    (regions, Regions { of_tet, free_in })
+    faces_of
 }
 
 impl LocalMesh {

@@ -23,6 +23,8 @@ use crate::progress::{improve_with_progress, mesh_with_progress, Stage};
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
 use crate::surface::{read_curvilinear_input, write_level_surface};
 use tptd::curvilinear::map_mesh;
+use tptd::surface::analysis::SurfaceAnalysis;
+use tptd::CurvilinearGrid;
 
 /// Output written by `--demo` when no `-o` is given.
 const DEMO_OUTPUT: &str = "tptd-demo.vtu";
@@ -58,23 +60,9 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let job = check_args(&cli)?;
 
     let t = Instant::now();
-    let stage = Stage::start(format!("reading {}", job.input_name), cli.quiet);
-    let curvilinear = read_curvilinear_input(&cli, &job.input_name)?;
-    let grid = match &curvilinear {
-        Some(c) => c.values.clone(),
-        None => read_grid(&cli, &job.input_name)?,
-    };
-    stage.finish();
+    let (grid, curvilinear) = read_input(&cli, &job)?;
     let t_read = secs(t);
-    warn_exact_bounds(&grid, &job);
-    if curvilinear.is_none() {
-        warn_near_singular(&grid, &job);
-    }
-    if !cli.no_critical_check {
-        let (a, b) = (job.opts.alpha, job.opts.beta);
-        crate::critical::warn_critical_bounds(&grid, &job.input_name, a, b, cli.critical_tol);
-    }
-    check_memory(&grid, &job)?;
+    check_input(&cli, &job, &grid, curvilinear.is_some())?;
 
     let t = Instant::now();
     let mut out = mesh(&grid, &job, cli.quiet)?;
@@ -98,18 +86,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
 
     // The mesh stays under its temporary name until the report is written too (`finish`).
     let t = Instant::now();
-    let stage = Stage::start(format!("writing {}", job.output.display()), cli.quiet);
-    let (surface, mesh_file) = match SurfaceFormat::from_path(&job.output) {
-        Some(_) => {
-            let (analysis, file) = write_level_surface(&cli, &job, &out.mesh)?;
-            (Some(analysis), file)
-        }
-        None => {
-            let file = write_mesh_pending(&job.output, &out.mesh, &job.write);
-            (None, file.map_err(write_error)?)
-        }
-    };
-    stage.finish();
+    let (surface, mesh_file) = write_output(&cli, &job, &out)?;
     let t_write = secs(t);
 
     let timings = Timings {
@@ -128,6 +105,53 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     std::mem::forget(out);
     std::mem::forget(grid);
     Ok(())
+}
+
+/// Reads the input volume (a curvilinear grid's values in parameter space, with the grid).
+fn read_input(cli: &Cli, job: &Job) -> Result<(ScalarGrid, Option<CurvilinearGrid>)> {
+    let stage = Stage::start(format!("reading {}", job.input_name), cli.quiet);
+    let curvilinear = read_curvilinear_input(cli, &job.input_name)?;
+    let grid = match &curvilinear {
+        Some(c) => c.values.clone(),
+        None => read_grid(cli, &job.input_name)?,
+    };
+    stage.finish();
+    Ok((grid, curvilinear))
+}
+
+/// Warnings about the bounds and the geometry, and the memory check, before meshing.
+fn check_input(cli: &Cli, job: &Job, grid: &ScalarGrid, curvilinear: bool) -> Result<()> {
+    warn_exact_bounds(grid, job);
+    if !curvilinear {
+        warn_near_singular(grid, job);
+    }
+    if !cli.no_critical_check {
+        let (a, b) = (job.opts.alpha, job.opts.beta);
+        crate::critical::warn_critical_bounds(grid, &job.input_name, a, b, cli.critical_tol);
+    }
+    check_memory(grid, job)
+}
+
+/// Writes the mesh (or, for a surface extension, the level sets) under a temporary name;
+/// `finish` renames it once the report is written too.
+fn write_output(
+    cli: &Cli,
+    job: &Job,
+    out: &MeshOutput,
+) -> Result<(Option<SurfaceAnalysis>, PendingFile)> {
+    let stage = Stage::start(format!("writing {}", job.output.display()), cli.quiet);
+    let written = match SurfaceFormat::from_path(&job.output) {
+        Some(_) => {
+            let (analysis, file) = write_level_surface(cli, job, &out.mesh)?;
+            (Some(analysis), file)
+        }
+        None => {
+            let file = write_mesh_pending(&job.output, &out.mesh, &job.write);
+            (None, file.map_err(write_error)?)
+        }
+    };
+    stage.finish();
+    Ok(written)
 }
 
 /// Checks the arguments before any work: the interval, the output format and that the
