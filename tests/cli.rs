@@ -8,7 +8,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::files::{listing, npy_bytes};
+use common::files::{listing, write_npy};
 use serde_json::Value;
 
 const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
@@ -37,22 +37,6 @@ fn assert_ok(o: &Output) {
         stdout(o),
         stderr(o)
     );
-}
-
-/// Writes a C-order `<f8` `.npy` (format 1.0) of shape `(nx, ny, nz)`; element `[i, j, k]`
-/// (grid vertex x = i, y = j, z = k) is `f(i, j, k)`.
-fn write_npy(path: &Path, dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f64) {
-    let [nx, ny, nz] = dims;
-    let mut data = Vec::with_capacity(nx * ny * nz * 8);
-    for i in 0..nx {
-        for j in 0..ny {
-            for k in 0..nz {
-                data.extend_from_slice(&f(i, j, k).to_le_bytes());
-            }
-        }
-    }
-    let shape = format!("({nx}, {ny}, {nz})");
-    fs::write(path, npy_bytes("<f8", &shape, &data)).unwrap();
 }
 
 /// A smooth blob: distance from an off-centre point plus a wobble, so generic values (no grid

@@ -3,30 +3,11 @@
 mod common;
 
 use std::fs;
-use std::path::Path;
 use std::process::Command;
 
-use common::files::npy_bytes;
+use common::files::write_npy;
 
 const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
-
-/// Writes a C-order `(nx, ny, nz)` float64 `.npy` (x slowest, as tptd reads it).
-fn write_npy(path: &Path, dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f64) {
-    let [nx, ny, nz] = dims;
-    let mut data = Vec::with_capacity(nx * ny * nz * 8);
-    for i in 0..nx {
-        for j in 0..ny {
-            for k in 0..nz {
-                data.extend_from_slice(&f(i, j, k).to_le_bytes());
-            }
-        }
-    }
-    fs::write(
-        path,
-        npy_bytes("<f8", &format!("({nx}, {ny}, {nz})"), &data),
-    )
-    .unwrap();
-}
 
 fn gaussians(i: usize, j: usize, k: usize) -> f64 {
     let g = |c: f64| {

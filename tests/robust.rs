@@ -10,7 +10,7 @@ use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use common::files::{listing, npy_bytes};
+use common::files::{listing, npy_bytes, write_npy};
 
 const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
 
@@ -29,21 +29,6 @@ fn run_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A C-order `<f8` `.npy` of shape `dims` with element `[i, j, k]` = `f(i, j, k)`.
-fn write_npy(path: &Path, dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f64) {
-    let [nx, ny, nz] = dims;
-    let mut data = Vec::with_capacity(nx * ny * nz * 8);
-    for i in 0..nx {
-        for j in 0..ny {
-            for k in 0..nz {
-                data.extend_from_slice(&f(i, j, k).to_le_bytes());
-            }
-        }
-    }
-    let shape = format!("({nx}, {ny}, {nz})");
-    fs::write(path, npy_bytes("<f8", &shape, &data)).unwrap();
 }
 
 /// Distance from an off-centre point: a ball for `--beta r`.

@@ -96,7 +96,7 @@ fn node_data(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
 }
 
 fn point<'o, 'w>(out: &'o mut TextOut<'w>, p: [f64; 3]) -> &'o mut TextOut<'w> {
-    out.float(p[0]).s(" ").float(p[1]).s(" ").float(p[2])
+    out.vec3(p)
 }
 
 /// Axis-aligned bounding box of the given node indices (zeros if there are none).

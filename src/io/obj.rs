@@ -24,12 +24,7 @@ pub fn write_obj(s: &TriSurface, w: &mut dyn Write) -> io::Result<()> {
         .s(" triangles, normals towards increasing f");
     out.nl()?;
     for p in &s.points {
-        out.s("v ")
-            .float(p[0])
-            .s(" ")
-            .float(p[1])
-            .s(" ")
-            .float(p[2]);
+        out.s("v ").vec3(*p);
         out.nl()?;
     }
     for label in BoundaryLabel::ALL {

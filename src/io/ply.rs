@@ -69,7 +69,7 @@ fn vertex_labels(s: &TriSurface) -> Vec<u8> {
 fn write_ascii(s: &TriSurface, labels: &[u8], w: &mut dyn Write) -> io::Result<()> {
     let mut out = TextOut::new(w);
     for ((p, &v), &l) in s.points.iter().zip(&s.values).zip(labels) {
-        out.float(p[0]).s(" ").float(p[1]).s(" ").float(p[2]);
+        out.vec3(*p);
         out.s(" ").float(v).s(" ").int(l);
         out.nl()?;
     }

@@ -30,23 +30,13 @@ fn write_ascii(s: &TriSurface, w: &mut dyn Write) -> io::Result<()> {
     out.nl()?;
     for &t in &s.triangles {
         let n = unit_normal(s, t);
-        out.s("facet normal ")
-            .float(n[0])
-            .s(" ")
-            .float(n[1])
-            .s(" ")
-            .float(n[2]);
+        out.s("facet normal ").vec3(n);
         out.nl()?;
         out.s(" outer loop");
         out.nl()?;
         for i in t {
             let p = s.points[i as usize];
-            out.s("  vertex ")
-                .float(p[0])
-                .s(" ")
-                .float(p[1])
-                .s(" ")
-                .float(p[2]);
+            out.s("  vertex ").vec3(p);
             out.nl()?;
         }
         out.s(" endloop");

@@ -101,6 +101,12 @@ impl<'a> TextOut<'a> {
         self
     }
 
+    /// Appends a point's three coordinates, space-separated ([`TextOut::float`] each).
+    #[inline]
+    pub(crate) fn vec3(&mut self, p: [f64; 3]) -> &mut Self {
+        self.float(p[0]).s(" ").float(p[1]).s(" ").float(p[2])
+    }
+
     /// Appends a float in at most `width` (>= 16) characters: the shortest round-trip form when
     /// it fits, otherwise scientific notation with `width - 8` fractional digits.
     #[inline]

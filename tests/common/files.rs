@@ -28,3 +28,19 @@ pub fn npy_bytes(descr: &str, shape: &str, data: &[u8]) -> Vec<u8> {
     out.extend_from_slice(data);
     out
 }
+
+/// Writes a C-order `<f8` `.npy` of shape `(nx, ny, nz)`; element `[i, j, k]` (grid vertex
+/// x = i, y = j, z = k, as tptd reads it) is `f(i, j, k)`.
+pub fn write_npy(path: &Path, dims: [usize; 3], f: impl Fn(usize, usize, usize) -> f64) {
+    let [nx, ny, nz] = dims;
+    let mut data = Vec::with_capacity(nx * ny * nz * 8);
+    for i in 0..nx {
+        for j in 0..ny {
+            for k in 0..nz {
+                data.extend_from_slice(&f(i, j, k).to_le_bytes());
+            }
+        }
+    }
+    let shape = format!("({nx}, {ny}, {nz})");
+    fs::write(path, npy_bytes("<f8", &shape, &data)).unwrap();
+}
