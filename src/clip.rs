@@ -74,6 +74,20 @@ impl Interval {
     }
 }
 
+impl Interval {
+    /// Value of a (not snapped) vertex for cut placement: tied values moved outward.
+    #[inline]
+    pub fn effective(&self, v: f64) -> f64 {
+        if v == self.alpha {
+            self.alpha_tie
+        } else if v == self.beta {
+            self.beta_tie
+        } else {
+            v
+        }
+    }
+}
+
 /// A tet vertex handed to the clipper.
 #[derive(Clone, Copy, Debug)]
 pub struct ClipVertex {
@@ -134,24 +148,12 @@ fn classify(v: f64, alpha: f64, beta: f64) -> u8 {
     }
 }
 
-/// Value of a vertex for cut placement (moves tied values outward).
-#[inline]
-fn effective(v: f64, iv: &Interval) -> f64 {
-    if v == iv.alpha {
-        iv.alpha_tie
-    } else if v == iv.beta {
-        iv.beta_tie
-    } else {
-        v
-    }
-}
-
 /// Value of a tet vertex for cut placement: a snapped vertex is exactly on its level, a tied
 /// one is moved outward.
 #[inline]
 fn placed(v: &ClipVertex, iv: &Interval) -> f64 {
     if v.snap == SNAP_NONE {
-        effective(v.val, iv)
+        iv.effective(v.val)
     } else {
         v.val
     }

@@ -128,17 +128,6 @@ fn snap_round(stars: &[Star], open: &[usize], passes: &[bool]) -> Vec<usize> {
         .collect()
 }
 
-/// The value used for cut placement (ties moved outward, as the clipper does).
-fn effective(v: f64, iv: &Interval) -> f64 {
-    if v == iv.alpha {
-        iv.alpha_tie
-    } else if v == iv.beta {
-        iv.beta_tie
-    } else {
-        v
-    }
-}
-
 /// Whether value `u` lies on the domain side of level `snap` (ties count as outside).
 fn domain_side(u: f64, snap: u8, iv: &Interval) -> bool {
     if snap == SNAP_ALPHA {
@@ -256,7 +245,7 @@ fn mixed_row(sides: &[[Vec<u64>; 2]; 3], j: usize, words: usize) -> Vec<u64> {
 
 fn candidate_level(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], eps: f64) -> u8 {
     let f = grid.value(ijk[0], ijk[1], ijk[2]);
-    let e = effective(f, iv);
+    let e = iv.effective(f);
     let mut found = SNAP_NONE;
     for snap in [SNAP_ALPHA, SNAP_BETA] {
         let level = level_of(snap, iv);
@@ -341,7 +330,7 @@ impl Star {
         link.add_outside_octants(grid, iv, v);
         let f = grid.values[v];
         let side = domain_side(f, snap, iv);
-        let (e, level) = (effective(f, iv), level_of(snap, iv));
+        let (e, level) = (iv.effective(f), level_of(snap, iv));
         let t = link
             .nodes
             .iter()
