@@ -294,7 +294,8 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
         return;
     }
     let cuts = cut_points(tv, &cls, iv);
-    if flat(&cuts.pts[..cuts.np], iv) {
+    // Only snapped vertices make a piece with every point on one level.
+    if tv.iter().any(|v| v.snap != SNAP_NONE) && flat(&cuts.pts[..cuts.np], iv) {
         return;
     }
     let mut faces = Faces {
