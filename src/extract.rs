@@ -1,24 +1,22 @@
-//! The parallel cell loop and the deterministic merge of points by key.
+//! The parallel cell loop: plan → decompose → clip, slab by slab.
 //!
-//! Cells are processed in z-slabs (one slab = one layer of cells) in parallel. Each slab welds
-//! its points by [`PointKey`] into slab-local numbering. A sequential pass then numbers points
-//! globally in slab order; only keys on the plane shared by two slabs are looked up across
-//! slabs. Output is therefore identical for every thread count.
+//! Cells are processed in z-slabs (one slab = one layer of cells), a window of slabs at a
+//! time in parallel. Each slab welds its points by key into slab-local numbering; the
+//! [`Welder`] then numbers them globally in slab order and hands each slab on as a chunk
+//! (see `weld`). Output is therefore identical for every thread count and window size.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rayon::prelude::*;
-use rustc_hash::FxHashMap;
 
-use crate::clip::{
-    clip_tet, ClipPoint, ClipSink, ClipVertex, Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE,
-};
+use crate::clip::{clip_tet, ClipVertex, Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
 use crate::decompose::plan::{plan_cell, Layout, Planner};
 use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM_LOCAL};
 use crate::grid::{cell_box_planes, corner_offset, ScalarGrid};
-use crate::keys::{grid_vertex, local_key, on_z_plane, vertex_key, vertex_point, PointKey, CORNER};
-use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::keys::local_key;
+use crate::mesh::TetMesh;
 use crate::warp::snap_vertices;
+use crate::weld::{Gather, MeshSink, Slab, Welder};
 
 pub use crate::decompose::plan::Method;
 
@@ -39,6 +37,10 @@ pub struct MeshOptions {
     /// it lies off the trilinear level set until the quality pass projects it; use it with
     /// [`crate::improve::improve`].
     pub warp: f64,
+    /// Slabs (layers of cells) meshed at a time before they are welded and handed on;
+    /// `0` (default) is 8 per worker thread. Bounds the memory of
+    /// [`mesh_interval_streamed`]; the output does not depend on it.
+    pub slabs_in_flight: usize,
 }
 
 impl Default for MeshOptions {
@@ -50,6 +52,7 @@ impl Default for MeshOptions {
             method: Method::Ctd,
             threads: None,
             warp: 0.0,
+            slabs_in_flight: 0,
         }
     }
 }
@@ -120,6 +123,9 @@ pub enum MeshError {
     /// More than 2^32 - 1 points or tets.
     #[error("mesh too large: {0} exceeds the 32-bit index range")]
     TooLarge(&'static str),
+    /// The sink of [`mesh_interval_streamed`] failed (e.g. writing the output).
+    #[error("{0}")]
+    Output(#[source] std::io::Error),
 }
 
 /// Counters of one run.
@@ -162,6 +168,28 @@ pub fn mesh_interval_with_progress(
     opts: &MeshOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<MeshOutput, MeshError> {
+    let mut gather = Gather::default();
+    let stats = mesh_interval_streamed(grid, opts, progress, &mut gather)?;
+    Ok(MeshOutput {
+        mesh: gather.mesh,
+        stats,
+    })
+}
+
+/// Meshes like [`mesh_interval`] but hands the mesh to `sink` slab by slab ([`MeshChunk`]s in
+/// z order, points in physical coordinates, elements in global numbers) instead of building
+/// it in memory: at most [`MeshOptions::slabs_in_flight`] slabs are held at a time. The
+/// chunks concatenated are exactly the mesh [`mesh_interval`] returns, whatever the number of
+/// threads or of slabs in flight.
+///
+/// # Errors
+/// As [`mesh_interval`], and [`MeshError::Output`] with the first error of `sink`.
+pub fn mesh_interval_streamed(
+    grid: &ScalarGrid,
+    opts: &MeshOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<MeshStats, MeshError> {
     if opts.alpha.is_nan() || opts.beta.is_nan() || opts.alpha >= opts.beta {
         return Err(MeshError::InvalidInterval {
             alpha: opts.alpha,
@@ -174,116 +202,14 @@ pub fn mesh_interval_with_progress(
                 .num_threads(n.max(1))
                 .build()
                 .map_err(|e| MeshError::Threads(n, e.to_string()))?;
-            pool.install(|| run(grid, opts, progress))
+            pool.install(|| run(grid, opts, progress, sink))
         }
-        None => run(grid, opts, progress),
+        None => run(grid, opts, progress, sink),
     }
 }
 
-/// Points, tets and boundary triangles of one slab, numbered locally.
-struct Slab {
-    /// Slab-local id of each grid vertex on the slab's two planes (`u32::MAX`: none yet).
-    corner_ids: Vec<u32>,
-    /// Grid index of the first vertex of the slab's lower plane.
-    plane_base: usize,
-    /// Direct-mapped cache in front of `map` (points recur within and across nearby cells).
-    recent: Box<[(PointKey, u32); RECENT]>,
-    map: FxHashMap<PointKey, u32>,
-    keys: Vec<PointKey>,
-    pos: Vec<[f64; 3]>,
-    val: Vec<f64>,
-    tets: Vec<[u32; 4]>,
-    tris: Vec<[u32; 3]>,
-    labels: Vec<BoundaryLabel>,
-    cases: [u64; 6],
-}
-
-const RECENT: usize = 256;
-
-impl Slab {
-    fn new(plane: usize, k: usize) -> Self {
-        Slab {
-            corner_ids: vec![u32::MAX; 2 * plane],
-            plane_base: k * plane,
-            recent: Box::new([(PointKey::MAX, 0); RECENT]),
-            map: FxHashMap::with_capacity_and_hasher(plane / 4, Default::default()),
-            keys: Vec::new(),
-            pos: Vec::new(),
-            val: Vec::new(),
-            tets: Vec::new(),
-            tris: Vec::new(),
-            labels: Vec::new(),
-            cases: [0; 6],
-        }
-    }
-
-    /// Reserves room for `meshed` cells (about 7 tets and 2 new points each) so the slab's
-    /// vectors do not grow by copying.
-    fn reserve(&mut self, meshed: usize) {
-        self.tets.reserve(7 * meshed);
-        self.keys.reserve(2 * meshed);
-        self.pos.reserve(2 * meshed);
-        self.val.reserve(2 * meshed);
-        self.tris.reserve(meshed);
-        self.labels.reserve(meshed);
-    }
-
-    #[inline]
-    fn push_point(&mut self, key: PointKey, pos: [f64; 3], val: f64) -> u32 {
-        let i = self.keys.len() as u32;
-        self.keys.push(key);
-        self.pos.push(pos);
-        self.val.push(val);
-        i
-    }
-
-    /// Slab-local id of grid vertex `grid_index` (on one of the slab's two planes).
-    #[inline]
-    fn corner_id(&mut self, grid_index: usize, pos: [f64; 3], val: f64) -> u32 {
-        let slot = grid_index - self.plane_base;
-        let id = self.corner_ids[slot];
-        if id != u32::MAX {
-            return id;
-        }
-        let id = self.push_point(vertex_point(vertex_key(grid_index, CORNER)), pos, val);
-        self.corner_ids[slot] = id;
-        id
-    }
-
-    #[inline]
-    fn id(&mut self, p: &ClipPoint) -> u32 {
-        if let Some(gi) = grid_vertex(p.key) {
-            return self.corner_id(gi, p.pos, p.val);
-        }
-        let h = ((p.key as u64) ^ ((p.key >> 64) as u64)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56;
-        let slot = &mut self.recent[h as usize % RECENT];
-        if slot.0 == p.key {
-            return slot.1;
-        }
-        if let Some(&i) = self.map.get(&p.key) {
-            *slot = (p.key, i);
-            return i;
-        }
-        let i = self.push_point(p.key, p.pos, p.val);
-        self.recent[h as usize % RECENT] = (p.key, i);
-        self.map.insert(p.key, i);
-        i
-    }
-}
-
-impl ClipSink for Slab {
-    #[inline]
-    fn tet(&mut self, points: &[ClipPoint], t: [usize; 4]) {
-        let ids = t.map(|i| self.id(&points[i]));
-        self.tets.push(ids);
-    }
-    #[inline]
-    fn triangle(&mut self, points: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
-        let ids = t.map(|i| self.id(&points[i]));
-        self.tris.push(ids);
-        self.labels.push(label);
-    }
-}
+/// Slabs in flight per worker thread when [`MeshOptions::slabs_in_flight`] is 0.
+const SLABS_PER_THREAD: usize = 8;
 
 /// What every cell of one run shares.
 struct Ctx<'a> {
@@ -310,7 +236,8 @@ fn run(
     grid: &ScalarGrid,
     opts: &MeshOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<MeshOutput, MeshError> {
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<MeshStats, MeshError> {
     let tied = without_near_ties(grid, opts.alpha, opts.beta);
     let grid = tied.as_ref().unwrap_or(grid);
     let [_, _, cz] = grid.cell_dims();
@@ -326,27 +253,35 @@ fn run(
         snaps: Vec::new(),
     };
     ctx.snaps = snap_vertices(grid, &ctx.planner, &ctx.interval, opts.warp);
-    let done = AtomicUsize::new(0);
-    let slabs: Vec<Slab> = (0..cz)
-        .into_par_iter()
-        .map(|k| {
-            let s = process_slab(&ctx, k);
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress(d, cz);
-            s
-        })
-        .collect();
+    let window = match opts.slabs_in_flight {
+        0 => SLABS_PER_THREAD * rayon::current_num_threads(),
+        n => n,
+    };
     let mut stats = MeshStats {
         cells_total: grid.num_cells() as u64,
         ..Default::default()
     };
-    for s in &slabs {
-        for (a, b) in stats.cells_by_case.iter_mut().zip(s.cases) {
-            *a += b;
+    let mut welder = Welder::new(grid);
+    let done = AtomicUsize::new(0);
+    for k0 in (0..cz).step_by(window) {
+        let slabs: Vec<Slab> = (k0..(k0 + window).min(cz))
+            .into_par_iter()
+            .map(|k| {
+                let s = process_slab(&ctx, k);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, cz);
+                s
+            })
+            .collect();
+        for s in &slabs {
+            for (a, b) in stats.cells_by_case.iter_mut().zip(s.cases) {
+                *a += b;
+            }
+        }
+        for chunk in welder.weld(slabs)? {
+            sink.chunk(chunk).map_err(MeshError::Output)?;
         }
     }
-    let mesh = merge(grid, slabs)?;
-    Ok(MeshOutput { mesh, stats })
+    Ok(stats)
 }
 
 /// Values within this fraction of the data range of a level, but not equal to it, are set
@@ -376,207 +311,6 @@ fn without_near_ties(grid: &ScalarGrid, alpha: f64, beta: f64) -> Option<ScalarG
     Some(g)
 }
 
-/// Global numbering in slab order; returns the mesh in physical coordinates.
-fn merge(grid: &ScalarGrid, slabs: Vec<Slab>) -> Result<TetMesh, MeshError> {
-    let numbering = number_points(grid, &slabs)?;
-    let mut points = Vec::with_capacity(numbering.count);
-    let mut values = Vec::with_capacity(numbering.count);
-    for (s, fresh) in slabs.iter().zip(&numbering.fresh) {
-        for &li in fresh {
-            points.push(s.pos[li as usize]);
-            values.push(s.val[li as usize]);
-        }
-    }
-    let total_tets: usize = slabs.iter().map(|s| s.tets.len()).sum();
-    if total_tets > u32::MAX as usize {
-        return Err(MeshError::TooLarge("tets"));
-    }
-    let (tets, boundary, boundary_labels) = remap_elements(grid, &slabs, &numbering.maps);
-    drop(slabs);
-    to_physical(grid, &mut points);
-    Ok(TetMesh {
-        points,
-        values,
-        tets,
-        boundary,
-        boundary_labels,
-    })
-}
-
-/// Tets, boundary triangles and their labels of every slab in slab order, in global numbers.
-/// A left-handed frame mirrors the mesh: then every element is flipped to keep orientations.
-fn remap_elements(
-    grid: &ScalarGrid,
-    slabs: &[Slab],
-    maps: &[Vec<u32>],
-) -> (Vec<[u32; 4]>, Vec<[u32; 3]>, Vec<BoundaryLabel>) {
-    let flip = grid.affine_determinant() < 0.0;
-    let tets = remap(
-        slabs,
-        maps,
-        |s| &s.tets,
-        |t, m| {
-            let g = t.map(|i| m[i as usize]);
-            if flip {
-                [g[0], g[1], g[3], g[2]]
-            } else {
-                g
-            }
-        },
-    );
-    let boundary = remap(
-        slabs,
-        maps,
-        |s| &s.tris,
-        |t, m| {
-            let g = t.map(|i| m[i as usize]);
-            if flip {
-                [g[0], g[2], g[1]]
-            } else {
-                g
-            }
-        },
-    );
-    let labels = slabs
-        .iter()
-        .flat_map(|s| s.labels.iter().copied())
-        .collect();
-    (tets, boundary, labels)
-}
-
-/// Maps index-space points to physical coordinates in place.
-fn to_physical(grid: &ScalarGrid, points: &mut [[f64; 3]]) {
-    let lin = grid.linear_map();
-    let origin = grid.origin;
-    points.par_iter_mut().for_each(|p| {
-        let q = *p;
-        for r in 0..3 {
-            p[r] = origin[r] + lin[r][0] * q[0] + lin[r][1] * q[1] + lin[r][2] * q[2];
-        }
-    });
-}
-
-/// The global numbering of every slab's points.
-struct Numbering {
-    /// Per slab: global number of each slab-local point.
-    maps: Vec<Vec<u32>>,
-    /// Per slab: the slab-local points numbered first in this slab, in global order.
-    fresh: Vec<Vec<u32>>,
-    /// Number of global points.
-    count: usize,
-}
-
-/// Global numbers of the points of one z-plane shared by two slabs: grid vertices in a dense
-/// array (indexed by position in the plane), every other point (cuts, saddles of z-faces) in
-/// a hash map.
-struct PlanePoints {
-    corners: Vec<u32>,
-    others: FxHashMap<PointKey, u32>,
-}
-
-/// Numbers points globally in slab order; a point on the plane shared with the slab below
-/// takes the number it got there.
-fn number_points(grid: &ScalarGrid, slabs: &[Slab]) -> Result<Numbering, MeshError> {
-    let stride = grid.dims[0] * grid.dims[1];
-    let mut maps: Vec<Vec<u32>> = Vec::with_capacity(slabs.len());
-    let mut fresh: Vec<Vec<u32>> = Vec::with_capacity(slabs.len());
-    let mut prev = PlanePoints {
-        corners: vec![u32::MAX; stride],
-        others: FxHashMap::default(),
-    };
-    let mut top = PlanePoints {
-        corners: vec![u32::MAX; stride],
-        others: FxHashMap::default(),
-    };
-    let mut next = 0u64;
-    for (k, s) in slabs.iter().enumerate() {
-        top.corners.fill(u32::MAX);
-        let (map, new) = number_slab(s, k, stride, &prev, &mut top, &mut next)?;
-        std::mem::swap(&mut prev.corners, &mut top.corners);
-        prev.others = std::mem::take(&mut top.others);
-        maps.push(map);
-        fresh.push(new);
-    }
-    Ok(Numbering {
-        maps,
-        fresh,
-        count: next as usize,
-    })
-}
-
-/// Numbers the points of slab `k`: returns its local-to-global map and its new points; fills
-/// `top` with the points on its upper plane.
-fn number_slab(
-    s: &Slab,
-    k: usize,
-    stride: usize,
-    prev: &PlanePoints,
-    top: &mut PlanePoints,
-    next: &mut u64,
-) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
-    let mut map = Vec::with_capacity(s.keys.len());
-    let mut fresh = Vec::new();
-    for (li, &key) in s.keys.iter().enumerate() {
-        let corner = grid_vertex(key);
-        let shared = match corner {
-            Some(gi) if gi / stride == k => {
-                Some(prev.corners[gi % stride]).filter(|&g| g != u32::MAX)
-            }
-            Some(_) => None,
-            None if on_z_plane(key, k, stride) => prev.others.get(&key).copied(),
-            None => None,
-        };
-        let gid = match shared {
-            Some(g) => g,
-            None => {
-                let g = u32::try_from(*next).map_err(|_| MeshError::TooLarge("points"))?;
-                *next += 1;
-                fresh.push(li as u32);
-                g
-            }
-        };
-        match corner {
-            Some(gi) if gi / stride == k + 1 => top.corners[gi % stride] = gid,
-            Some(_) => {}
-            None if on_z_plane(key, k + 1, stride) => {
-                top.others.insert(key, gid);
-            }
-            None => {}
-        }
-        map.push(gid);
-    }
-    Ok((map, fresh))
-}
-
-/// Concatenates one per-slab list in slab order, renumbering each element through its slab's
-/// local-to-global map, in parallel into an exactly sized vector.
-fn remap<T: Copy + Default + Send + Sync>(
-    slabs: &[Slab],
-    maps: &[Vec<u32>],
-    list: impl Fn(&Slab) -> &Vec<T> + Sync,
-    f: impl Fn(&T, &[u32]) -> T + Sync,
-) -> Vec<T> {
-    let total = slabs.iter().map(|s| list(s).len()).sum();
-    let mut out = vec![T::default(); total];
-    let mut chunks = Vec::with_capacity(slabs.len());
-    let mut rest = &mut out[..];
-    for s in slabs {
-        let (a, b) = rest.split_at_mut(list(s).len());
-        chunks.push(a);
-        rest = b;
-    }
-    chunks
-        .into_par_iter()
-        .zip(slabs.par_iter())
-        .zip(maps.par_iter())
-        .for_each(|((dst, s), m)| {
-            for (d, t) in dst.iter_mut().zip(list(s)) {
-                *d = f(t, m);
-            }
-        });
-    out
-}
-
 /// Meshes the cells of layer `k` into a new slab.
 fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     let [cx, cy, _] = ctx.grid.cell_dims();
@@ -594,9 +328,7 @@ fn process_slab(ctx: &Ctx, k: usize) -> Slab {
             process_cell(ctx, [i, j, k], &mut tets, &mut slab);
         }
     }
-    slab.map = FxHashMap::default();
-    slab.recent = Box::new([(PointKey::MAX, 0); RECENT]);
-    slab.corner_ids = Vec::new();
+    slab.seal();
     slab
 }
 

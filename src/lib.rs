@@ -32,13 +32,15 @@ pub mod surface;
 pub mod topology;
 pub(crate) mod trilinear;
 pub(crate) mod warp;
+pub mod weld;
 
 pub use curvilinear::{mesh_curvilinear, CurvilinearError};
 pub use decompose::CellCase;
 pub use extract::{
-    mesh_interval, mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput, MeshStats,
-    Method,
+    mesh_interval, mesh_interval_streamed, mesh_interval_with_progress, MeshError, MeshOptions,
+    MeshOutput, MeshStats, Method,
 };
 pub use grid::{CurvilinearGrid, ScalarGrid};
 pub use mesh::{BoundaryLabel, TetMesh, TriSurface};
 pub use surface::{analysis::analyse_surface, level_surface, SurfaceOptions};
+pub use weld::{MeshChunk, MeshSink};

@@ -14,6 +14,7 @@ pub mod nrrd;
 pub mod obj;
 pub mod plot3d;
 pub mod ply;
+mod source;
 pub mod stl;
 pub mod transfer_out;
 mod volume;

@@ -13,7 +13,8 @@
 
 use std::io::{self, Write};
 
-use super::write_common::{check_lengths, present_labels, TextOut};
+use super::source::{InMemory, MeshSource};
+use super::write_common::{check_lengths, TextOut};
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// Which `.msh` format version [`write_msh`] produces.
@@ -52,11 +53,20 @@ const VOLUME_ENTITY: u32 = 1;
 /// inconsistent (`values` or `boundary_labels` of the wrong length).
 pub fn write_msh(mesh: &TetMesh, w: &mut dyn Write, version: MshVersion) -> io::Result<()> {
     check_lengths(mesh)?;
+    write_msh_source(&InMemory::new(mesh), w, version)
+}
+
+/// [`write_msh`] from any [`MeshSource`].
+pub(crate) fn write_msh_source(
+    src: &dyn MeshSource,
+    w: &mut dyn Write,
+    version: MshVersion,
+) -> io::Result<()> {
     let mut out = TextOut::new(w);
-    let present = present_labels(mesh);
+    let present = src.present_labels();
     match version {
-        MshVersion::V41 => write_v41(mesh, &present, &mut out)?,
-        MshVersion::V22 => write_v22(mesh, &present, &mut out)?,
+        MshVersion::V41 => write_v41(src, &present, &mut out)?,
+        MshVersion::V22 => write_v22(src, &present, &mut out)?,
     }
     out.finish()
 }
@@ -79,7 +89,7 @@ fn header(out: &mut TextOut, version: &str, present: &[(BoundaryLabel, usize)]) 
     out.s("$EndPhysicalNames").nl()
 }
 
-fn node_data(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
+fn node_data(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
     out.s("$NodeData").nl()?;
     out.s("1").nl()?;
     out.s("\"f\"").nl()?;
@@ -88,10 +98,15 @@ fn node_data(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
     out.s("3").nl()?;
     out.s("0").nl()?;
     out.s("1").nl()?;
-    out.int(mesh.points.len()).nl()?;
-    for (i, &v) in mesh.values.iter().enumerate() {
-        out.int(i + 1).s(" ").float(v).nl()?;
-    }
+    out.int(src.num_points()).nl()?;
+    let mut i = 0usize;
+    src.values(&mut |vs| {
+        for &v in vs {
+            i += 1;
+            out.int(i).s(" ").float(v).nl()?;
+        }
+        Ok(())
+    })?;
     out.s("$EndNodeData").nl()
 }
 
@@ -99,23 +114,9 @@ fn point<'o, 'w>(out: &'o mut TextOut<'w>, p: [f64; 3]) -> &'o mut TextOut<'w> {
     out.vec3(p)
 }
 
-/// Axis-aligned bounding box of the given node indices (zeros if there are none).
-fn bbox(mesh: &TetMesh, nodes: impl Iterator<Item = u32>) -> [f64; 6] {
-    let mut b = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    for i in nodes {
-        let p = mesh.points[i as usize];
-        for k in 0..3 {
-            b[k] = b[k].min(p[k]);
-            b[k + 3] = b[k + 3].max(p[k]);
-        }
-    }
+/// The bounding box of [`MeshSource::bbox`], zeros if there are no points.
+fn bbox(src: &dyn MeshSource, label: Option<BoundaryLabel>) -> [f64; 6] {
+    let b = src.bbox(label);
     if b[0] > b[3] {
         [0.0; 6]
     } else {
@@ -124,34 +125,33 @@ fn bbox(mesh: &TetMesh, nodes: impl Iterator<Item = u32>) -> [f64; 6] {
 }
 
 fn write_v41(
-    mesh: &TetMesh,
+    src: &dyn MeshSource,
     present: &[(BoundaryLabel, usize)],
     out: &mut TextOut,
 ) -> io::Result<()> {
     header(out, "4.1", present)?;
-    entities_v41(mesh, present, out)?;
-    nodes_v41(mesh, out)?;
-    elements_v41(mesh, present, out)?;
-    node_data(mesh, out)
+    entities_v41(src, present, out)?;
+    nodes_v41(src, out)?;
+    elements_v41(src, present, out)?;
+    node_data(src, out)
 }
 
 /// `$Entities`: one surface per boundary label that occurs, then the volume entity.
 fn entities_v41(
-    mesh: &TetMesh,
+    src: &dyn MeshSource,
     present: &[(BoundaryLabel, usize)],
     out: &mut TextOut,
 ) -> io::Result<()> {
     out.s("$Entities").nl()?;
     out.s("0 0 ").int(present.len()).s(" 1").nl()?;
     for &(label, _) in present {
-        let nodes = triangles_labelled(mesh, label).flat_map(|t| t.iter().copied());
         out.int(label_tag(label));
-        bbox_fields(out, bbox(mesh, nodes));
+        bbox_fields(out, bbox(src, Some(label)));
         // one physical tag; no bounding curves
         out.s(" 1 ").int(label_tag(label)).s(" 0").nl()?;
     }
     out.int(VOLUME_ENTITY);
-    bbox_fields(out, bbox(mesh, 0..mesh.points.len() as u32));
+    bbox_fields(out, bbox(src, None));
     out.s(" 1 ")
         .int(DOMAIN_PHYSICAL_TAG)
         .s(" ")
@@ -171,8 +171,8 @@ fn bbox_fields(out: &mut TextOut, b: [f64; 6]) {
 }
 
 /// `$Nodes`: all nodes in one block classified on the volume entity.
-fn nodes_v41(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
-    let n_points = mesh.points.len();
+fn nodes_v41(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
+    let n_points = src.num_points();
     out.s("$Nodes").nl()?;
     let max_tag = n_points; // 0 when empty, matching gmsh's own output for empty meshes
     let min_tag = usize::from(n_points > 0);
@@ -188,21 +188,24 @@ fn nodes_v41(mesh: &TetMesh, out: &mut TextOut) -> io::Result<()> {
     for i in 1..=n_points {
         out.int(i).nl()?;
     }
-    for &p in &mesh.points {
-        point(out, p).nl()?;
-    }
+    src.points(&mut |ps| {
+        for &p in ps {
+            point(out, p).nl()?;
+        }
+        Ok(())
+    })?;
     out.s("$EndNodes").nl()
 }
 
 /// `$Elements`: the tets in one block on the volume entity, then one triangle block per
 /// boundary label that occurs.
 fn elements_v41(
-    mesh: &TetMesh,
+    src: &dyn MeshSource,
     present: &[(BoundaryLabel, usize)],
     out: &mut TextOut,
 ) -> io::Result<()> {
-    let n_tets = mesh.tets.len();
-    let n_elems = n_tets + mesh.boundary.len();
+    let n_tets = src.num_tets();
+    let n_elems = n_tets + src.num_boundary();
     out.s("$Elements").nl()?;
     out.int(present.len() + 1)
         .s(" ")
@@ -213,16 +216,23 @@ fn elements_v41(
         .int(n_elems)
         .nl()?;
     element_block(out, VOLUME_ENTITY, 3, TETRAHEDRON, n_tets)?;
-    for (t, tet) in mesh.tets.iter().enumerate() {
-        element_nodes(out.int(t + 1), tet)?;
-    }
-    let mut tag = n_tets;
+    let mut tag = 0usize;
+    src.tets(&mut |ts| {
+        for tet in ts {
+            tag += 1;
+            element_nodes(out.int(tag), tet)?;
+        }
+        Ok(())
+    })?;
     for &(label, count) in present {
         element_block(out, label_tag(label), 2, TRIANGLE, count)?;
-        for tri in triangles_labelled(mesh, label) {
-            tag += 1;
-            element_nodes(out.int(tag), tri)?;
-        }
+        src.triangles(label, &mut |ts| {
+            for tri in ts {
+                tag += 1;
+                element_nodes(out.int(tag), tri)?;
+            }
+            Ok(())
+        })?;
     }
     out.s("$EndElements").nl()
 }
@@ -254,57 +264,59 @@ fn element_nodes(out: &mut TextOut, nodes: &[u32]) -> io::Result<()> {
 }
 
 fn write_v22(
-    mesh: &TetMesh,
+    src: &dyn MeshSource,
     present: &[(BoundaryLabel, usize)],
     out: &mut TextOut,
 ) -> io::Result<()> {
     header(out, "2.2", present)?;
     out.s("$Nodes").nl()?;
-    out.int(mesh.points.len()).nl()?;
-    for (i, &p) in mesh.points.iter().enumerate() {
-        out.int(i + 1).s(" ");
-        point(out, p).nl()?;
-    }
+    out.int(src.num_points()).nl()?;
+    let mut i = 0usize;
+    src.points(&mut |ps| {
+        for &p in ps {
+            i += 1;
+            out.int(i).s(" ");
+            point(out, p).nl()?;
+        }
+        Ok(())
+    })?;
     out.s("$EndNodes").nl()?;
-    elements_v22(mesh, present, out)?;
-    node_data(mesh, out)
+    elements_v22(src, present, out)?;
+    node_data(src, out)
 }
 
 /// `$Elements` (2.2): the tets, then the boundary triangles grouped by label; each element
 /// carries two tags, physical and elementary.
 fn elements_v22(
-    mesh: &TetMesh,
+    src: &dyn MeshSource,
     present: &[(BoundaryLabel, usize)],
     out: &mut TextOut,
 ) -> io::Result<()> {
     out.s("$Elements").nl()?;
-    let n_tets = mesh.tets.len();
-    out.int(n_tets + mesh.boundary.len()).nl()?;
-    for (t, tet) in mesh.tets.iter().enumerate() {
-        out.int(t + 1)
-            .s(" 4 2 ")
-            .int(DOMAIN_PHYSICAL_TAG)
-            .s(" ")
-            .int(VOLUME_ENTITY);
-        element_nodes(out, tet)?;
-    }
-    let mut tag = n_tets;
+    out.int(src.num_tets() + src.num_boundary()).nl()?;
+    let mut tag = 0usize;
+    src.tets(&mut |ts| {
+        for tet in ts {
+            tag += 1;
+            out.int(tag)
+                .s(" 4 2 ")
+                .int(DOMAIN_PHYSICAL_TAG)
+                .s(" ")
+                .int(VOLUME_ENTITY);
+            element_nodes(out, tet)?;
+        }
+        Ok(())
+    })?;
     for &(label, _) in present {
         let lt = label_tag(label);
-        for tri in triangles_labelled(mesh, label) {
-            tag += 1;
-            out.int(tag).s(" 2 2 ").int(lt).s(" ").int(lt);
-            element_nodes(out, tri)?;
-        }
+        src.triangles(label, &mut |ts| {
+            for tri in ts {
+                tag += 1;
+                out.int(tag).s(" 2 2 ").int(lt).s(" ").int(lt);
+                element_nodes(out, tri)?;
+            }
+            Ok(())
+        })?;
     }
     out.s("$EndElements").nl()
-}
-
-/// The boundary triangles of `mesh` that carry `label`, in mesh order.
-fn triangles_labelled(mesh: &TetMesh, label: BoundaryLabel) -> impl Iterator<Item = &[u32; 3]> {
-    mesh.boundary
-        .iter()
-        .zip(&mesh.boundary_labels)
-        .filter(move |&(_, &l)| l == label)
-        .map(|(tri, _)| tri)
 }

@@ -36,6 +36,7 @@ use flate2::write::ZlibEncoder;
 use flate2::Compression;
 use rayon::prelude::*;
 
+use super::source::{visit_iter, InMemory, MeshSource};
 use super::write_common::{check_lengths, invalid};
 use crate::mesh::TetMesh;
 
@@ -89,9 +90,9 @@ pub struct VtuField<'a> {
 }
 
 /// Whether `connectivity` and `offsets` need Int64 (an id or offset exceeds `i32`).
-fn is_wide(mesh: &TetMesh) -> bool {
-    mesh.points.len() as u64 > i32::MAX as u64
-        || mesh.tets.len().saturating_mul(4) > i32::MAX as usize
+fn is_wide(src: &dyn MeshSource) -> bool {
+    src.num_points() as u64 > i32::MAX as u64
+        || src.num_tets().saturating_mul(4) > i32::MAX as usize
 }
 
 /// The little-endian bytes of `v`: borrowed on a little-endian host.
@@ -103,40 +104,73 @@ fn le_f64(v: &[f64]) -> Cow<'_, [u8]> {
     }
 }
 
-/// The little-endian bytes of the arrays, in file order (point fields, `Points`,
-/// `connectivity`, `offsets`, `types`, cell fields): borrowed from the mesh where its memory
-/// already holds them, built otherwise.
-fn arrays<'a>(
-    mesh: &'a TetMesh,
+/// One array of the appended data.
+#[derive(Clone, Copy)]
+enum Array<'a> {
+    /// A Float64 point or cell field given in memory.
+    Field(&'a [f64]),
+    /// The field `f` of the source.
+    Values,
+    /// The points, Float64 × 3.
+    Points,
+    /// The tets' node ids, Int32 or Int64.
+    Connectivity,
+    /// `4, 8, 12, …`, Int32 or Int64.
+    Offsets,
+    /// `VTK_TETRA` per tet, UInt8.
+    Types,
+}
+
+/// A source's arrays, and whether its ids are Int64.
+struct Arrays<'a> {
+    src: &'a dyn MeshSource,
     wide: bool,
-    point: &[VtuField<'a>],
-    cell: &[VtuField<'a>],
-) -> Vec<Cow<'a, [u8]>> {
-    let n_tets = mesh.tets.len();
-    let ids = mesh.tets.iter().flatten();
-    let conn: Cow<'_, [u8]> = match (NATIVE, wide) {
-        (true, false) => Cow::Borrowed(bytemuck::cast_slice(&mesh.tets)),
-        (_, true) => Cow::Owned(ids.flat_map(|&v| i64::from(v).to_le_bytes()).collect()),
-        (false, false) => Cow::Owned(ids.flat_map(|&v| (v as i32).to_le_bytes()).collect()),
-    };
-    let offsets: Vec<u8> = if wide {
-        (1..=n_tets as i64)
-            .flat_map(|t| (4 * t).to_le_bytes())
-            .collect()
-    } else {
-        (1..=n_tets as i32)
-            .flat_map(|t| (4 * t).to_le_bytes())
-            .collect()
-    };
-    let mut out: Vec<Cow<'a, [u8]>> = point.iter().map(|f| le_f64(f.data)).collect();
-    out.extend([
-        le_f64(bytemuck::cast_slice(&mesh.points)),
-        conn,
-        Cow::Owned(offsets),
-        Cow::Owned(vec![VTK_TETRA; n_tets]),
-    ]);
-    out.extend(cell.iter().map(|f| le_f64(f.data)));
-    out
+}
+
+impl Arrays<'_> {
+    /// The number of bytes of `a`.
+    fn byte_len(&self, a: &Array) -> u64 {
+        let id = if self.wide { 8 } else { 4 };
+        let (n, t) = (self.src.num_points() as u64, self.src.num_tets() as u64);
+        match a {
+            Array::Field(d) => 8 * d.len() as u64,
+            Array::Values => 8 * n,
+            Array::Points => 24 * n,
+            Array::Connectivity => 4 * id * t,
+            Array::Offsets => id * t,
+            Array::Types => t,
+        }
+    }
+
+    /// Visits the little-endian bytes of `a` in order.
+    fn visit(&self, a: &Array, f: &mut dyn FnMut(&[u8]) -> io::Result<()>) -> io::Result<()> {
+        let t = self.src.num_tets();
+        match a {
+            Array::Field(d) => f(&le_f64(d)),
+            Array::Values => self.src.values(&mut |v| f(&le_f64(v))),
+            Array::Points => self
+                .src
+                .points(&mut |p| f(&le_f64(bytemuck::cast_slice(p)))),
+            Array::Connectivity => self.src.tets(&mut |ts| f(&self.connectivity(ts))),
+            Array::Offsets if self.wide => visit_iter((1..=t as i64).map(|k| 4 * k), &mut |o| {
+                f(&o.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>())
+            }),
+            Array::Offsets => visit_iter((1..=t as i32).map(|k| 4 * k), &mut |o| {
+                f(&o.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>())
+            }),
+            Array::Types => visit_iter(std::iter::repeat_n(VTK_TETRA, t), f),
+        }
+    }
+
+    /// The connectivity bytes of `ts`: borrowed where memory already holds them.
+    fn connectivity<'t>(&self, ts: &'t [[u32; 4]]) -> Cow<'t, [u8]> {
+        let ids = ts.iter().flatten();
+        match (NATIVE, self.wide) {
+            (true, false) => Cow::Borrowed(bytemuck::cast_slice(ts)),
+            (_, true) => Cow::Owned(ids.flat_map(|&v| i64::from(v).to_le_bytes()).collect()),
+            (false, false) => Cow::Owned(ids.flat_map(|&v| (v as i32).to_le_bytes()).collect()),
+        }
+    }
 }
 
 /// Length of the base64 encoding of `n` bytes.
@@ -147,7 +181,7 @@ fn b64_len(n: u64) -> u64 {
 /// One array as stored in the appended data.
 enum Stored<'a> {
     /// The bytes, written after their UInt64 count (raw, or base64 as one stream).
-    Plain(Cow<'a, [u8]>),
+    Plain(Array<'a>, u64),
     /// The zlib block header and the compressed blocks.
     Blocks(Vec<u64>, Vec<Vec<u8>>),
 }
@@ -156,8 +190,8 @@ impl Stored<'_> {
     /// Its size in the appended data (bytes for `Raw`, characters otherwise).
     fn stored_len(&self, encoding: VtuEncoding) -> u64 {
         match (self, encoding) {
-            (Stored::Plain(b), VtuEncoding::Raw) => 8 + b.len() as u64,
-            (Stored::Plain(b), _) => b64_len(8 + b.len() as u64),
+            (Stored::Plain(_, n), VtuEncoding::Raw) => 8 + n,
+            (Stored::Plain(_, n), _) => b64_len(8 + n),
             (Stored::Blocks(h, blocks), _) => {
                 let data: u64 = blocks.iter().map(|b| b.len() as u64).sum();
                 b64_len(8 * h.len() as u64) + b64_len(data)
@@ -166,16 +200,16 @@ impl Stored<'_> {
     }
 
     /// Writes it to `w`.
-    fn write(&self, w: &mut dyn Write, encoding: VtuEncoding) -> io::Result<()> {
+    fn write(&self, arrays: &Arrays, w: &mut dyn Write, encoding: VtuEncoding) -> io::Result<()> {
         match (self, encoding) {
-            (Stored::Plain(b), VtuEncoding::Raw) => {
-                w.write_all(&(b.len() as u64).to_le_bytes())?;
-                w.write_all(b)
+            (Stored::Plain(a, n), VtuEncoding::Raw) => {
+                w.write_all(&n.to_le_bytes())?;
+                arrays.visit(a, &mut |b| w.write_all(b))
             }
-            (Stored::Plain(b), _) => {
+            (Stored::Plain(a, n), _) => {
                 let mut out = Base64Out::new(w);
-                out.put(&(b.len() as u64).to_le_bytes())?;
-                out.put(b)?;
+                out.put(&n.to_le_bytes())?;
+                arrays.visit(a, &mut |b| out.put(b))?;
                 out.finish()
             }
             (Stored::Blocks(h, blocks), _) => {
@@ -194,20 +228,47 @@ impl Stored<'_> {
     }
 }
 
-/// Compresses `bytes` into VTK's zlib blocks (in parallel): the header and the blocks.
-fn compress(bytes: &[u8]) -> io::Result<Stored<'static>> {
-    let blocks = bytes
-        .par_chunks(ZLIB_BLOCK)
-        .map(|block| {
-            let mut z = ZlibEncoder::new(Vec::new(), Compression::new(ZLIB_LEVEL));
-            z.write_all(block)?;
-            z.finish()
-        })
-        .collect::<io::Result<Vec<_>>>()?;
+/// zlib blocks compressed at a time (in parallel).
+const ZLIB_BATCH: usize = 64;
+
+/// Compresses array `a` into VTK's zlib blocks (in parallel, batch by batch): the header and
+/// the blocks. Blocks are cut at fixed offsets from the array's start, however its bytes
+/// arrive.
+fn compress(arrays: &Arrays, a: &Array) -> io::Result<Stored<'static>> {
+    let n = arrays.byte_len(a);
+    let mut blocks: Vec<Vec<u8>> = Vec::new();
+    let mut pending: Vec<u8> = Vec::with_capacity(ZLIB_BLOCK * ZLIB_BATCH);
+    let flush = |pending: &mut Vec<u8>, blocks: &mut Vec<Vec<u8>>| -> io::Result<()> {
+        let z = pending
+            .par_chunks(ZLIB_BLOCK)
+            .map(|block| {
+                let mut z = ZlibEncoder::new(Vec::new(), Compression::new(ZLIB_LEVEL));
+                z.write_all(block)?;
+                z.finish()
+            })
+            .collect::<io::Result<Vec<_>>>()?;
+        blocks.extend(z);
+        pending.clear();
+        Ok(())
+    };
+    arrays.visit(a, &mut |mut bytes| {
+        while !bytes.is_empty() {
+            let take = (pending.capacity() - pending.len()).min(bytes.len());
+            pending.extend_from_slice(&bytes[..take]);
+            bytes = &bytes[take..];
+            if pending.len() == ZLIB_BLOCK * ZLIB_BATCH {
+                flush(&mut pending, &mut blocks)?;
+            }
+        }
+        Ok(())
+    })?;
+    if !pending.is_empty() {
+        flush(&mut pending, &mut blocks)?;
+    }
     let mut header = vec![
         blocks.len() as u64,
         ZLIB_BLOCK as u64,
-        (bytes.len() % ZLIB_BLOCK) as u64,
+        n % ZLIB_BLOCK as u64,
     ];
     header.extend(blocks.iter().map(|b| b.len() as u64));
     Ok(Stored::Blocks(header, blocks))
@@ -263,7 +324,7 @@ impl<'a> Base64Out<'a> {
 /// The XML part of the file, up to and including the `_` that starts the appended data;
 /// `o` are the offsets of the arrays in the appended data, in file order.
 fn xml_header(
-    mesh: &TetMesh,
+    src: &dyn MeshSource,
     wide: bool,
     o: &[u64],
     encoding: VtuEncoding,
@@ -288,8 +349,8 @@ fn xml_header(
             "    <Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{nc}\">\n",
         ),
         compressor = compressor,
-        np = mesh.points.len(),
-        nc = mesh.tets.len(),
+        np = src.num_points(),
+        nc = src.num_tets(),
     );
     if let Some(first) = point.first() {
         h += &format!("      <PointData Scalars=\"{}\">\n", first.name);
@@ -366,12 +427,24 @@ pub fn write_vtu(mesh: &TetMesh, w: &mut dyn Write) -> io::Result<()> {
 /// Returns the first error of `w`, or [`io::ErrorKind::InvalidInput`] when the mesh is
 /// inconsistent (`values` or `boundary_labels` of the wrong length, an out-of-range index).
 pub fn write_vtu_with(mesh: &TetMesh, w: &mut dyn Write, encoding: VtuEncoding) -> io::Result<()> {
-    let f = VtuField {
-        name: "f",
-        components: 1,
-        data: &mesh.values,
-    };
-    write_vtu_fields_with(mesh, &[f], &[], w, encoding)
+    check_lengths(mesh)?;
+    write_vtu_source(&InMemory::new(mesh), w, encoding)
+}
+
+/// [`write_vtu_with`] from any [`MeshSource`].
+pub(crate) fn write_vtu_source(
+    src: &dyn MeshSource,
+    w: &mut dyn Write,
+    encoding: VtuEncoding,
+) -> io::Result<()> {
+    write_arrays(
+        src,
+        &[("f", 1, Array::Values)],
+        Vec::new(),
+        &[],
+        w,
+        encoding,
+    )
 }
 
 /// Writes the tetrahedra of `mesh` with the given point and cell fields (instead of `f`) in
@@ -406,21 +479,62 @@ pub fn write_vtu_fields_with(
     check_lengths(mesh)?;
     check_fields(point, mesh.points.len())?;
     check_fields(cell, mesh.tets.len())?;
-    let wide = is_wide(mesh);
-    let stored = arrays(mesh, wide, point, cell)
+    let p: Vec<_> = point
+        .iter()
+        .map(|f| (f.name, f.components, Array::Field(f.data)))
+        .collect();
+    let c = cell.iter().map(|f| Array::Field(f.data)).collect();
+    write_arrays(&InMemory::new(mesh), &p, c, cell, w, encoding)
+}
+
+/// Writes the `.vtu`: point arrays (name, components, data), then `Points`, the cell
+/// arrays, and `cell` arrays (`cell_fields` names them).
+fn write_arrays(
+    src: &dyn MeshSource,
+    point: &[(&str, usize, Array)],
+    cell: Vec<Array>,
+    cell_fields: &[VtuField],
+    w: &mut dyn Write,
+    encoding: VtuEncoding,
+) -> io::Result<()> {
+    let arrays = Arrays {
+        src,
+        wide: is_wide(src),
+    };
+    let mut all: Vec<Array> = point.iter().map(|(_, _, a)| a.clone()).collect();
+    all.extend([
+        Array::Points,
+        Array::Connectivity,
+        Array::Offsets,
+        Array::Types,
+    ]);
+    all.extend(cell);
+    let stored = all
         .into_iter()
         .map(|a| match encoding {
-            VtuEncoding::Zlib => compress(&a),
-            _ => Ok(Stored::Plain(a)),
+            VtuEncoding::Zlib => compress(&arrays, &a),
+            _ => {
+                let n = arrays.byte_len(&a);
+                Ok(Stored::Plain(a, n))
+            }
         })
         .collect::<io::Result<Vec<_>>>()?;
     let mut offsets = vec![0u64; stored.len()];
     for k in 1..stored.len() {
         offsets[k] = offsets[k - 1] + stored[k - 1].stored_len(encoding);
     }
-    w.write_all(xml_header(mesh, wide, &offsets, encoding, point, cell).as_bytes())?;
+    let names: Vec<VtuField> = point
+        .iter()
+        .map(|&(name, components, _)| VtuField {
+            name,
+            components,
+            data: &[],
+        })
+        .collect();
+    let header = xml_header(src, arrays.wide, &offsets, encoding, &names, cell_fields);
+    w.write_all(header.as_bytes())?;
     for a in &stored {
-        a.write(w, encoding)?;
+        a.write(&arrays, w, encoding)?;
     }
     w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")?;
     w.flush()

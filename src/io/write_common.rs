@@ -4,7 +4,7 @@
 
 use std::io::{self, Write};
 
-use crate::mesh::{BoundaryLabel, TetMesh, TriSurface};
+use crate::mesh::{TetMesh, TriSurface};
 
 /// Checks that `values` and `boundary_labels` have the lengths of `points` and `boundary` and
 /// that every tet and triangle refers to an existing node.
@@ -41,19 +41,6 @@ pub(crate) fn check_lengths(mesh: &TetMesh) -> io::Result<()> {
 /// An [`io::ErrorKind::InvalidInput`] error with `msg`.
 pub(crate) fn invalid(msg: String) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidInput, msg)
-}
-
-/// For each label in [`BoundaryLabel::ALL`] order that occurs: (label, triangle count).
-pub(crate) fn present_labels(mesh: &TetMesh) -> Vec<(BoundaryLabel, usize)> {
-    let mut count = [0usize; 3];
-    for &l in &mesh.boundary_labels {
-        count[l as usize] += 1;
-    }
-    BoundaryLabel::ALL
-        .into_iter()
-        .filter(|&l| count[l as usize] > 0)
-        .map(|l| (l, count[l as usize]))
-        .collect()
 }
 
 /// Threshold at which [`TextOut`] hands its buffer to the underlying writer.

@@ -180,6 +180,7 @@ fn check_args(cli: &Cli) -> Result<Job> {
         } else {
             0.0
         },
+        ..MeshOptions::default()
     };
     let write = WriteOptions::default()
         .with_msh_version(cli.msh_version.version())

@@ -1,0 +1,401 @@
+//! Welding: points by [`PointKey`], first within a slab, then globally in slab order.
+//!
+//! Each slab (one layer of cells, meshed by one worker) welds its points by key into
+//! slab-local numbers ([`Slab`]). The [`Welder`] then numbers the slabs' points globally, one
+//! slab after the other in z order: a point on the plane shared with the slab below takes the
+//! number it got there, every other point the next free number. Only the keys of one plane
+//! are remembered, so the slabs can be handed on as [`MeshChunk`]s (points in physical
+//! coordinates, elements in global numbers) and streamed to a [`MeshSink`]: memory stays
+//! bounded by the slabs in flight, whatever the size of the mesh. Numbering depends only on
+//! the keys and the slab order, so the output is identical for every thread count and every
+//! number of slabs in flight.
+
+use std::io;
+
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+use crate::clip::{ClipPoint, ClipSink};
+use crate::grid::ScalarGrid;
+use crate::keys::{grid_vertex, on_z_plane, vertex_key, vertex_point, PointKey, CORNER};
+use crate::mesh::{BoundaryLabel, TetMesh};
+
+/// Points, tets and boundary triangles of one slab, numbered locally.
+pub(crate) struct Slab {
+    /// Slab-local id of each grid vertex on the slab's two planes (`u32::MAX`: none yet).
+    corner_ids: Vec<u32>,
+    /// Grid index of the first vertex of the slab's lower plane.
+    plane_base: usize,
+    /// Direct-mapped cache in front of `map` (points recur within and across nearby cells).
+    recent: Box<[(PointKey, u32); RECENT]>,
+    map: FxHashMap<PointKey, u32>,
+    keys: Vec<PointKey>,
+    pos: Vec<[f64; 3]>,
+    val: Vec<f64>,
+    pub(crate) tets: Vec<[u32; 4]>,
+    tris: Vec<[u32; 3]>,
+    labels: Vec<BoundaryLabel>,
+    /// Cells meshed per case.
+    pub(crate) cases: [u64; 6],
+}
+
+const RECENT: usize = 256;
+
+impl Slab {
+    /// An empty slab for layer `k` of a grid with `plane` vertices per z-plane.
+    pub(crate) fn new(plane: usize, k: usize) -> Self {
+        Slab {
+            corner_ids: vec![u32::MAX; 2 * plane],
+            plane_base: k * plane,
+            recent: Box::new([(PointKey::MAX, 0); RECENT]),
+            map: FxHashMap::with_capacity_and_hasher(plane / 4, Default::default()),
+            keys: Vec::new(),
+            pos: Vec::new(),
+            val: Vec::new(),
+            tets: Vec::new(),
+            tris: Vec::new(),
+            labels: Vec::new(),
+            cases: [0; 6],
+        }
+    }
+
+    /// Reserves room for `meshed` cells (about 7 tets and 2 new points each) so the slab's
+    /// vectors do not grow by copying.
+    pub(crate) fn reserve(&mut self, meshed: usize) {
+        self.tets.reserve(7 * meshed);
+        self.keys.reserve(2 * meshed);
+        self.pos.reserve(2 * meshed);
+        self.val.reserve(2 * meshed);
+        self.tris.reserve(meshed);
+        self.labels.reserve(meshed);
+    }
+
+    /// Drops the lookup structures once the slab's cells are done.
+    pub(crate) fn seal(&mut self) {
+        self.map = FxHashMap::default();
+        self.recent = Box::new([(PointKey::MAX, 0); RECENT]);
+        self.corner_ids = Vec::new();
+    }
+
+    #[inline]
+    fn push_point(&mut self, key: PointKey, pos: [f64; 3], val: f64) -> u32 {
+        let i = self.keys.len() as u32;
+        self.keys.push(key);
+        self.pos.push(pos);
+        self.val.push(val);
+        i
+    }
+
+    /// Slab-local id of grid vertex `grid_index` (on one of the slab's two planes).
+    #[inline]
+    pub(crate) fn corner_id(&mut self, grid_index: usize, pos: [f64; 3], val: f64) -> u32 {
+        let slot = grid_index - self.plane_base;
+        let id = self.corner_ids[slot];
+        if id != u32::MAX {
+            return id;
+        }
+        let id = self.push_point(vertex_point(vertex_key(grid_index, CORNER)), pos, val);
+        self.corner_ids[slot] = id;
+        id
+    }
+
+    #[inline]
+    fn id(&mut self, p: &ClipPoint) -> u32 {
+        if let Some(gi) = grid_vertex(p.key) {
+            return self.corner_id(gi, p.pos, p.val);
+        }
+        let h = ((p.key as u64) ^ ((p.key >> 64) as u64)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56;
+        let slot = &mut self.recent[h as usize % RECENT];
+        if slot.0 == p.key {
+            return slot.1;
+        }
+        if let Some(&i) = self.map.get(&p.key) {
+            *slot = (p.key, i);
+            return i;
+        }
+        let i = self.push_point(p.key, p.pos, p.val);
+        self.recent[h as usize % RECENT] = (p.key, i);
+        self.map.insert(p.key, i);
+        i
+    }
+}
+
+impl ClipSink for Slab {
+    #[inline]
+    fn tet(&mut self, points: &[ClipPoint], t: [usize; 4]) {
+        let ids = t.map(|i| self.id(&points[i]));
+        self.tets.push(ids);
+    }
+    #[inline]
+    fn triangle(&mut self, points: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
+        let ids = t.map(|i| self.id(&points[i]));
+        self.tris.push(ids);
+        self.labels.push(label);
+    }
+}
+
+/// One slab of the mesh in global numbering, as handed to a [`MeshSink`].
+///
+/// Chunks arrive in slab order. `points` are the points numbered first in this slab (global
+/// numbers `first_point..first_point + points.len()`); the elements may also use points of
+/// earlier chunks (those on the plane shared with the slab below).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshChunk {
+    /// Global number of `points[0]`.
+    pub first_point: usize,
+    /// New points, physical coordinates.
+    pub points: Vec<[f64; 3]>,
+    /// Field value at each new point.
+    pub values: Vec<f64>,
+    /// Global number of `tets[0]`.
+    pub first_tet: usize,
+    /// Tets, global point numbers, positively oriented.
+    pub tets: Vec<[u32; 4]>,
+    /// Boundary triangles, global point numbers, outward normals. Each is a face of a tet of
+    /// the same chunk.
+    pub boundary: Vec<[u32; 3]>,
+    /// Label of each boundary triangle.
+    pub boundary_labels: Vec<BoundaryLabel>,
+    /// Per label (in [`BoundaryLabel::ALL`] order) the bounding box `[min xyz, max xyz]` of the
+    /// vertices of this chunk's triangles with that label (`±inf` when there are none).
+    pub label_boxes: [[f64; 6]; 3],
+}
+
+/// Where [`crate::mesh_interval_streamed`] delivers the mesh, one slab at a time.
+pub trait MeshSink {
+    /// Takes the next chunk (in slab order).
+    ///
+    /// # Errors
+    /// Any I/O error: it stops the meshing run and is returned from it.
+    fn chunk(&mut self, chunk: MeshChunk) -> io::Result<()>;
+}
+
+/// A sink that gathers the chunks into one [`TetMesh`].
+#[derive(Default)]
+pub(crate) struct Gather {
+    pub(crate) mesh: TetMesh,
+}
+
+impl MeshSink for Gather {
+    fn chunk(&mut self, c: MeshChunk) -> io::Result<()> {
+        let m = &mut self.mesh;
+        m.points.extend_from_slice(&c.points);
+        m.values.extend_from_slice(&c.values);
+        m.tets.extend_from_slice(&c.tets);
+        m.boundary.extend_from_slice(&c.boundary);
+        m.boundary_labels.extend_from_slice(&c.boundary_labels);
+        Ok(())
+    }
+}
+
+/// An empty bounding box (`min = +inf`, `max = -inf`).
+pub const EMPTY_BOX: [f64; 6] = [
+    f64::INFINITY,
+    f64::INFINITY,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    f64::NEG_INFINITY,
+    f64::NEG_INFINITY,
+];
+
+/// Grows box `b` by point `p`.
+#[inline]
+pub fn grow_box(b: &mut [f64; 6], p: [f64; 3]) {
+    for k in 0..3 {
+        b[k] = b[k].min(p[k]);
+        b[k + 3] = b[k + 3].max(p[k]);
+    }
+}
+
+/// Global numbers of the points of one z-plane shared by two slabs: grid vertices in a dense
+/// array (indexed by position in the plane), every other point (cuts, saddles of z-faces) in
+/// a hash map.
+struct PlanePoints {
+    corners: Vec<u32>,
+    others: FxHashMap<PointKey, u32>,
+}
+
+impl PlanePoints {
+    fn new(stride: usize) -> Self {
+        PlanePoints {
+            corners: vec![u32::MAX; stride],
+            others: FxHashMap::default(),
+        }
+    }
+}
+
+/// A slab's global numbering: the global number of each slab-local point, and the local
+/// points numbered first in this slab, in global order.
+struct SlabNumbers {
+    map: Vec<u32>,
+    fresh: Vec<u32>,
+    first_point: usize,
+    first_tet: usize,
+}
+
+/// Numbers slabs globally, one after the other in z order (see the module documentation).
+pub(crate) struct Welder {
+    stride: usize,
+    /// Points on the lower plane of the next slab.
+    prev: PlanePoints,
+    top: PlanePoints,
+    next_point: u64,
+    next_tet: u64,
+    next_slab: usize,
+    lin: [[f64; 3]; 3],
+    origin: [f64; 3],
+    /// The frame is left-handed: elements are flipped to keep their orientation.
+    flip: bool,
+}
+
+impl Welder {
+    pub(crate) fn new(grid: &ScalarGrid) -> Self {
+        let stride = grid.dims[0] * grid.dims[1];
+        Welder {
+            stride,
+            prev: PlanePoints::new(stride),
+            top: PlanePoints::new(stride),
+            next_point: 0,
+            next_tet: 0,
+            next_slab: 0,
+            lin: grid.linear_map(),
+            origin: grid.origin,
+            flip: grid.affine_determinant() < 0.0,
+        }
+    }
+
+    /// Welds the next slabs (consecutive, starting at the next layer) into chunks.
+    ///
+    /// # Errors
+    /// [`crate::MeshError::TooLarge`] past 2^32 − 1 points or tets.
+    pub(crate) fn weld(&mut self, slabs: Vec<Slab>) -> Result<Vec<MeshChunk>, crate::MeshError> {
+        let mut numbers = Vec::with_capacity(slabs.len());
+        for s in &slabs {
+            numbers.push(self.number(s)?);
+        }
+        Ok(slabs
+            .into_par_iter()
+            .zip(numbers)
+            .map(|(s, n)| self.chunk(s, n))
+            .collect())
+    }
+
+    /// Numbers the points of the next slab; remembers the points on its upper plane.
+    fn number(&mut self, s: &Slab) -> Result<SlabNumbers, crate::MeshError> {
+        let k = self.next_slab;
+        let stride = self.stride;
+        let first_point = self.next_point as usize;
+        let first_tet = self.next_tet as usize;
+        self.top.corners.fill(u32::MAX);
+        let mut map = Vec::with_capacity(s.keys.len());
+        let mut fresh = Vec::new();
+        for (li, &key) in s.keys.iter().enumerate() {
+            let corner = grid_vertex(key);
+            let gid = match self.shared(key, corner, k) {
+                Some(g) => g,
+                None => {
+                    let g = u32::try_from(self.next_point)
+                        .map_err(|_| crate::MeshError::TooLarge("points"))?;
+                    self.next_point += 1;
+                    fresh.push(li as u32);
+                    g
+                }
+            };
+            match corner {
+                Some(gi) if gi / stride == k + 1 => self.top.corners[gi % stride] = gid,
+                Some(_) => {}
+                None if on_z_plane(key, k + 1, stride) => {
+                    self.top.others.insert(key, gid);
+                }
+                None => {}
+            }
+            map.push(gid);
+        }
+        self.next_tet += s.tets.len() as u64;
+        if self.next_tet > u64::from(u32::MAX) {
+            return Err(crate::MeshError::TooLarge("tets"));
+        }
+        std::mem::swap(&mut self.prev.corners, &mut self.top.corners);
+        self.prev.others = std::mem::take(&mut self.top.others);
+        self.next_slab += 1;
+        Ok(SlabNumbers {
+            map,
+            fresh,
+            first_point,
+            first_tet,
+        })
+    }
+
+    /// The global number `key` got in the slab below, if it lies on the shared plane `k`.
+    #[inline]
+    fn shared(&self, key: PointKey, corner: Option<usize>, k: usize) -> Option<u32> {
+        match corner {
+            Some(gi) if gi / self.stride == k => {
+                Some(self.prev.corners[gi % self.stride]).filter(|&g| g != u32::MAX)
+            }
+            Some(_) => None,
+            None if on_z_plane(key, k, self.stride) => self.prev.others.get(&key).copied(),
+            None => None,
+        }
+    }
+
+    /// Index-space `p` in physical coordinates.
+    #[inline]
+    fn physical(&self, p: [f64; 3]) -> [f64; 3] {
+        let (lin, o) = (&self.lin, self.origin);
+        [0, 1, 2].map(|r| o[r] + lin[r][0] * p[0] + lin[r][1] * p[1] + lin[r][2] * p[2])
+    }
+
+    /// Slab `s` in global numbers `n`, physical coordinates.
+    fn chunk(&self, s: Slab, n: SlabNumbers) -> MeshChunk {
+        let m = &n.map;
+        let points = n
+            .fresh
+            .iter()
+            .map(|&li| self.physical(s.pos[li as usize]))
+            .collect();
+        let values = n.fresh.iter().map(|&li| s.val[li as usize]).collect();
+        let tets = s
+            .tets
+            .iter()
+            .map(|t| {
+                let g = t.map(|i| m[i as usize]);
+                if self.flip {
+                    [g[0], g[1], g[3], g[2]]
+                } else {
+                    g
+                }
+            })
+            .collect();
+        let mut label_boxes = [EMPTY_BOX; 3];
+        let boundary = s
+            .tris
+            .iter()
+            .zip(&s.labels)
+            .map(|(t, &l)| {
+                for &i in t {
+                    grow_box(
+                        &mut label_boxes[l as usize],
+                        self.physical(s.pos[i as usize]),
+                    );
+                }
+                let g = t.map(|i| m[i as usize]);
+                if self.flip {
+                    [g[0], g[2], g[1]]
+                } else {
+                    g
+                }
+            })
+            .collect();
+        MeshChunk {
+            first_point: n.first_point,
+            points,
+            values,
+            first_tet: n.first_tet,
+            tets,
+            boundary,
+            boundary_labels: s.labels,
+            label_boxes,
+        }
+    }
+}
