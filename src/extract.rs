@@ -278,7 +278,7 @@ fn run(
             }
         }
         for chunk in welder.weld(slabs)? {
-            sink.chunk(chunk).map_err(MeshError::Output)?;
+            sink.chunk(&chunk).map_err(MeshError::Output)?;
         }
     }
     Ok(stats)

@@ -20,6 +20,7 @@ pub mod curvilinear;
 pub(crate) mod decompose;
 pub mod demo;
 pub(crate) mod extract;
+pub mod facts;
 pub(crate) mod geom;
 pub mod grid;
 pub mod improve;

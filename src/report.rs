@@ -9,9 +9,10 @@ use serde::{Serialize, Serializer};
 
 use crate::decompose::CellCase;
 use crate::extract::{MeshStats, Method};
+use crate::facts::MeshFacts;
 use crate::improve::quality::QualitySummary;
 use crate::improve::ImproveReport;
-use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::mesh::BoundaryLabel;
 
 /// A bound of the interval: finite values serialize as JSON numbers, infinities as the strings
 /// `"-inf"` / `"inf"` (JSON has no infinity), so the report is always valid JSON.
@@ -178,18 +179,15 @@ pub struct RunInfo<'a> {
 /// Pure: no I/O.
 pub fn build_report(
     run: &RunInfo<'_>,
-    mesh: &TetMesh,
+    facts: &MeshFacts,
     stats: &MeshStats,
-    betti: Option<[usize; 3]>,
-    dihedral: Option<(f64, f64)>,
     quality: Option<QualitySection>,
     timings: Timings,
 ) -> Report {
-    let mut boundary_triangles: BTreeMap<&'static str, usize> =
-        BoundaryLabel::ALL.iter().map(|l| (l.name(), 0)).collect();
-    for l in &mesh.boundary_labels {
-        *boundary_triangles.entry(l.name()).or_default() += 1;
-    }
+    let boundary_triangles: BTreeMap<&'static str, usize> = BoundaryLabel::ALL
+        .iter()
+        .map(|&l| (l.name(), facts.boundary_triangles[l as usize]))
+        .collect();
     let cells_meshed: u64 = stats.cells_by_case.iter().sum();
     let cells_by_case = CaseCounts(
         CellCase::ALL
@@ -213,15 +211,15 @@ pub fn build_report(
         method: run.method.name(),
         alpha: Bound(run.alpha),
         beta: Bound(run.beta),
-        nodes: mesh.points.len(),
-        tets: mesh.tets.len(),
+        nodes: facts.nodes,
+        tets: facts.tets,
         boundary_triangles,
         cells_total: stats.cells_total,
         cells_meshed,
         cells_by_case,
-        volume: mesh.volume(),
-        betti,
-        dihedral_degrees: dihedral.map(|(min, max)| Dihedral { min, max }),
+        volume: facts.volume,
+        betti: facts.betti,
+        dihedral_degrees: facts.dihedral.map(|(min, max)| Dihedral { min, max }),
         quality,
         surface: None,
         threads: run.threads,
@@ -240,6 +238,7 @@ impl Report {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::TetMesh;
 
     #[test]
     fn infinite_bounds_serialize_as_strings() {
@@ -274,7 +273,8 @@ mod tests {
             beta: f64::INFINITY,
             threads: 1,
         };
-        let r = build_report(&run, &mesh, &stats, None, None, None, Timings::default());
+        let facts = MeshFacts::of(&mesh, false);
+        let r = build_report(&run, &facts, &stats, None, Timings::default());
         let v: serde_json::Value = serde_json::from_str(&r.to_json_pretty()).unwrap();
         assert_eq!(v["alpha"], "-inf");
         assert_eq!(v["beta"], "inf");

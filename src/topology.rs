@@ -21,6 +21,17 @@ impl Dsu {
         }
         x
     }
+    /// Adds singletons up to `n` elements.
+    pub(crate) fn grow(&mut self, n: usize) {
+        let from = self.0.len() as u32;
+        self.0.extend(from..n as u32);
+    }
+    /// Number of roots among the elements flagged in `used`.
+    pub(crate) fn roots(&mut self, used: &[bool]) -> usize {
+        (0..used.len() as u32)
+            .filter(|&i| used[i as usize] && self.find(i) == i)
+            .count()
+    }
     pub(crate) fn union(&mut self, a: u32, b: u32) {
         let (ra, rb) = (self.find(a), self.find(b));
         if ra != rb {
@@ -95,7 +106,12 @@ pub fn betti(mesh: &TetMesh) -> [usize; 3] {
         [(t[0], t[1]), (t[0], t[2]), (t[1], t[2])]
     });
     let vb = on_b.iter().filter(|&&x| x).count() as i64;
-    let fb = mesh.boundary.len() as i64;
+    betti_from_counts(b0, surfaces, vb, mesh.boundary.len() as i64)
+}
+
+/// Betti numbers from the counts: `b0` solid components, boundary-surface components, and
+/// the boundary's vertices `vb` and triangles `fb`.
+pub(crate) fn betti_from_counts(b0: usize, surfaces: usize, vb: i64, fb: i64) -> [usize; 3] {
     // χ(∂M) = V − E + F with E = 3F/2; χ(M) = χ(∂M)/2
     let chi = (2 * vb - fb) / 4;
     let b2 = surfaces.saturating_sub(b0);

@@ -167,7 +167,7 @@ pub trait MeshSink {
     ///
     /// # Errors
     /// Any I/O error: it stops the meshing run and is returned from it.
-    fn chunk(&mut self, chunk: MeshChunk) -> io::Result<()>;
+    fn chunk(&mut self, chunk: &MeshChunk) -> io::Result<()>;
 }
 
 /// A sink that gathers the chunks into one [`TetMesh`].
@@ -177,7 +177,7 @@ pub(crate) struct Gather {
 }
 
 impl MeshSink for Gather {
-    fn chunk(&mut self, c: MeshChunk) -> io::Result<()> {
+    fn chunk(&mut self, c: &MeshChunk) -> io::Result<()> {
         let m = &mut self.mesh;
         m.points.extend_from_slice(&c.points);
         m.values.extend_from_slice(&c.values);

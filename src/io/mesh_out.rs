@@ -7,12 +7,14 @@ use std::io::{self, Write};
 use std::path::Path;
 
 use super::atomic::{write_atomically, write_pending, PendingFile, WriteError};
-use super::inp::write_inp;
-use super::msh::{write_msh, MshVersion};
+use super::inp::{write_inp, write_inp_source};
+use super::msh::{write_msh, write_msh_source, MshVersion};
 use super::obj::write_obj;
 use super::ply::write_ply;
+use super::source::MeshSource;
+use super::spill::SpilledMesh;
 use super::stl::write_stl;
-use super::vtu::{write_vtu_with, VtuEncoding};
+use super::vtu::{write_vtu_source, write_vtu_with, VtuEncoding};
 use crate::mesh::{TetMesh, TriSurface};
 
 /// An output mesh format.
@@ -61,6 +63,20 @@ impl MeshFormat {
             MeshFormat::Msh => write_msh(mesh, w, options.msh_version),
             MeshFormat::Inp => write_inp(mesh, w),
             MeshFormat::Vtu => write_vtu_with(mesh, w, options.vtu_encoding),
+        }
+    }
+
+    /// Writes the mesh `src` in this format to `w` (the writers' common path).
+    fn write_source(
+        self,
+        src: &dyn MeshSource,
+        w: &mut dyn Write,
+        options: &WriteOptions,
+    ) -> io::Result<()> {
+        match self {
+            MeshFormat::Msh => write_msh_source(src, w, options.msh_version),
+            MeshFormat::Inp => write_inp_source(src, w),
+            MeshFormat::Vtu => write_vtu_source(src, w, options.vtu_encoding),
         }
     }
 }
@@ -201,6 +217,45 @@ pub fn write_mesh_pending(
 ) -> Result<PendingFile, WriteError> {
     let format = MeshFormat::from_path(path)?;
     write_pending(path, |w| format.write(mesh, w, options))
+}
+
+/// A [`SpilledMesh`] for a mesh bound for `path`: its files in the folder of `path`, with the
+/// boundary faces when the format (by extension) needs them. Feed it to
+/// [`crate::mesh_interval_streamed`], then write it with [`write_spilled_pending`].
+///
+/// # Errors
+/// [`WriteError::UnknownFormat`] for an unknown extension; [`WriteError::Io`] when the files
+/// cannot be created.
+pub fn spill_for(path: &Path) -> Result<SpilledMesh, WriteError> {
+    let format = MeshFormat::from_path(path)?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    SpilledMesh::new(dir, format == MeshFormat::Inp).map_err(|source| WriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Writes a streamed mesh to a temporary of `path` (see [`write_pending`]), in the format
+/// chosen by the extension of `path`; the bytes equal what [`write_mesh_pending`] writes for
+/// the same mesh in memory.
+///
+/// # Errors
+/// As [`write_mesh`].
+pub fn write_spilled_pending(
+    path: &Path,
+    mesh: &mut SpilledMesh,
+    options: &WriteOptions,
+) -> Result<PendingFile, WriteError> {
+    let format = MeshFormat::from_path(path)?;
+    mesh.finish().map_err(|source| WriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mesh = &*mesh;
+    write_pending(path, |w| format.write_source(mesh, w, options))
 }
 
 #[cfg(test)]

@@ -15,6 +15,8 @@ pub mod obj;
 pub mod plot3d;
 pub mod ply;
 mod source;
+mod spill;
+pub use spill::SpilledMesh;
 pub mod stl;
 pub mod transfer_out;
 mod volume;
@@ -27,8 +29,8 @@ pub use atomic::{
     PendingFile, WriteError,
 };
 pub use mesh_out::{
-    write_mesh, write_mesh_pending, write_surface, write_surface_pending, MeshFormat,
-    SurfaceFormat, WriteOptions,
+    spill_for, write_mesh, write_mesh_pending, write_spilled_pending, write_surface,
+    write_surface_pending, MeshFormat, SurfaceFormat, WriteOptions,
 };
 pub use transfer_out::{write_transfer, TransferFormat, TransferTable};
 pub use volume::{is_curvilinear, read_curvilinear, read_volume, ReadError};

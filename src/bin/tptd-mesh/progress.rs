@@ -7,8 +7,13 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use tptd::facts::{FactsSink, Tee};
 use tptd::improve::{improve, ImproveReport, QualityOptions};
-use tptd::{mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput, ScalarGrid, TetMesh};
+use tptd::io::SpilledMesh;
+use tptd::{
+    mesh_interval_streamed, mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput,
+    MeshStats, ScalarGrid, TetMesh,
+};
 
 use crate::run::Job;
 
@@ -44,6 +49,33 @@ pub(crate) fn mesh_with_progress(
             .max(done as u64);
         pb.set_position(d);
     });
+    pb.finish_and_clear();
+    result
+}
+
+/// Meshes like [`mesh_with_progress`], streaming the chunks to `spill` and `facts`.
+pub(crate) fn mesh_streamed_with_progress(
+    grid: &ScalarGrid,
+    opts: &MeshOptions,
+    quiet: bool,
+    spill: &mut SpilledMesh,
+    facts: &mut FactsSink,
+) -> Result<MeshStats, MeshError> {
+    let pb = progress_bar(grid, quiet);
+    let high = AtomicU64::new(0);
+    let mut tee = Tee(spill, facts);
+    let result = mesh_interval_streamed(
+        grid,
+        opts,
+        &|done, total| {
+            pb.set_length(total as u64);
+            let d = high
+                .fetch_max(done as u64, Ordering::Relaxed)
+                .max(done as u64);
+            pb.set_position(d);
+        },
+        &mut tee,
+    );
     pb.finish_and_clear();
     result
 }

@@ -7,19 +7,22 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
-use tptd::improve::quality::{summarize, QualitySummary};
+use tptd::facts::{FactsSink, MeshFacts};
+use tptd::improve::quality::summarize;
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
 use tptd::io::{
-    check_writable, read_volume, same_file, write_mesh_pending, write_pending, MeshFormat,
-    PendingFile, SurfaceFormat,
+    check_writable, read_volume, same_file, spill_for, write_mesh_pending, write_pending,
+    write_spilled_pending, MeshFormat, PendingFile, SurfaceFormat,
 };
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
-use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid};
+use tptd::{mesh_interval, MeshOptions, MeshOutput, MeshStats, Method, ScalarGrid};
 
 use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
-use crate::progress::{improve_with_progress, mesh_with_progress, Stage};
+use crate::progress::{
+    improve_with_progress, mesh_streamed_with_progress, mesh_with_progress, Stage,
+};
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
 use crate::surface::{read_curvilinear_input, write_level_surface};
 use tptd::curvilinear::map_mesh;
@@ -41,12 +44,19 @@ pub(crate) struct Job {
     pub(crate) write: WriteOptions,
 }
 
-/// The results of the analysis stage (all `None` with `--no-analysis`).
-struct Analysis {
-    betti: Option<[usize; 3]>,
-    dihedral: Option<(f64, f64)>,
-    /// The full quality summary, with `--quality` only.
-    quality: Option<QualitySummary>,
+/// What meshing, analysing and writing produced (the mesh file still pending).
+struct Written {
+    facts: MeshFacts,
+    stats: MeshStats,
+    quality: Option<QualitySection>,
+    surface: Option<SurfaceAnalysis>,
+    comparison: Option<DemoComparison>,
+    mesh_file: PendingFile,
+    /// Seconds of meshing, analysis, the quality pass and writing.
+    t_mesh: f64,
+    t_analysis: f64,
+    t_quality: Option<f64>,
+    t_write: f64,
 }
 
 /// Seconds since `t`.
@@ -64,47 +74,110 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let t_read = secs(t);
     check_input(&cli, &job, &grid, curvilinear.is_some())?;
 
+    let w = if streams(&cli, &job, curvilinear.is_some()) {
+        stream_to_disk(&cli, &job, &grid)?
+    } else {
+        mesh_in_memory(&cli, &job, &grid, curvilinear.as_ref())?
+    };
+    let timings = Timings {
+        read: t_read,
+        mesh: w.t_mesh,
+        analysis: w.t_analysis,
+        quality: w.t_quality,
+        write: w.t_write,
+        total: secs(t_total),
+    };
+    let mut report = make_report(&job, &grid, &w.facts, &w.stats, w.quality, timings);
+    report.surface = w.surface;
+    finish(&cli, &report, w.comparison.as_ref(), w.mesh_file)?;
+    // The process ends here: let the OS reclaim the grid at exit instead of freeing hundreds
+    // of megabytes page by page first.
+    std::mem::forget(grid);
+    Ok(())
+}
+
+/// Whether the mesh goes straight to disk slab by slab: a volume mesh output without the
+/// quality pass (which needs the whole mesh) or a curvilinear mapping.
+fn streams(cli: &Cli, job: &Job, curvilinear: bool) -> bool {
+    !cli.quality && !curvilinear && SurfaceFormat::from_path(&job.output).is_none()
+}
+
+/// Meshes slab by slab into spill files next to the output, gathering the facts on the way,
+/// then writes the output from the spill files: memory stays the grid plus a few slabs.
+fn stream_to_disk(cli: &Cli, job: &Job, grid: &ScalarGrid) -> Result<Written> {
     let t = Instant::now();
-    let mut out = mesh(&grid, &job, cli.quiet)?;
+    let mut spill = spill_for(&job.output).map_err(write_error)?;
+    let mut facts = FactsSink::new(!cli.no_analysis);
+    let stats = mesh_streamed_with_progress(grid, &job.opts, cli.quiet, &mut spill, &mut facts)
+        .map_err(|e| file_error(&job.input_name, e))?;
+    let facts = facts.finish();
+    check_not_empty(grid, job, facts.tets)?;
+    let t_mesh = secs(t);
+    let t = Instant::now();
+    let stage = Stage::start(format!("writing {}", job.output.display()), cli.quiet);
+    let mesh_file = write_spilled_pending(&job.output, &mut spill, &job.write);
+    stage.finish();
+    Ok(Written {
+        facts,
+        stats,
+        quality: None,
+        surface: None,
+        comparison: compare_demo(cli, grid, job)?,
+        mesh_file: mesh_file.map_err(write_error)?,
+        t_mesh,
+        t_analysis: 0.0,
+        t_quality: None,
+        t_write: secs(t),
+    })
+}
+
+/// Meshes into memory, improves (`--quality`), maps (curvilinear), analyses and writes.
+fn mesh_in_memory(
+    cli: &Cli,
+    job: &Job,
+    grid: &ScalarGrid,
+    curvilinear: Option<&CurvilinearGrid>,
+) -> Result<Written> {
+    let t = Instant::now();
+    let mut out = mesh(grid, job, cli.quiet)?;
     let t_mesh = secs(t);
 
-    let (quality, t_quality) = improve_mesh(&cli, &grid, &job, &mut out);
-    if let Some(c) = &curvilinear {
+    let (quality, t_quality) = improve_mesh(cli, grid, job, &mut out);
+    if let Some(c) = curvilinear {
         map_mesh(&mut out.mesh, c).map_err(|e| file_error(&job.input_name, e))?;
     }
 
     let t = Instant::now();
     let stage = Stage::start("analysing the mesh".into(), cli.quiet);
-    let analysis = analyse(&out, cli.no_analysis, cli.quality);
+    let facts = MeshFacts::of(&out.mesh, !cli.no_analysis);
+    let after = (cli.quality && !cli.no_analysis).then(|| summarize(&out.mesh));
     stage.finish();
     let t_analysis = secs(t);
     let quality = quality.map(|mut q| {
-        q.after = analysis.quality.clone();
+        q.after = after;
         q
     });
-    let comparison = compare_demo(&cli, &grid, &job)?;
+    let comparison = compare_demo(cli, grid, job)?;
 
     // The mesh stays under its temporary name until the report is written too (`finish`).
     let t = Instant::now();
-    let (surface, mesh_file) = write_output(&cli, &job, &out)?;
+    let (surface, mesh_file) = write_output(cli, job, &out)?;
     let t_write = secs(t);
-
-    let timings = Timings {
-        read: t_read,
-        mesh: t_mesh,
-        analysis: t_analysis,
-        quality: t_quality,
-        write: t_write,
-        total: secs(t_total),
-    };
-    let mut report = make_report(&job, &grid, &out, analysis, quality, timings);
-    report.surface = surface;
-    finish(&cli, &report, comparison.as_ref(), mesh_file)?;
-    // The process ends here: let the OS reclaim the mesh and the grid at exit instead of
-    // freeing hundreds of megabytes page by page first.
+    let stats = out.stats.clone();
+    // Let the OS reclaim the mesh at exit.
     std::mem::forget(out);
-    std::mem::forget(grid);
-    Ok(())
+    Ok(Written {
+        facts,
+        stats,
+        quality,
+        surface,
+        comparison,
+        mesh_file,
+        t_mesh,
+        t_analysis,
+        t_quality,
+        t_write,
+    })
 }
 
 /// Reads the input volume (a curvilinear grid's values in parameter space, with the grid).
@@ -371,34 +444,24 @@ fn check_memory(grid: &ScalarGrid, job: &Job) -> Result<()> {
 fn mesh(grid: &ScalarGrid, job: &Job, quiet: bool) -> Result<MeshOutput> {
     let out =
         mesh_with_progress(grid, &job.opts, quiet).map_err(|e| file_error(&job.input_name, e))?;
-    if out.mesh.tets.is_empty() {
-        let (lo, hi) = grid.value_range();
-        return Err(file_error(
-            &job.input_name,
-            format_args!(
-                "the interval {} contains no part of the volume; data range is {}",
-                fmt_interval(job.opts.alpha, job.opts.beta),
-                fmt_interval(lo, hi)
-            ),
-        ));
-    }
+    check_not_empty(grid, job, out.mesh.tets.len())?;
     Ok(out)
 }
 
-/// Betti numbers and the dihedral-angle range, unless `--no-analysis`.
-fn analyse(out: &MeshOutput, skip: bool, quality: bool) -> Analysis {
-    if skip {
-        return Analysis {
-            betti: None,
-            dihedral: None,
-            quality: None,
-        };
+/// An empty mesh is an error that names the data range.
+fn check_not_empty(grid: &ScalarGrid, job: &Job, tets: usize) -> Result<()> {
+    if tets > 0 {
+        return Ok(());
     }
-    Analysis {
-        betti: Some(tptd::topology::betti(&out.mesh)),
-        dihedral: tptd::improve::quality::dihedral_range(&out.mesh),
-        quality: quality.then(|| summarize(&out.mesh)),
-    }
+    let (lo, hi) = grid.value_range();
+    Err(file_error(
+        &job.input_name,
+        format_args!(
+            "the interval {} contains no part of the volume; data range is {}",
+            fmt_interval(job.opts.alpha, job.opts.beta),
+            fmt_interval(lo, hi)
+        ),
+    ))
 }
 
 /// With `--quality`: the quality pass (and the quality before it, unless `--no-analysis`),
@@ -459,8 +522,8 @@ fn compare_demo(cli: &Cli, grid: &ScalarGrid, job: &Job) -> Result<Option<DemoCo
 fn make_report(
     job: &Job,
     grid: &ScalarGrid,
-    out: &MeshOutput,
-    analysis: Analysis,
+    facts: &MeshFacts,
+    stats: &MeshStats,
     quality: Option<QualitySection>,
     timings: Timings,
 ) -> Report {
@@ -481,10 +544,8 @@ fn make_report(
             beta: job.opts.beta,
             threads,
         },
-        &out.mesh,
-        &out.stats,
-        analysis.betti,
-        analysis.dihedral,
+        facts,
+        stats,
         quality,
         timings,
     )

@@ -1,0 +1,238 @@
+//! [`MeshFacts`]: the numbers the report and the summary give about a mesh (counts, volume,
+//! dihedral range, Betti numbers), from a mesh in memory ([`MeshFacts::of`]) or gathered
+//! chunk by chunk while it streams to disk ([`FactsSink`]). Both give the same numbers, bit
+//! for bit: the volume is summed in the same fixed blocks, the extremes and the component
+//! counts do not depend on order.
+
+use std::io;
+
+use rayon::prelude::*;
+
+use crate::geom::signed_volume;
+use crate::improve::quality::{dihedral_cosines, dihedral_range};
+use crate::mesh::TetMesh;
+use crate::topology::{betti, Dsu};
+use crate::weld::{MeshChunk, MeshSink};
+
+/// Tets per block of the volume sum (as [`TetMesh::volume`]).
+const VOLUME_BLOCK: usize = 1 << 14;
+
+/// What the report says about a mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshFacts {
+    /// Number of nodes.
+    pub nodes: usize,
+    /// Number of tets.
+    pub tets: usize,
+    /// Boundary triangles per label, in [`crate::BoundaryLabel::ALL`] order.
+    pub boundary_triangles: [usize; 3],
+    /// Total volume.
+    pub volume: f64,
+    /// Smallest and largest dihedral angle in degrees (`None`: not analysed, or no tet).
+    pub dihedral: Option<(f64, f64)>,
+    /// Betti numbers (`None`: not analysed).
+    pub betti: Option<[usize; 3]>,
+}
+
+impl MeshFacts {
+    /// The facts of `mesh`; `analyse`: with the dihedral range and the Betti numbers.
+    pub fn of(mesh: &TetMesh, analyse: bool) -> Self {
+        let mut boundary_triangles = [0; 3];
+        for &l in &mesh.boundary_labels {
+            boundary_triangles[l as usize] += 1;
+        }
+        MeshFacts {
+            nodes: mesh.points.len(),
+            tets: mesh.tets.len(),
+            boundary_triangles,
+            volume: mesh.volume(),
+            dihedral: if analyse { dihedral_range(mesh) } else { None },
+            betti: analyse.then(|| betti(mesh)),
+        }
+    }
+}
+
+/// Union–find of the tets' and the boundary triangles' vertices, grown chunk by chunk.
+struct Components {
+    solid: Dsu,
+    surface: Dsu,
+    used: Vec<bool>,
+    on_boundary: Vec<bool>,
+}
+
+impl Components {
+    fn add(&mut self, c: &MeshChunk) {
+        let n = c.first_point + c.points.len();
+        self.solid.grow(n);
+        self.surface.grow(n);
+        self.used.resize(n, false);
+        self.on_boundary.resize(n, false);
+        for t in &c.tets {
+            for &v in t {
+                self.used[v as usize] = true;
+            }
+            for k in 1..4 {
+                self.solid.union(t[0], t[k]);
+            }
+        }
+        for t in &c.boundary {
+            for &v in t {
+                self.on_boundary[v as usize] = true;
+            }
+            self.surface.union(t[0], t[1]);
+            self.surface.union(t[0], t[2]);
+        }
+    }
+
+    /// Betti numbers, as [`betti`] computes them from the same counts.
+    fn betti(mut self, boundary_triangles: usize) -> [usize; 3] {
+        if !self.used.iter().any(|&u| u) {
+            return [0, 0, 0];
+        }
+        let b0 = self.solid.roots(&self.used);
+        let surfaces = self.surface.roots(&self.on_boundary);
+        let vb = self.on_boundary.iter().filter(|&&x| x).count() as i64;
+        crate::topology::betti_from_counts(b0, surfaces, vb, boundary_triangles as i64)
+    }
+}
+
+/// A [`MeshSink`] gathering [`MeshFacts`] while the mesh streams (it keeps the points of the
+/// last two chunks: a tet uses points of its own chunk and of the one before).
+pub struct FactsSink {
+    analyse: bool,
+    nodes: usize,
+    tets: usize,
+    boundary_triangles: [usize; 3],
+    /// Volumes of the tets of the unfinished block, and the sums of the finished ones.
+    block: Vec<f64>,
+    partials: Vec<f64>,
+    cos_range: (f64, f64),
+    components: Option<Components>,
+    prev: (usize, Vec<[f64; 3]>),
+    cur: (usize, Vec<[f64; 3]>),
+}
+
+impl FactsSink {
+    /// A sink for an empty mesh; `analyse`: also the dihedral range and the Betti numbers.
+    pub fn new(analyse: bool) -> Self {
+        FactsSink {
+            analyse,
+            nodes: 0,
+            tets: 0,
+            boundary_triangles: [0; 3],
+            block: Vec::with_capacity(VOLUME_BLOCK),
+            partials: Vec::new(),
+            cos_range: (f64::NEG_INFINITY, f64::INFINITY),
+            components: analyse.then(|| Components {
+                solid: Dsu::new(0),
+                surface: Dsu::new(0),
+                used: Vec::new(),
+                on_boundary: Vec::new(),
+            }),
+            prev: (0, Vec::new()),
+            cur: (0, Vec::new()),
+        }
+    }
+
+    /// The facts of everything received.
+    pub fn finish(mut self) -> MeshFacts {
+        if !self.block.is_empty() {
+            self.partials.push(self.block.iter().sum());
+        }
+        let dihedral = (self.analyse && self.tets > 0).then(|| {
+            let (hi, lo) = self.cos_range;
+            (hi.acos().to_degrees(), lo.acos().to_degrees())
+        });
+        let nb = self.boundary_triangles.iter().sum();
+        MeshFacts {
+            nodes: self.nodes,
+            tets: self.tets,
+            boundary_triangles: self.boundary_triangles,
+            volume: self.partials.iter().sum(),
+            dihedral,
+            betti: self.components.map(|c| c.betti(nb)),
+        }
+    }
+
+    /// The corners of tet `t` (of the current chunk).
+    #[inline]
+    fn corners(&self, t: &[u32; 4]) -> [[f64; 3]; 4] {
+        t.map(|i| {
+            let i = i as usize;
+            if i >= self.cur.0 {
+                self.cur.1[i - self.cur.0]
+            } else {
+                self.prev.1[i - self.prev.0]
+            }
+        })
+    }
+
+    /// Adds the volumes of `tets` to the block sums, in order.
+    fn add_volumes(&mut self, tets: &[[u32; 4]]) {
+        let vols: Vec<f64> = tets
+            .par_iter()
+            .map(|t| {
+                let [a, b, c, d] = self.corners(t);
+                signed_volume(a, b, c, d)
+            })
+            .collect();
+        for v in vols {
+            self.block.push(v);
+            if self.block.len() == VOLUME_BLOCK {
+                self.partials.push(self.block.iter().sum());
+                self.block.clear();
+            }
+        }
+    }
+
+    /// Widens the range of dihedral cosines by the tets of `tets`.
+    fn add_cosines(&mut self, tets: &[[u32; 4]]) {
+        let r = tets
+            .par_iter()
+            .map(|t| {
+                dihedral_cosines(self.corners(t))
+                    .iter()
+                    .fold((f64::NEG_INFINITY, f64::INFINITY), |(hi, lo), &c| {
+                        (hi.max(c), lo.min(c))
+                    })
+            })
+            .reduce(
+                || (f64::NEG_INFINITY, f64::INFINITY),
+                |a, b| (a.0.max(b.0), a.1.min(b.1)),
+            );
+        self.cos_range = (self.cos_range.0.max(r.0), self.cos_range.1.min(r.1));
+    }
+}
+
+impl MeshSink for FactsSink {
+    fn chunk(&mut self, c: &MeshChunk) -> io::Result<()> {
+        self.prev = std::mem::take(&mut self.cur);
+        self.cur = (c.first_point, c.points.clone());
+        self.nodes += c.points.len();
+        self.tets += c.tets.len();
+        for &l in &c.boundary_labels {
+            self.boundary_triangles[l as usize] += 1;
+        }
+        self.add_volumes(&c.tets);
+        if self.analyse {
+            self.add_cosines(&c.tets);
+        }
+        if let Some(comp) = &mut self.components {
+            comp.add(c);
+        }
+        Ok(())
+    }
+}
+
+/// Hands each chunk to two sinks in turn.
+pub struct Tee<'a>(
+    pub &'a mut (dyn MeshSink + Send),
+    pub &'a mut (dyn MeshSink + Send),
+);
+
+impl MeshSink for Tee<'_> {
+    fn chunk(&mut self, c: &MeshChunk) -> io::Result<()> {
+        self.0.chunk(c)?;
+        self.1.chunk(c)
+    }
+}
