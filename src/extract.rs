@@ -263,25 +263,48 @@ fn run(
     };
     let mut welder = Welder::new(grid);
     let done = AtomicUsize::new(0);
-    for k0 in (0..cz).step_by(window) {
-        let slabs: Vec<Slab> = (k0..(k0 + window).min(cz))
+    let mesh_window = |k0: usize| -> Vec<Slab> {
+        (k0..(k0 + window).min(cz))
             .into_par_iter()
             .map(|k| {
                 let s = process_slab(&ctx, k);
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, cz);
                 s
             })
-            .collect();
-        for s in &slabs {
-            for (a, b) in stats.cells_by_case.iter_mut().zip(s.cases) {
-                *a += b;
-            }
-        }
-        for chunk in welder.weld(slabs)? {
-            sink.chunk(&chunk).map_err(MeshError::Output)?;
-        }
+            .collect()
+    };
+    // One window is meshed while the one before is welded and handed to the sink.
+    let mut pending: Option<Vec<Slab>> = None;
+    for k0 in (0..cz).step_by(window).map(Some).chain([None]) {
+        let (next, handed) = rayon::join(
+            || k0.map(mesh_window),
+            || match pending.take() {
+                Some(slabs) => hand_on(&mut welder, slabs, &mut stats, sink),
+                None => Ok(()),
+            },
+        );
+        handed?;
+        pending = next;
     }
     Ok(stats)
+}
+
+/// Counts the slabs' cases, welds them and hands the chunks to `sink` in order.
+fn hand_on(
+    welder: &mut Welder,
+    slabs: Vec<Slab>,
+    stats: &mut MeshStats,
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<(), MeshError> {
+    for s in &slabs {
+        for (a, b) in stats.cells_by_case.iter_mut().zip(s.cases) {
+            *a += b;
+        }
+    }
+    for chunk in welder.weld(slabs)? {
+        sink.chunk(&chunk).map_err(MeshError::Output)?;
+    }
+    Ok(())
 }
 
 /// Values within this fraction of the data range of a level, but not equal to it, are set
