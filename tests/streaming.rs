@@ -1,0 +1,158 @@
+//! Streamed meshing and writing (`mesh_interval_streamed` → `SpilledMesh` →
+//! `write_spilled_pending`) against the in-memory path (`mesh_interval` → `write_mesh`):
+//! the same bytes in every format and encoding, for any number of threads and of slabs in
+//! flight; the facts gathered while streaming equal those of the mesh in memory; no spill
+//! file is left behind.
+
+mod common;
+
+use std::fs;
+use std::path::Path;
+
+use common::Rng;
+use tptd::facts::{FactsSink, MeshFacts, Tee};
+use tptd::io::msh::MshVersion;
+use tptd::io::vtu::VtuEncoding;
+use tptd::io::{spill_for, write_mesh, write_spilled_pending, WriteOptions};
+use tptd::{
+    mesh_interval, mesh_interval_streamed, BoundaryLabel, MeshOptions, Method, ScalarGrid, TetMesh,
+};
+
+/// A smooth random field with plenty of saddles, in a left- or right-handed frame.
+fn field(dims: [usize; 3], seed: u64, left_handed: bool) -> ScalarGrid {
+    let mut rng = Rng::new(seed);
+    let waves: Vec<[f64; 4]> = (0..6)
+        .map(|_| [0.0, 1.0, 2.0, 3.0].map(|_| rng.range(-1.2, 1.2)))
+        .collect();
+    let mut v = Vec::with_capacity(dims.iter().product());
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let p = [i as f64, j as f64, k as f64];
+                v.push(
+                    waves
+                        .iter()
+                        .map(|w| (w[0] * p[0] + w[1] * p[1] + w[2] * p[2] + 3.0 * w[3]).sin())
+                        .sum::<f64>(),
+                );
+            }
+        }
+    }
+    let mut dir = tptd::grid::IDENTITY;
+    if left_handed {
+        dir[2][2] = -1.0;
+    }
+    ScalarGrid::with_geometry(dims, [0.5, 0.7, 0.9], [1.0, -2.0, 3.0], dir, v).unwrap()
+}
+
+/// Every format and encoding the writers have, as (file name, options).
+fn outputs() -> Vec<(&'static str, WriteOptions)> {
+    let w = WriteOptions::default;
+    vec![
+        ("m41.msh", w()),
+        ("m22.msh", w().with_msh_version(MshVersion::V22)),
+        ("m.inp", w()),
+        ("b64.vtu", w()),
+        ("zlib.vtu", w().with_vtu_encoding(VtuEncoding::Zlib)),
+        ("raw.vtu", w().with_vtu_encoding(VtuEncoding::Raw)),
+    ]
+}
+
+/// Streams `grid` with `opts` into `dir/name` and returns the bytes and the facts.
+fn streamed(
+    grid: &ScalarGrid,
+    opts: &MeshOptions,
+    dir: &Path,
+    name: &str,
+    w: &WriteOptions,
+) -> (Vec<u8>, MeshFacts) {
+    let path = dir.join(name);
+    let mut spill = spill_for(&path).unwrap();
+    let mut facts = FactsSink::new(true);
+    mesh_interval_streamed(grid, opts, &|_, _| {}, &mut Tee(&mut spill, &mut facts)).unwrap();
+    write_spilled_pending(&path, &mut spill, w)
+        .unwrap()
+        .commit()
+        .unwrap();
+    (fs::read(&path).unwrap(), facts.finish())
+}
+
+fn in_memory(mesh: &TetMesh, dir: &Path, name: &str, w: &WriteOptions) -> Vec<u8> {
+    let path = dir.join(format!("mem-{name}"));
+    write_mesh(&path, mesh, w).unwrap();
+    fs::read(&path).unwrap()
+}
+
+#[test]
+fn streamed_output_equals_the_in_memory_output() {
+    let dir = tempfile::tempdir().unwrap();
+    for (seed, left) in [(1, false), (2, true)] {
+        let grid = field([9, 8, 11], seed, left);
+        let base = MeshOptions::new(-0.8, 1.1, Method::Ctd);
+        let mesh = mesh_interval(&grid, &base).unwrap().mesh;
+        let labels: Vec<_> = BoundaryLabel::ALL
+            .iter()
+            .map(|l| mesh.boundary_labels.iter().filter(|&m| m == l).count())
+            .collect();
+        assert!(labels.iter().all(|&n| n > 0), "every label occurs: {labels:?}");
+        let expect = MeshFacts::of(&mesh, true);
+        for (name, w) in outputs() {
+            let want = in_memory(&mesh, dir.path(), name, &w);
+            for (threads, slabs) in [(1, 1), (2, 3), (2, 0)] {
+                let opts = MeshOptions {
+                    threads: Some(threads),
+                    slabs_in_flight: slabs,
+                    ..base.clone()
+                };
+                let (got, facts) = streamed(&grid, &opts, dir.path(), name, &w);
+                let what = format!("{name}, seed {seed}, -j {threads}, {slabs} slabs in flight");
+                assert!(got == want, "{what}: streamed bytes differ");
+                // Bit for bit, the volume included.
+                assert_eq!(facts, expect, "{what}");
+            }
+        }
+    }
+    let left: Vec<_> = fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "spill or temporary files left: {left:?}");
+}
+
+#[test]
+fn streamed_facts_match_on_every_method_and_an_empty_mesh() {
+    let grid = field([7, 9, 6], 3, false);
+    for method in common::ALL_METHODS {
+        let opts = MeshOptions::new(-0.5, 0.6, method).threads(Some(2));
+        let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
+        let mut facts = FactsSink::new(true);
+        mesh_interval_streamed(&grid, &opts, &|_, _| {}, &mut facts).unwrap();
+        assert_eq!(facts.finish(), MeshFacts::of(&mesh, true), "{method:?}");
+    }
+    let opts = MeshOptions::new(100.0, 200.0, Method::Ctd);
+    let mut facts = FactsSink::new(true);
+    mesh_interval_streamed(&grid, &opts, &|_, _| {}, &mut facts).unwrap();
+    let f = facts.finish();
+    assert_eq!((f.tets, f.nodes, f.betti, f.dihedral), (0, 0, Some([0, 0, 0]), None));
+}
+
+#[test]
+fn a_failing_sink_stops_meshing_with_its_error() {
+    struct Full(usize);
+    impl tptd::MeshSink for Full {
+        fn chunk(&mut self, _: &tptd::MeshChunk) -> std::io::Result<()> {
+            self.0 += 1;
+            if self.0 == 3 {
+                return Err(std::io::Error::other("disk full"));
+            }
+            Ok(())
+        }
+    }
+    let grid = field([6, 6, 12], 4, false);
+    let opts = MeshOptions::new(-1.0, 1.0, Method::Ctd).threads(Some(2));
+    let mut sink = Full(0);
+    let e = mesh_interval_streamed(&grid, &opts, &|_, _| {}, &mut sink).unwrap_err();
+    assert_eq!(e.to_string(), "disk full");
+    assert_eq!(sink.0, 3, "no chunk after the error");
+}
