@@ -38,7 +38,7 @@ pub struct MeshOptions {
     /// [`crate::improve::improve`].
     pub warp: f64,
     /// Slabs (layers of cells) meshed at a time before they are welded and handed on;
-    /// `0` (default) is 8 per worker thread. Bounds the memory of
+    /// `0` (default) is 4 per worker thread. Bounds the memory of
     /// [`mesh_interval_streamed`]; the output does not depend on it.
     pub slabs_in_flight: usize,
 }
@@ -209,7 +209,7 @@ pub fn mesh_interval_streamed(
 }
 
 /// Slabs in flight per worker thread when [`MeshOptions::slabs_in_flight`] is 0.
-const SLABS_PER_THREAD: usize = 8;
+const SLABS_PER_THREAD: usize = 4;
 
 /// What every cell of one run shares.
 struct Ctx<'a> {

@@ -94,7 +94,10 @@ fn streamed_output_equals_the_in_memory_output() {
             .iter()
             .map(|l| mesh.boundary_labels.iter().filter(|&m| m == l).count())
             .collect();
-        assert!(labels.iter().all(|&n| n > 0), "every label occurs: {labels:?}");
+        assert!(
+            labels.iter().all(|&n| n > 0),
+            "every label occurs: {labels:?}"
+        );
         let expect = MeshFacts::of(&mesh, true);
         for (name, w) in outputs() {
             let want = in_memory(&mesh, dir.path(), name, &w);
@@ -134,7 +137,10 @@ fn streamed_facts_match_on_every_method_and_an_empty_mesh() {
     let mut facts = FactsSink::new(true);
     mesh_interval_streamed(&grid, &opts, &|_, _| {}, &mut facts).unwrap();
     let f = facts.finish();
-    assert_eq!((f.tets, f.nodes, f.betti, f.dihedral), (0, 0, Some([0, 0, 0]), None));
+    assert_eq!(
+        (f.tets, f.nodes, f.betti, f.dihedral),
+        (0, 0, Some([0, 0, 0]), None)
+    );
 }
 
 #[test]
