@@ -486,6 +486,8 @@ fn emit_six_inside(ctx: &Ctx, c: [usize; 3], v: &[f64; 8], slab: &mut Slab) {
 mod tests {
     use super::*;
     use crate::geom::signed_volume;
+    use crate::mesh::BoundaryLabel;
+    use rustc_hash::FxHashMap;
 
     const ALL: [Method; 5] = [
         Method::Five,

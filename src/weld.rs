@@ -73,7 +73,6 @@ impl Slab {
     /// Drops the lookup structures once the slab's cells are done.
     pub(crate) fn seal(&mut self) {
         self.map = FxHashMap::default();
-        self.recent = Box::new([(PointKey::MAX, 0); RECENT]);
         self.corner_ids = Vec::new();
     }
 

@@ -501,7 +501,7 @@ fn write_arrays(
         src,
         wide: is_wide(src),
     };
-    let mut all: Vec<Array> = point.iter().map(|(_, _, a)| a.clone()).collect();
+    let mut all: Vec<Array> = point.iter().map(|(_, _, a)| *a).collect();
     all.extend([
         Array::Points,
         Array::Connectivity,
