@@ -514,7 +514,7 @@ pub(crate) fn build_grid(
     spacing: [f64; 3],
     origin: [f64; 3],
     direction: [[f64; 3]; 3],
-    values: Vec<f64>,
+    values: impl Into<crate::grid::Samples>,
 ) -> Result<ScalarGrid, ReadError> {
     ScalarGrid::with_geometry(dims, spacing, origin, direction, values).map_err(|source| {
         ReadError::Grid {
