@@ -346,7 +346,8 @@ fn inside_value(values: &Samples, bound: f64, lower: bool) -> Option<f64> {
 /// [`tptd::memory`]).
 fn check_memory(grid: &ScalarGrid, job: &Job) -> Result<()> {
     let tets = tptd::memory::estimate_tets(grid, job.opts.alpha, job.opts.beta);
-    let need = tptd::memory::mesh_bytes(grid.num_vertices() as u64, tets);
+    let bytes = grid.values.bytes_per_sample() as u64;
+    let need = tptd::memory::mesh_bytes(grid.num_vertices() as u64, bytes, tets);
     let what = format!(
         "meshing {} (about {:.1} M tetrahedra)",
         fmt_interval(job.opts.alpha, job.opts.beta),
