@@ -387,7 +387,6 @@ fn the_memory_cap_gives_one_line_at_every_stage() {
     let args = [
         "v.npy", "--beta", "15.5", "-o", "m.vtu", "--report", "r.json",
     ];
-    let before = listing(d);
     // an allocation outside any estimate fails (the allocator's line): an ascii NRRD (about
     // 1 MB of text) is read whole before its header is looked at; the .npy reader checks its
     // estimate before it allocates anything proportional to the data

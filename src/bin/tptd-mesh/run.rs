@@ -470,6 +470,7 @@ fn make_report(
             output: &output_name,
             dims: grid.dims,
             spacing: grid.spacing,
+            samples: grid.values.storage(),
             method: job.opts.method,
             alpha: job.opts.alpha,
             beta: job.opts.beta,
