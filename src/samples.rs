@@ -107,6 +107,8 @@ macro_rules! typed {
     };
 }
 
+// `f64::from` in `typed!` is the identity in the `F64` arm.
+#[allow(clippy::useless_conversion)]
 impl Samples {
     /// The storage type.
     #[inline]
