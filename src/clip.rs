@@ -36,17 +36,23 @@ impl Interval {
     /// The interval `(alpha, beta)` for data `values`: a tied value is moved outward by
     /// [`TIE_FRACTION`] of the smallest non-zero distance between the level and a data value
     /// (so, with integer data, by 10⁻³).
-    pub fn new(alpha: f64, beta: f64, values: &[f64]) -> Self {
+    pub fn new(alpha: f64, beta: f64, values: &crate::samples::Samples) -> Self {
         let gap = |level: f64| -> f64 {
             if !level.is_finite() {
                 return 0.0;
             }
-            use rayon::prelude::*;
-            let g = values
-                .par_iter()
-                .map(|&v| (v - level).abs())
-                .filter(|&d| d > 0.0)
-                .reduce(|| f64::INFINITY, f64::min);
+            let g = values.par_fold(
+                || f64::INFINITY,
+                |m, v| {
+                    let d = (v - level).abs();
+                    if d > 0.0 {
+                        m.min(d)
+                    } else {
+                        m
+                    }
+                },
+                f64::min,
+            );
             if g.is_finite() {
                 g
             } else {
@@ -578,7 +584,7 @@ mod tests {
                 tets: 0,
                 area_alpha: 0.0,
             };
-            clip_tet(&tv, &Interval::new(a, b, &[0.0, 1.0]), 0, &mut c);
+            clip_tet(&tv, &Interval::new(a, b, &vec![0.0, 1.0].into()), 0, &mut c);
             let cube = |s: f64| s.clamp(0.0, 1.0).powi(3) / 6.0;
             let want = cube(b) - cube(a);
             assert!((c.vol - want).abs() < 1e-14, "{a} {b}: {} vs {want}", c.vol);
@@ -779,7 +785,7 @@ mod tests {
                 for _ in 0..4 {
                     let tv = random_tet(&mut seed, cls, alpha, beta);
                     let vals: Vec<f64> = tv.iter().map(|v| v.val).collect();
-                    let iv = Interval::new(a, b, &vals);
+                    let iv = Interval::new(a, b, &vals.into());
                     check_clip(&tv, &iv, &format!("({a}, {b}) classes {cls:?}"));
                 }
             }

@@ -94,6 +94,6 @@ mod tests {
 
     #[test]
     fn no_grid_value_equals_alpha() {
-        assert!(demo_volume().values.iter().all(|&v| v != DEMO_ALPHA));
+        assert!(demo_volume().values.iter().all(|v| v != DEMO_ALPHA));
     }
 }

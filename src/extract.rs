@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use crate::clip::{clip_tet, ClipVertex, Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
 use crate::decompose::plan::{plan_cell, Layout, Planner};
 use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM_LOCAL};
-use crate::grid::{cell_box_planes, corner_offset, ScalarGrid};
+use crate::grid::{cell_box_planes, corner_offset, Samples, ScalarGrid};
 use crate::keys::local_key;
 use crate::mesh::TetMesh;
 use crate::warp::snap_vertices;
@@ -238,17 +238,17 @@ fn run(
     progress: &(dyn Fn(usize, usize) + Sync),
     sink: &mut (dyn MeshSink + Send),
 ) -> Result<MeshStats, MeshError> {
-    let tied = without_near_ties(grid, opts.alpha, opts.beta);
+    let (tied, alpha, beta) = without_near_ties(grid, opts.alpha, opts.beta);
     let grid = tied.as_ref().unwrap_or(grid);
     let [_, _, cz] = grid.cell_dims();
     let mut ctx = Ctx {
         grid,
-        interval: Interval::new(opts.alpha, opts.beta, &grid.values),
+        interval: Interval::new(alpha, beta, &grid.values),
         planner: Planner {
             grid,
             method: opts.method,
-            alpha: opts.alpha,
-            beta: opts.beta,
+            alpha,
+            beta,
         },
         snaps: Vec::new(),
     };
@@ -311,27 +311,47 @@ fn hand_on(
 /// onto the level before meshing.
 pub const NEAR_TIE: f64 = 1e-9;
 
-/// A copy of `grid` with every value within [`NEAR_TIE`] × (data range) of `alpha` or `beta`
-/// set exactly to it, or `None` when there is none. Such values (e.g. 0.9999999999999999 for a
-/// distance sampled on a sphere of radius 1) would put cuts within rounding of a grid vertex:
-/// the cut point and the vertex coincide in floating point, and tets between them vanish. As
-/// exact ties they follow the ties rule (`clip`), which keeps every tet non-degenerate.
-fn without_near_ties(grid: &ScalarGrid, alpha: f64, beta: f64) -> Option<ScalarGrid> {
+/// Removes values within [`NEAR_TIE`] × (data range) of `alpha` or `beta` but not equal to
+/// it. Such values (e.g. 0.9999999999999999 for a distance sampled on a sphere of radius 1)
+/// would put cuts within rounding of a grid vertex: the cut point and the vertex coincide in
+/// floating point, and tets between them vanish. As exact ties they follow the ties rule
+/// (`clip`), which keeps every tet non-degenerate. Returns the grid to mesh (`None`: `grid`
+/// itself) and the levels to mesh:
+/// * integer storage: the level moves onto the integer next to it (the tolerance is far below
+///   0.5, so no other value lies between them: the same interval of the data), no copy;
+/// * float storage: a copy of the grid with those values set onto the level, in the same
+///   storage type when it holds the level exactly, else in `f64`.
+fn without_near_ties(grid: &ScalarGrid, alpha: f64, beta: f64) -> (Option<ScalarGrid>, f64, f64) {
     let (lo, hi) = grid.value_range();
     let tol = NEAR_TIE * (hi - lo);
-    let near = |v: f64| -> Option<f64> {
-        [alpha, beta]
-            .into_iter()
-            .find(|&l| l.is_finite() && v != l && (v - l).abs() <= tol)
-    };
-    if !grid.values.par_iter().any(|&v| near(v).is_some()) {
-        return None;
+    let near = |v: f64, l: f64| l.is_finite() && v != l && (v - l).abs() <= tol;
+    let near_any = |v: f64| [alpha, beta].into_iter().find(|&l| near(v, l));
+    if !grid.values.par_any(|v| near_any(v).is_some()) {
+        return (None, alpha, beta);
     }
-    let mut g = grid.clone();
-    g.values
-        .par_iter_mut()
-        .for_each(|v| *v = near(*v).unwrap_or(*v));
-    Some(g)
+    if grid.values.storage().is_integer() && tol < 0.5 {
+        let moved = [alpha, beta].map(|l| match grid.values.par_any(|v| near(v, l)) {
+            true => l.round(),
+            false => l,
+        });
+        if moved[0] < moved[1] {
+            return (None, moved[0], moved[1]);
+        }
+    }
+    let written = [alpha, beta].into_iter().filter(|l| l.is_finite());
+    let mut values = match written.clone().all(|l| grid.values.holds(l)) {
+        true => grid.values.clone(),
+        false => Samples::F64(grid.values.to_f64_vec()),
+    };
+    values.par_map_in_place(|v| near_any(v).unwrap_or(v));
+    let g = ScalarGrid {
+        dims: grid.dims,
+        spacing: grid.spacing,
+        origin: grid.origin,
+        direction: grid.direction,
+        values,
+    };
+    (Some(g), alpha, beta)
 }
 
 /// Meshes the cells of layer `k` into a new slab.
@@ -388,14 +408,15 @@ fn plane_bits(ctx: &Ctx, z: usize) -> [Vec<u64>; 2] {
     let words = nx.div_ceil(64);
     let mut bits = [vec![0u64; ny * words], vec![0u64; ny * words]];
     let base = ctx.grid.index(0, 0, z);
-    for (jj, row) in ctx.grid.values[base..base + nx * ny]
-        .chunks_exact(nx)
-        .enumerate()
-    {
-        for (i, &v) in row.iter().enumerate() {
-            bits[0][jj * words + i / 64] |= ((v <= ctx.interval.alpha) as u64) << (i % 64);
-            bits[1][jj * words + i / 64] |= ((v >= ctx.interval.beta) as u64) << (i % 64);
-        }
+    let (alpha, beta) = (ctx.interval.alpha, ctx.interval.beta);
+    for jj in 0..ny {
+        let [below, above] = &mut bits;
+        let (below, above) = (&mut below[jj * words..], &mut above[jj * words..]);
+        let row = base + jj * nx..base + (jj + 1) * nx;
+        ctx.grid.values.for_each_in(row, |i, v| {
+            below[i / 64] |= ((v <= alpha) as u64) << (i % 64);
+            above[i / 64] |= ((v >= beta) as u64) << (i % 64);
+        });
     }
     bits
 }
@@ -616,10 +637,7 @@ mod tests {
             let c = |n: usize| -1.2 + n as f64 * 0.2;
             (c(i) * c(i) + c(j) * c(j) + c(k) * c(k)).sqrt()
         });
-        assert!(g
-            .values
-            .iter()
-            .any(|&v| v != 1.0 && (v - 1.0).abs() < 1e-15));
+        assert!(g.values.iter().any(|v| v != 1.0 && (v - 1.0).abs() < 1e-15));
         for method in ALL {
             let m = mesh_interval(&g, &MeshOptions::new(f64::NEG_INFINITY, 1.0, method))
                 .unwrap()
@@ -640,6 +658,39 @@ mod tests {
             }
             let open = faces.values().filter(|&&n| n == 1).count();
             assert_eq!(open, m.boundary.len(), "{method:?}: unlabelled open faces");
+        }
+    }
+
+    #[test]
+    fn integer_samples_near_a_level_move_the_level_not_the_grid() {
+        // u8 ball; alpha 1e-8 above a data value (tolerance 1e-9 * 255), beta 1e-8 below one
+        let vals: Vec<u8> = (0..9 * 9 * 9)
+            .map(|n| {
+                let d = [n % 9, n / 9 % 9, n / 81].map(|x| x as f64 - 4.0);
+                (250.0 - 30.0 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()) as u8
+            })
+            .collect();
+        let g = ScalarGrid::new([9, 9, 9], vals).unwrap();
+        let (a, b) = (100.0 + 1e-8, 190.0 - 1e-8);
+        assert!(g.values.iter().any(|v| v == 100.0) && g.values.iter().any(|v| v == 190.0));
+        let (copy, a2, b2) = without_near_ties(&g, a, b);
+        assert!(copy.is_none());
+        assert_eq!((a2, b2), (100.0, 190.0));
+        // a level near no value stays; float storage gets a copy with the value on the level
+        assert_eq!(without_near_ties(&g, 100.5, 190.0 - 1e-8).1, 100.5);
+        let gf = ScalarGrid::new([9, 9, 9], g.values.to_f64_vec()).unwrap();
+        let (copy, a3, _) = without_near_ties(&gf, a, b);
+        let copy = copy.expect("a copy for float storage");
+        assert_eq!(a3, a);
+        assert!(copy.values.iter().any(|v| v == a));
+        for method in ALL {
+            let exact = mesh_interval(&g, &MeshOptions::new(100.0, 190.0, method)).unwrap();
+            let near = mesh_interval(&g, &MeshOptions::new(a, b, method)).unwrap();
+            assert_eq!(exact.mesh, near.mesh, "{method:?}");
+            assert!(!near.mesh.tets.is_empty());
+            for t in 0..near.mesh.tets.len() {
+                assert!(near.mesh.tet_volume(t) > 0.0, "{method:?}: tet {t}");
+            }
         }
     }
 

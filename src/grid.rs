@@ -9,6 +9,8 @@
 //! * Index coordinates `(i + u, j + v, k + w)` map to physical coordinates by
 //!   `origin + direction * (spacing ⊙ index)` (see [`ScalarGrid::to_physical`]).
 
+pub use crate::samples::{SampleStorage, Samples};
+
 /// A scalar field sampled at the vertices of a regular (possibly oriented) grid.
 ///
 /// Invariants: `values.len() == dims[0] * dims[1] * dims[2]`, every value finite,
@@ -23,8 +25,8 @@ pub struct ScalarGrid {
     pub origin: [f64; 3],
     /// Row-major 3×3 matrix whose columns are the unit directions of the index axes.
     pub direction: [[f64; 3]; 3],
-    /// Values at the grid vertices, x fastest.
-    pub values: Vec<f64>,
+    /// Values at the grid vertices, x fastest, in their storage type (see [`Samples`]).
+    pub values: Samples,
 }
 
 /// Why a grid could not be built.
@@ -114,7 +116,7 @@ impl ScalarGrid {
     ///
     /// # Errors
     /// See [`GridError`].
-    pub fn new(dims: [usize; 3], values: Vec<f64>) -> Result<Self, GridError> {
+    pub fn new(dims: [usize; 3], values: impl Into<Samples>) -> Result<Self, GridError> {
         Self::with_geometry(dims, [1.0; 3], [0.0; 3], IDENTITY, values)
     }
 
@@ -127,8 +129,9 @@ impl ScalarGrid {
         spacing: [f64; 3],
         origin: [f64; 3],
         direction: [[f64; 3]; 3],
-        values: Vec<f64>,
+        values: impl Into<Samples>,
     ) -> Result<Self, GridError> {
+        let values = values.into();
         if dims.iter().any(|&d| d < 2) {
             return Err(GridError::TooSmall(dims));
         }
@@ -161,17 +164,11 @@ impl ScalarGrid {
         {
             return Err(GridError::BadDirection);
         }
-        use rayon::prelude::*;
-        let bad = g
-            .values
-            .par_chunks(1 << 16)
-            .any(|c| c.iter().any(|v| !v.is_finite()));
-        if let Some(p) = bad
-            .then(|| g.values.iter().position(|v| !v.is_finite()))
-            .flatten()
-        {
+        let float = !g.values.storage().is_integer();
+        let bad = float && g.values.par_any(|v| !v.is_finite());
+        if let Some(p) = bad.then(|| g.values.position(|v| !v.is_finite())).flatten() {
             let [i, j, k] = g.vertex_ijk(p);
-            return Err(GridError::NotFinite(i, j, k, g.values[p]));
+            return Err(GridError::NotFinite(i, j, k, g.values.get(p)));
         }
         Ok(g)
     }
@@ -209,7 +206,7 @@ impl ScalarGrid {
     /// Value at grid vertex (i, j, k).
     #[inline]
     pub fn value(&self, i: usize, j: usize, k: usize) -> f64 {
-        self.values[self.index(i, j, k)]
+        self.values.get(self.index(i, j, k))
     }
 
     /// The eight corner values of cell (i, j, k), in corner order.
@@ -219,17 +216,16 @@ impl ScalarGrid {
         let sx = 1;
         let sy = self.dims[0];
         let sz = self.dims[0] * self.dims[1];
-        let v = &self.values;
-        [
-            v[base],
-            v[base + sx],
-            v[base + sy],
-            v[base + sx + sy],
-            v[base + sz],
-            v[base + sx + sz],
-            v[base + sy + sz],
-            v[base + sx + sy + sz],
-        ]
+        self.values.gather([
+            base,
+            base + sx,
+            base + sy,
+            base + sx + sy,
+            base + sz,
+            base + sx + sz,
+            base + sy + sz,
+            base + sx + sy + sz,
+        ])
     }
 
     /// Linear map from index space to physical space: `direction * diag(spacing)`.
@@ -261,11 +257,7 @@ impl ScalarGrid {
 
     /// Smallest and largest value.
     pub fn value_range(&self) -> (f64, f64) {
-        self.values
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                (lo.min(v), hi.max(v))
-            })
+        self.values.min_max()
     }
 }
 
@@ -329,7 +321,7 @@ impl CurvilinearGrid {
     /// position.
     pub fn new(
         dims: [usize; 3],
-        values: Vec<f64>,
+        values: impl Into<Samples>,
         points: Vec<[f64; 3]>,
     ) -> Result<Self, GridError> {
         let values = ScalarGrid::new(dims, values)?;

@@ -29,6 +29,7 @@ pub(crate) mod keys;
 pub mod memory;
 pub mod mesh;
 pub mod report;
+pub mod samples;
 pub mod surface;
 pub mod topology;
 pub(crate) mod trilinear;
@@ -43,5 +44,6 @@ pub use extract::{
 };
 pub use grid::{CurvilinearGrid, ScalarGrid};
 pub use mesh::{BoundaryLabel, TetMesh, TriSurface};
+pub use samples::{SampleStorage, Samples};
 pub use surface::{analysis::analyse_surface, level_surface, SurfaceOptions};
 pub use weld::{MeshChunk, MeshSink};

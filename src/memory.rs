@@ -7,8 +7,9 @@
 //!   none. The process-wide limit is also what a capping global allocator (the binary's)
 //!   enforces.
 //! * **Estimates**, measured on this project's machine (README, *Performance*): the samples
-//!   take 8 bytes per voxel as `f64` plus, while the file is read, up to 16 bytes more per
-//!   voxel (the stored samples and a reordered copy); the mesh and its analysis take about
+//!   take their storage type's bytes per voxel ([`crate::Samples`]: 1 for `uint8`, 8 for
+//!   `float64`) plus, while the file is read, a reordered copy and the file's bytes; the mesh
+//!   and its analysis take about
 //!   [`BYTES_PER_TET`] bytes per tetrahedron; the number of tetrahedra is estimated from the
 //!   cells inside the interval and the cells a bound crosses ([`estimate_tets`]).
 //! * **Fallible sections** ([`fallible`]): a capping allocator returns null inside them, so
@@ -130,15 +131,18 @@ pub fn check(need: u64, what: impl Into<String>) -> Result<(), MemoryError> {
     }
 }
 
-/// Estimated peak bytes of reading `voxels` samples of `sample_size` bytes each.
-pub fn read_bytes(voxels: u64, sample_size: u64) -> u64 {
-    voxels.saturating_mul(16 + sample_size)
+/// Estimated peak bytes of reading `voxels` samples of `file_size` bytes each in the file,
+/// held as `storage_size` bytes each ([`crate::Samples`]): the samples, a reordered (or
+/// rescaled) copy of them, and the file's bytes where a format holds them in memory.
+pub fn read_bytes(voxels: u64, file_size: u64, storage_size: u64) -> u64 {
+    voxels.saturating_mul(2 * storage_size + file_size)
 }
 
-/// Estimated bytes of the grid (`f64` samples) plus a mesh of `tets` tetrahedra.
-pub fn mesh_bytes(voxels: u64, tets: u64) -> u64 {
+/// Estimated bytes of the grid (`bytes_per_sample` per voxel) plus a mesh of `tets`
+/// tetrahedra.
+pub fn mesh_bytes(voxels: u64, bytes_per_sample: u64, tets: u64) -> u64 {
     voxels
-        .saturating_mul(8)
+        .saturating_mul(bytes_per_sample)
         .saturating_add(tets.saturating_mul(BYTES_PER_TET))
 }
 

@@ -103,6 +103,8 @@ pub struct Report {
     pub dims: [usize; 3],
     /// Grid spacing along x, y, z.
     pub spacing: [f64; 3],
+    /// Storage type of the samples (`uint8`, `int16`, `uint16`, `float32`, `float64`).
+    pub samples: &'static str,
     /// Decomposition method name.
     pub method: &'static str,
     /// Lower bound of the interval.
@@ -165,6 +167,8 @@ pub struct RunInfo<'a> {
     pub dims: [usize; 3],
     /// Grid spacing.
     pub spacing: [f64; 3],
+    /// Storage type of the samples.
+    pub samples: crate::SampleStorage,
     /// Method used.
     pub method: Method,
     /// Lower bound.
@@ -207,6 +211,7 @@ pub fn build_report(
         input: run.input.to_string(),
         output: run.output.to_string(),
         dims: run.dims,
+        samples: run.samples.name(),
         spacing: run.spacing,
         method: run.method.name(),
         alpha: Bound(run.alpha),
@@ -268,6 +273,7 @@ mod tests {
             output: "x.vtu",
             dims: [3, 3, 3],
             spacing: [1.0; 3],
+            samples: crate::SampleStorage::U8,
             method: Method::Ctd,
             alpha: f64::NEG_INFINITY,
             beta: f64::INFINITY,
@@ -277,6 +283,7 @@ mod tests {
         let r = build_report(&run, &facts, &stats, None, Timings::default());
         let v: serde_json::Value = serde_json::from_str(&r.to_json_pretty()).unwrap();
         assert_eq!(v["alpha"], "-inf");
+        assert_eq!(v["samples"], "uint8");
         assert_eq!(v["beta"], "inf");
         assert_eq!(v["boundary_triangles"]["box"], 2);
         assert_eq!(v["boundary_triangles"]["beta"], 0);

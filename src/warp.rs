@@ -197,14 +197,15 @@ fn side_bits(grid: &ScalarGrid, iv: &Interval, z: usize) -> [Vec<u64>; 2] {
     let words = nx.div_ceil(64);
     let mut bits = [vec![0u64; ny * words], vec![0u64; ny * words]];
     let base = grid.index(0, 0, z);
-    for (j, row) in grid.values[base..base + nx * ny]
-        .chunks_exact(nx)
-        .enumerate()
-    {
-        for (i, &v) in row.iter().enumerate() {
-            bits[0][j * words + i / 64] |= ((v > iv.alpha) as u64) << (i % 64);
-            bits[1][j * words + i / 64] |= ((v < iv.beta) as u64) << (i % 64);
-        }
+    let (alpha, beta) = (iv.alpha, iv.beta);
+    for j in 0..ny {
+        let [up, down] = &mut bits;
+        let (up, down) = (&mut up[j * words..], &mut down[j * words..]);
+        let row = base + j * nx..base + (j + 1) * nx;
+        grid.values.for_each_in(row, |i, v| {
+            up[i / 64] |= ((v > alpha) as u64) << (i % 64);
+            down[i / 64] |= ((v < beta) as u64) << (i % 64);
+        });
     }
     bits
 }
@@ -255,7 +256,7 @@ fn candidate_level(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], eps: f64) 
         let d = (e - level).abs();
         let side = domain_side(f, snap, iv);
         let close = neighbours26().any(|o| {
-            let u = grid.values[neighbour(grid, ijk, o)];
+            let u = grid.values.get(neighbour(grid, ijk, o));
             domain_side(u, snap, iv) != side && d < eps * (u - e).abs()
         });
         if close {
@@ -328,7 +329,7 @@ impl Star {
         let mut link = Link::default();
         star_link(grid, planner, v, &mut link);
         link.add_outside_octants(grid, iv, v);
-        let f = grid.values[v];
+        let f = grid.values.get(v);
         let side = domain_side(f, snap, iv);
         let (e, level) = (iv.effective(f), level_of(snap, iv));
         let t = link

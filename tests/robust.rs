@@ -387,11 +387,23 @@ fn the_memory_cap_gives_one_line_at_every_stage() {
     let args = [
         "v.npy", "--beta", "15.5", "-o", "m.vtu", "--report", "r.json",
     ];
+    // an allocation outside any estimate fails (the allocator's line): an ascii NRRD (about
+    // 1 MB of text) is read whole before its header is looked at; the .npy reader checks its
+    // estimate before it allocates anything proportional to the data
+    let text: Vec<String> = (0..40 * 40 * 40)
+        .map(|n| format!("{:.15}", n as f64 / 7.0))
+        .collect();
+    let nrrd = "NRRD0004\ntype: double\ndimension: 3\nsizes: 40 40 40\nencoding: ascii\n\n";
+    std::fs::write(d.join("a.nrrd"), format!("{nrrd}{}\n", text.join(" "))).unwrap();
     let before = listing(d);
-    // below the file itself: an allocation fails outside any estimate (the allocator's line)
-    let o = run_env(d, &args, &[("TPTD_MEMORY_LIMIT", "200K")]);
+    let mut a = args.to_vec();
+    a[0] = "a.nrrd";
+    let o = run_env(d, &a, &[("TPTD_MEMORY_LIMIT", "200K")]);
     let e = assert_one_line_failure(&o, d, &before, "out of memory");
     assert!(e.contains("memory limit of 0.2 MiB"), "{e}");
+    let o = run_env(d, &args, &[("TPTD_MEMORY_LIMIT", "200K")]);
+    let e = assert_one_line_failure(&o, d, &before, "v.npy");
+    assert!(e.contains("reading 64000 samples needs about"), "{e}");
     // the samples do not fit: refused after the header, before the data are decoded
     let mut a = args.to_vec();
     a.extend(["--memory-limit", "1200K"]);

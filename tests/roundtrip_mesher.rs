@@ -66,13 +66,16 @@ fn shell_grid() -> ScalarGrid {
     .unwrap();
     let mid = grid.to_physical([5.5, 4.5, 4.0]);
     let centre = [mid[0] + 0.31, mid[1] - 0.22, mid[2] + 0.17];
-    for idx in 0..grid.num_vertices() {
-        let p = grid.to_physical(grid.vertex_ijk(idx).map(|i| i as f64));
-        grid.values[idx] = (0..3)
-            .map(|k| (p[k] - centre[k]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-    }
+    let values: Vec<f64> = (0..grid.num_vertices())
+        .map(|idx| {
+            let p = grid.to_physical(grid.vertex_ijk(idx).map(|i| i as f64));
+            (0..3)
+                .map(|k| (p[k] - centre[k]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    grid.values = values.into();
     grid
 }
 
@@ -93,9 +96,10 @@ fn slab_grid() -> ScalarGrid {
         vec![0.0; dims[0] * dims[1] * dims[2]],
     )
     .unwrap();
-    for idx in 0..grid.num_vertices() {
-        grid.values[idx] = grid.to_physical(grid.vertex_ijk(idx).map(|i| i as f64))[0];
-    }
+    let values: Vec<f64> = (0..grid.num_vertices())
+        .map(|idx| grid.to_physical(grid.vertex_ijk(idx).map(|i| i as f64))[0])
+        .collect();
+    grid.values = values.into();
     grid
 }
 

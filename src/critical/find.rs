@@ -169,13 +169,22 @@ fn neighbours(grid: &ScalarGrid, p: [usize; 3]) -> [Option<usize>; 6] {
 /// value (the vertex belongs to a plateau, see [`super::region`]).
 #[inline]
 pub fn vertex_class(grid: &ScalarGrid, p: [usize; 3]) -> Option<LinkClass> {
-    let v = grid.value(p[0], p[1], p[2]);
+    let centre = grid.index(p[0], p[1], p[2]);
+    let nbrs = neighbours(grid, p);
+    // the vertex and its neighbours (itself where there is none), one access
+    let vals = grid
+        .values
+        .gather(std::array::from_fn::<usize, 7, _>(|d| match d {
+            0 => centre,
+            _ => nbrs[d - 1].unwrap_or(centre),
+        }));
+    let v = vals[0];
     let mut upper = 0u8;
     let mut interior = true;
-    for (d, n) in neighbours(grid, p).into_iter().enumerate() {
+    for (d, n) in nbrs.into_iter().enumerate() {
         match n {
-            Some(n) => {
-                let w = grid.values[n];
+            Some(_) => {
+                let w = vals[d + 1];
                 if w == v {
                     return None;
                 }
@@ -239,7 +248,7 @@ fn faces_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<Critical
                     let o = crate::grid::corner_offset(c);
                     base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2]
                 };
-                let q = fc.map(|c| grid.values[corner(c)]);
+                let q = grid.values.gather(fc.map(corner));
                 let (lo, hi) = q
                     .iter()
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
@@ -252,9 +261,9 @@ fn faces_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<Critical
                     continue;
                 };
                 let lower =
-                    (p[axis] > 0).then(|| fc.map(|c| grid.values[corner(c) - stride[axis]]));
+                    (p[axis] > 0).then(|| grid.values.gather(fc.map(|c| corner(c) - stride[axis])));
                 let upper = (p[axis] + 1 < dims[axis])
-                    .then(|| fc.map(|c| grid.values[corner(c) + stride[axis]]));
+                    .then(|| grid.values.gather(fc.map(|c| corner(c) + stride[axis])));
                 let Some((class, degenerate)) = classify_face_saddle(q, s.value, [lower, upper])
                 else {
                     continue;

@@ -141,7 +141,7 @@ fn vertex_persistence(grid: &ScalarGrid, g: &Graph) -> Vec<f64> {
     let total = n + g.extra_keys.len();
     let value = |i: usize| {
         if i < n {
-            grid.values[i]
+            grid.values.get(i)
         } else {
             g.extra_values[i - n]
         }

@@ -60,7 +60,17 @@ pub fn plateaus_where(
     };
     let flat: Vec<bool> = (0..n)
         .into_par_iter()
-        .map(|i| keep(grid.values[i]) && nbrs(i).any(|m| grid.values[m] == grid.values[i]))
+        .map(|i| {
+            // the vertex and its six neighbours (itself where there is none), one access
+            let mut idx = [i; 7];
+            let mut count = 1;
+            for m in nbrs(i) {
+                idx[count] = m;
+                count += 1;
+            }
+            let v = grid.values.gather(idx);
+            keep(v[0]) && v[1..count].iter().any(|&w| w == v[0])
+        })
         .collect();
     let mut labels = vec![NO_REGION; n];
     let mut out = Vec::new();
@@ -70,13 +80,13 @@ pub fn plateaus_where(
             continue;
         }
         let id = out.len() as u32;
-        let v = grid.values[s];
+        let v = grid.values.get(s);
         let mut region = vec![s];
         labels[s] = id;
         stack.push(s);
         while let Some(i) = stack.pop() {
             for m in nbrs(i) {
-                if labels[m] == NO_REGION && grid.values[m] == v {
+                if labels[m] == NO_REGION && grid.values.get(m) == v {
                     labels[m] = id;
                     region.push(m);
                     stack.push(m);
@@ -129,7 +139,7 @@ pub fn classify_region(
     id: u32,
     region: &[usize],
 ) -> Option<CriticalPoint> {
-    let v = grid.values[region[0]];
+    let v = grid.values.get(region[0]);
     let in_region = |idx: usize| labels[idx] == id;
     let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
     // a plateau whose exits all go up (down) is a minimum (maximum): no graph needed, a
@@ -143,8 +153,9 @@ pub fn classify_region(
                 (p[a] + 1 < grid.dims[a], r + stride[a]),
             ] {
                 if ok && !in_region(m) {
-                    up |= grid.values[m] > v;
-                    down |= grid.values[m] < v;
+                    let w = grid.values.get(m);
+                    up |= w > v;
+                    down |= w < v;
                 }
             }
         }
@@ -203,7 +214,7 @@ pub fn classify_region(
             let o = corner_offset(k);
             base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2]
         });
-        let vals = gidx.map(|g| grid.values[g]);
+        let vals = grid.values.gather(gidx);
         let mut rmask = 0u8;
         for k in 0..8 {
             if vals[k] == v && in_region(gidx[k]) {

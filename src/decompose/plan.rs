@@ -411,7 +411,7 @@ mod tests {
     }
     fn noise_grid(dims: [usize; 3], seed: u64) -> ScalarGrid {
         let n = dims[0] * dims[1] * dims[2];
-        let v = (0..n as u64)
+        let v: Vec<f64> = (0..n as u64)
             .map(|i| {
                 let h = (seed ^ i.wrapping_mul(0x2545_F491_4F6C_DD1D))
                     .wrapping_mul(0x9E37_79B9_7F4A_7C15);

@@ -18,10 +18,11 @@ use flate2::read::ZlibDecoder;
 
 use super::header::{self, Fields};
 use super::volume::{
-    build_grid, checked_decode, data_size, decompress_exact, quote, read_all, read_data_file,
-    read_raw_range, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
+    build_grid, checked_decode, data_size, decompress_into, open_raw_range, quote, read_all,
+    read_data_file, read_raw_into, take_exact, Endian, Geometry, ReadError, SampleBuf, SampleType,
+    Skip,
 };
-use crate::grid::{ScalarGrid, IDENTITY};
+use crate::grid::{Samples, ScalarGrid, IDENTITY};
 
 /// Reads a MetaImage volume (`.mhd` + data file, or `.mha`).
 ///
@@ -34,9 +35,12 @@ use crate::grid::{ScalarGrid, IDENTITY};
 pub fn read_mhd(path: &Path) -> Result<ScalarGrid, ReadError> {
     let bytes = read_all(path)?;
     let h = parse_header(path, &bytes)?;
-    let (_, nbytes) = data_size(path, h.dims, h.ty)?;
-    let data: Vec<u8> = match (&h.data, h.compressed) {
-        (DataLocation::Local(start), false) => read_local_raw(path, &h, &bytes[*start..], nbytes)?,
+    let (count, nbytes) = data_size(path, h.dims, h.ty)?;
+    let values = match (&h.data, h.compressed) {
+        (DataLocation::Local(start), false) => {
+            let data = read_local_raw(path, &h, &bytes[*start..], nbytes)?;
+            checked_decode(path, data, h.ty, h.endian)?
+        }
         (DataLocation::Local(start), true) => {
             let block = &bytes[*start..];
             check_compressed_size(
@@ -45,26 +49,32 @@ pub fn read_mhd(path: &Path) -> Result<ScalarGrid, ReadError> {
                 block.len(),
                 "the file after the header",
             )?;
-            decompress_exact(path, ZlibDecoder::new(block), nbytes, true, "the zlib data")?
+            let mut buf = SampleBuf::new(path, h.ty, count)?;
+            let z = ZlibDecoder::new(block);
+            decompress_into(path, z, 0, buf.bytes_mut(), true, "the zlib data")?;
+            buf.finish(h.endian)
         }
         (DataLocation::File(file), false) => {
             let skip = h.header_size.unwrap_or(Skip::Bytes(0));
-            read_raw_range(path, file, skip, nbytes, skip != Skip::FromEnd)?
+            let f = open_raw_range(path, file, skip, nbytes, skip != Skip::FromEnd)?;
+            let mut buf = SampleBuf::new(path, h.ty, count)?;
+            read_raw_into(path, file, f, buf.bytes_mut())?;
+            buf.finish(h.endian)
         }
-        (DataLocation::File(file), true) => read_zlib_file(path, &h, file, nbytes)?,
+        (DataLocation::File(file), true) => read_zlib_file(path, &h, file, count)?,
     };
-    let values = checked_decode(path, &data, h.ty, h.endian)?;
+    drop(bytes);
     build_grid(path, h.dims, h.spacing, h.origin, h.direction, values)
 }
 
 /// The `nbytes` uncompressed data bytes of a `.mha` file, from `block` (the file after the
 /// header) and `HeaderSize`.
-fn read_local_raw(
+fn read_local_raw<'a>(
     path: &Path,
     h: &Header,
-    block: &[u8],
+    block: &'a [u8],
     nbytes: usize,
-) -> Result<Vec<u8>, ReadError> {
+) -> Result<&'a [u8], ReadError> {
     let block = match h.header_size {
         Some(Skip::FromEnd) => {
             let from = block.len().checked_sub(nbytes).ok_or_else(|| {
@@ -76,7 +86,7 @@ fn read_local_raw(
                     ),
                 )
             })?;
-            return Ok(block[from..].to_vec());
+            return Ok(&block[from..]);
         }
         Some(Skip::Bytes(s)) => usize::try_from(s)
             .ok()
@@ -89,16 +99,16 @@ fn read_local_raw(
             })?,
         None => block,
     };
-    Ok(take_exact(path, block, nbytes, true, "the file after the header")?.to_vec())
+    take_exact(path, block, nbytes, true, "the file after the header")
 }
 
-/// Decompresses the `nbytes` data bytes of the zlib data file `file`.
+/// Decompresses the `count` samples of the zlib data file `file`.
 fn read_zlib_file(
     path: &Path,
     h: &Header,
     file: &Path,
-    nbytes: usize,
-) -> Result<Vec<u8>, ReadError> {
+    count: usize,
+) -> Result<Samples, ReadError> {
     let shown = file.display().to_string();
     let all = read_data_file(path, file)?;
     check_compressed_size(
@@ -108,7 +118,10 @@ fn read_zlib_file(
         &format!("data file {shown}"),
     )?;
     let what = format!("zlib data file {shown}");
-    decompress_exact(path, ZlibDecoder::new(all.as_slice()), nbytes, true, &what)
+    let mut buf = SampleBuf::new(path, h.ty, count)?;
+    let z = ZlibDecoder::new(all.as_slice());
+    decompress_into(path, z, 0, buf.bytes_mut(), true, &what)?;
+    Ok(buf.finish(h.endian))
 }
 
 /// Checks `CompressedDataSize`, if the header gives it, against the bytes present.

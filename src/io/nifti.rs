@@ -12,16 +12,17 @@
 //! origin, identity direction. As in `nifti1_io`, zero or non-finite `pixdim` entries read
 //! as 1.
 
-use std::io::Read;
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
 use flate2::read::MultiGzDecoder;
 
 use super::volume::{
-    build_grid, checked_decode, data_size, decompress_exact, read_all, split_linear, take_exact,
-    to_dim, Endian, Geometry, ReadError, SampleType,
+    build_grid, data_size, decompress_into, split_linear, to_dim, Endian, Geometry, ReadError,
+    SampleBuf, SampleType,
 };
-use crate::grid::{ScalarGrid, IDENTITY};
+use crate::grid::{Samples, ScalarGrid, IDENTITY};
 
 const NIFTI1_HDR: usize = 348;
 const NIFTI2_HDR: usize = 540;
@@ -36,56 +37,98 @@ const NIFTI2_HDR: usize = 540;
 /// other datatypes or images that are not 3-D; [`ReadError::Grid`] for a dimension below 2,
 /// a non-finite value or a degenerate affine.
 pub fn read_nifti(path: &Path) -> Result<ScalarGrid, ReadError> {
-    let raw = read_all(path)?;
-    let gz = raw.starts_with(&[0x1f, 0x8b]);
-    let h = parse_header(path, &head_bytes(path, &raw, gz)?)?;
-    let (_, nbytes) = data_size(path, h.dims, h.ty)?;
-    let end = h
-        .vox_offset
+    let cannot = |e| ReadError::io(path, "cannot read file", e);
+    let mut file = File::open(path).map_err(cannot)?;
+    let size = file.metadata().map_err(cannot)?.len();
+    let head = read_head(&mut file).map_err(cannot)?;
+    let gz = head.starts_with(&[0x1f, 0x8b]);
+    if !gz {
+        let h = parse_header(path, &head)?;
+        let (count, nbytes) = data_size(path, h.dims, h.ty)?;
+        h.vox_offset
+            .checked_add(nbytes)
+            .ok_or_else(|| ReadError::invalid(path, "vox_offset + data size overflows"))?;
+        let body = size.saturating_sub(h.vox_offset as u64);
+        if body < nbytes as u64 {
+            return Err(ReadError::invalid(
+                path,
+                format!(
+                    "header says {nbytes} bytes of data but the file (after vox_offset {}) holds {body}",
+                    h.vox_offset
+                ),
+            ));
+        }
+        let mut buf = SampleBuf::new(path, h.ty, count)?;
+        file.seek(SeekFrom::Start(h.vox_offset as u64))
+            .and_then(|_| file.read_exact(buf.bytes_mut()))
+            .map_err(cannot)?;
+        return finish(path, h, buf);
+    }
+    file.seek(SeekFrom::Start(0)).map_err(cannot)?;
+    let mut gz = MultiGzDecoder::new(BufReader::new(file));
+    let head = read_head(&mut gz)
+        .map_err(|e| ReadError::invalid(path, format!("gzip stream is corrupt: {e}")))?;
+    let h = parse_header(path, &head)?;
+    let (count, nbytes) = data_size(path, h.dims, h.ty)?;
+    h.vox_offset
         .checked_add(nbytes)
         .ok_or_else(|| ReadError::invalid(path, "vox_offset + data size overflows"))?;
+    let mut buf = SampleBuf::new(path, h.ty, count)?;
+    let stream = head.as_slice().chain(gz);
+    decompress_into(
+        path,
+        stream,
+        h.vox_offset,
+        buf.bytes_mut(),
+        false,
+        "the gzip stream",
+    )?;
+    finish(path, h, buf)
+}
 
-    let data: Vec<u8> = if gz {
-        let all = decompress_exact(
-            path,
-            MultiGzDecoder::new(raw.as_slice()),
-            end,
-            false,
-            "the gzip stream",
-        )?;
-        all[h.vox_offset..].to_vec()
-    } else {
-        let body = raw.get(h.vox_offset..).unwrap_or(&[]);
-        take_exact(
-            path,
-            body,
-            nbytes,
-            false,
-            &format!("the file (after vox_offset {})", h.vox_offset),
-        )?
-        .to_vec()
-    };
-    let mut values = checked_decode(path, &data, h.ty, h.endian)?;
+/// The first bytes of a stream, enough for the largest header (NIfTI-2's 540 bytes + 4).
+fn read_head(r: &mut impl Read) -> std::io::Result<Vec<u8>> {
+    let mut head = Vec::new();
+    r.take((NIFTI2_HDR + 4) as u64).read_to_end(&mut head)?;
+    Ok(head)
+}
+
+/// The grid from the samples read: scaled by `scl_slope`/`scl_inter` unless they are the
+/// identity ([`scaled`]).
+fn finish(path: &Path, h: Header, buf: SampleBuf) -> Result<ScalarGrid, ReadError> {
+    let mut values = buf.finish(h.endian);
     if let Some((slope, inter)) = h.scale {
-        for v in &mut values {
-            *v = *v * slope + inter;
-        }
+        values = scaled(values, slope, inter);
     }
     build_grid(path, h.dims, h.spacing, h.origin, h.direction, values)
 }
 
-/// The first bytes of the file, enough for the largest header (NIfTI-2's 540 bytes + 4);
-/// with gzip, only those are decompressed.
-fn head_bytes(path: &Path, raw: &[u8], gz: bool) -> Result<Vec<u8>, ReadError> {
-    if !gz {
-        return Ok(raw.get(..NIFTI2_HDR + 4).unwrap_or(raw).to_vec());
+/// `x * slope + inter` for every sample, computed in `f64` as before scaling was typed:
+/// the identity keeps the samples (and their type); otherwise the values are held as
+/// `float32` when every one is exactly a `float32`, else as `float64`.
+fn scaled(raw: Samples, slope: f64, inter: f64) -> Samples {
+    use rayon::prelude::*;
+    const BLOCK: usize = 1 << 14;
+    if slope == 1.0 && inter == 0.0 {
+        return raw;
     }
-    let mut head = Vec::new();
-    MultiGzDecoder::new(raw)
-        .take((NIFTI2_HDR + 4) as u64)
-        .read_to_end(&mut head)
-        .map_err(|e| ReadError::invalid(path, format!("gzip stream is corrupt: {e}")))?;
-    Ok(head)
+    let f = |x: f64| x * slope + inter;
+    if raw.par_any(|x| f64::from(f(x) as f32) != f(x)) {
+        let mut out = raw.to_f64_vec();
+        drop(raw);
+        out.par_iter_mut().for_each(|v| *v = f(*v));
+        return Samples::F64(out);
+    }
+    let mut out = vec![0f32; raw.len()];
+    out.par_chunks_mut(BLOCK).enumerate().for_each(|(c, o)| {
+        let mut tmp = [0.0; BLOCK];
+        let tmp = &mut tmp[..o.len()];
+        raw.read_into(c * BLOCK, tmp);
+        for (y, &x) in o.iter_mut().zip(tmp.iter()) {
+            *y = f(x) as f32;
+        }
+    });
+    Samples::F32(out)
 }
 
 #[derive(Debug)]

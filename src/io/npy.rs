@@ -5,13 +5,14 @@
 //! `[i, j, k]` becomes grid vertex `(x = i, y = j, z = k)`; the grid has unit spacing, zero
 //! origin and identity direction.
 
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
 use super::volume::{
-    build_grid, checked_decode, data_size, quote, read_all, take_exact, Endian, ReadError,
-    SampleType,
+    build_grid, data_size, quote, read_all, Endian, ReadError, SampleBuf, SampleType,
 };
-use crate::grid::{ScalarGrid, IDENTITY};
+use crate::grid::{Samples, ScalarGrid, IDENTITY};
 
 const MAGIC: &[u8] = b"\x93NUMPY";
 
@@ -23,24 +24,62 @@ const MAGIC: &[u8] = b"\x93NUMPY";
 /// the shape; [`ReadError::Unsupported`] for other dtypes (structured, complex, half, ...);
 /// [`ReadError::Grid`] for a dimension below 2 or a non-finite value.
 pub fn read_npy(path: &Path) -> Result<ScalarGrid, ReadError> {
-    let bytes = read_all(path)?;
-    let header = parse_npy(path, &bytes)?;
-    let (_count, nbytes) = data_size(path, header.shape, header.ty)?;
-    let data = take_exact(path, &bytes[header.data_start..], nbytes, true, "the file")?;
-    let raw = checked_decode(path, data, header.ty, header.endian)?;
-    let [n0, n1, n2] = header.shape;
+    let cannot = |e| ReadError::io(path, "cannot read file", e);
+    let mut file = File::open(path).map_err(cannot)?;
+    let size = file.metadata().map_err(cannot)?.len();
+    let header = read_header(path, &mut file, size)?;
+    let (count, nbytes) = data_size(path, header.shape, header.ty)?;
+    let avail = size.saturating_sub(header.data_start as u64);
+    if avail != nbytes as u64 {
+        return Err(ReadError::invalid(
+            path,
+            format!("header says {nbytes} bytes of data but the file holds {avail}"),
+        ));
+    }
+    let mut buf = SampleBuf::new(path, header.ty, count)?;
+    file.seek(SeekFrom::Start(header.data_start as u64))
+        .and_then(|_| file.read_exact(buf.bytes_mut()))
+        .map_err(cannot)?;
+    let raw = buf.finish(header.endian);
     let values = if header.fortran_order {
         raw
     } else {
-        c_to_x_fastest(&raw, [n0, n1, n2])
+        reorder(raw, header.shape)
     };
     build_grid(path, header.shape, [1.0; 3], [0.0; 3], IDENTITY, values)
 }
 
+/// Bytes read for the header at first (a header is a few hundred bytes).
+const HEAD: u64 = 1 << 16;
+
+/// The parsed header, from the first [`HEAD`] bytes (the whole file if the header is longer).
+fn read_header(path: &Path, file: &mut File, size: u64) -> Result<NpyHeader, ReadError> {
+    let mut head = Vec::new();
+    Read::by_ref(file)
+        .take(HEAD)
+        .read_to_end(&mut head)
+        .map_err(|e| ReadError::io(path, "cannot read file", e))?;
+    match parse_npy(path, &head) {
+        Err(_) if (head.len() as u64) < size => parse_npy(path, &read_all(path)?),
+        r => r,
+    }
+}
+
+/// [`c_to_x_fastest`] in the samples' storage type.
+fn reorder(raw: Samples, shape: [usize; 3]) -> Samples {
+    match raw {
+        Samples::U8(v) => Samples::U8(c_to_x_fastest(&v, shape)),
+        Samples::I16(v) => Samples::I16(c_to_x_fastest(&v, shape)),
+        Samples::U16(v) => Samples::U16(c_to_x_fastest(&v, shape)),
+        Samples::F32(v) => Samples::F32(c_to_x_fastest(&v, shape)),
+        Samples::F64(v) => Samples::F64(c_to_x_fastest(&v, shape)),
+    }
+}
+
 /// Reorders a C-order array (element `[i, j, k]` at `(i * n1 + j) * n2 + k`) so that `i`
-/// varies fastest. Works on blocks of eight consecutive `k` (one cache line of `f64`) written
-/// to eight output planes, in parallel over blocks.
-fn c_to_x_fastest(raw: &[f64], [n0, n1, n2]: [usize; 3]) -> Vec<f64> {
+/// varies fastest. Works on blocks of eight consecutive `k` written to eight output planes,
+/// in parallel over blocks.
+fn c_to_x_fastest<T: Copy + Default + Send + Sync>(raw: &[T], [n0, n1, n2]: [usize; 3]) -> Vec<T> {
     use rayon::prelude::*;
     const KB: usize = 8;
     let plane = n0 * n1;
@@ -48,7 +87,7 @@ fn c_to_x_fastest(raw: &[f64], [n0, n1, n2]: [usize; 3]) -> Vec<f64> {
         // An empty axis: nothing to reorder (the grid check rejects the shape).
         return Vec::new();
     }
-    let mut v = vec![0.0; raw.len()];
+    let mut v = vec![T::default(); raw.len()];
     v.par_chunks_mut(plane * KB)
         .enumerate()
         .for_each(|(kb, chunk)| {

@@ -12,10 +12,11 @@ use flate2::read::MultiGzDecoder;
 
 use super::header::{self, Fields};
 use super::volume::{
-    build_grid, checked_decode, data_size, decompress_exact, quote, read_all, read_data_file,
-    read_raw_range, split_linear, take_exact, Endian, Geometry, ReadError, SampleType, Skip,
+    build_grid, checked_decode, data_size, decompress_into, open_raw_range, quote, read_all,
+    read_data_file, read_raw_into, split_linear, take_exact, Endian, Geometry, ReadError,
+    SampleBuf, SampleType, Skip,
 };
-use crate::grid::{ScalarGrid, IDENTITY};
+use crate::grid::{Samples, ScalarGrid, IDENTITY};
 
 /// Reads an NRRD volume (`.nrrd` with attached or detached data, or a `.nhdr` header).
 ///
@@ -29,16 +30,8 @@ pub fn read_nrrd(path: &Path) -> Result<ScalarGrid, ReadError> {
     let bytes = read_all(path)?;
     let header = parse_header(path, &bytes)?;
     let (count, nbytes) = data_size(path, header.sizes, header.ty)?;
-    let data = read_data(path, &header, &bytes, nbytes)?;
-    let values = match header.encoding {
-        Encoding::Ascii => parse_ascii(path, &data, count)?,
-        _ => checked_decode(
-            path,
-            &data,
-            header.ty,
-            header.endian.unwrap_or(Endian::Little),
-        )?,
-    };
+    let values = read_samples(path, &header, &bytes, count, nbytes)?;
+    drop(bytes);
     build_grid(
         path,
         header.sizes,
@@ -49,38 +42,72 @@ pub fn read_nrrd(path: &Path) -> Result<ScalarGrid, ReadError> {
     )
 }
 
-/// The `nbytes` data bytes (still ASCII text for that encoding), from the data file or
-/// from `bytes` (the whole `.nrrd` file) after the header.
-fn read_data(
+/// The `count` samples (`nbytes` data bytes), from the data file or from `bytes` (the whole
+/// `.nrrd` file) after the header. Detached raw and gzip data go straight into the samples'
+/// storage; attached raw data are copied from `bytes`; ascii data are read as `f64`.
+fn read_samples(
     path: &Path,
-    header: &Header,
+    h: &Header,
     bytes: &[u8],
+    count: usize,
     nbytes: usize,
-) -> Result<Vec<u8>, ReadError> {
-    match (&header.data_file, header.encoding) {
-        (Some(file), Encoding::Raw) if header.line_skip == 0 => {
-            let skip = header.byte_skip;
-            read_raw_range(path, file, skip, nbytes, skip != Skip::FromEnd)
+) -> Result<Samples, ReadError> {
+    let endian = h.endian.unwrap_or(Endian::Little);
+    if let (Some(file), Encoding::Raw, 0) = (&h.data_file, h.encoding, h.line_skip) {
+        let f = open_raw_range(
+            path,
+            file,
+            h.byte_skip,
+            nbytes,
+            h.byte_skip != Skip::FromEnd,
+        )?;
+        let mut buf = SampleBuf::new(path, h.ty, count)?;
+        read_raw_into(path, file, f, buf.bytes_mut())?;
+        return Ok(buf.finish(endian));
+    }
+    let all;
+    let (block, what) = match &h.data_file {
+        Some(file) => {
+            all = read_data_file(path, file)?;
+            (all.as_slice(), format!("data file {}", file.display()))
         }
-        (Some(file), _) => {
-            let shown = file.display().to_string();
-            let all = read_data_file(path, file)?;
-            extract(path, header, &all, nbytes, &format!("data file {shown}"))
-        }
-        (None, _) => {
-            let start = header.data_start.ok_or_else(|| {
+        None => {
+            let start = h.data_start.ok_or_else(|| {
                 ReadError::invalid(
                     path,
                     "header has no blank line ending it and no 'data file' field",
                 )
             })?;
-            extract(
-                path,
-                header,
-                &bytes[start..],
-                nbytes,
-                "the file after the header",
-            )
+            (&bytes[start..], "the file after the header".to_string())
+        }
+    };
+    let block = skip_lines(path, h, block, &what)?;
+    match h.encoding {
+        Encoding::Raw => {
+            let data = raw_data(path, h, block, nbytes, &what)?;
+            checked_decode(path, data, h.ty, endian)
+        }
+        Encoding::Gzip => {
+            // byte skip applies to the decompressed data
+            let too_large = || ReadError::invalid(path, "'byte skip' is too large");
+            let skip = match h.byte_skip {
+                Skip::Bytes(n) => usize::try_from(n).map_err(|_| too_large())?,
+                Skip::FromEnd => 0,
+            };
+            nbytes.checked_add(skip).ok_or_else(too_large)?;
+            let mut buf = SampleBuf::new(path, h.ty, count)?;
+            let what = format!("gzip data in {what}");
+            let gz = MultiGzDecoder::new(block);
+            decompress_into(path, gz, skip, buf.bytes_mut(), true, &what)?;
+            Ok(buf.finish(endian))
+        }
+        Encoding::Ascii => {
+            let byte_skip = match h.byte_skip {
+                Skip::Bytes(n) => n,
+                Skip::FromEnd => 0,
+            };
+            let text = skip_bytes(path, block, byte_skip, &what)?;
+            Ok(parse_ascii(path, text, count)?.into())
         }
     }
 }
@@ -109,14 +136,13 @@ struct Header {
     data_start: Option<usize>,
 }
 
-/// Applies line skip, byte skip and decoding to a data block held in memory.
-fn extract(
+/// `block` after the header's `line skip` lines.
+fn skip_lines<'a>(
     path: &Path,
     h: &Header,
-    block: &[u8],
-    nbytes: usize,
+    block: &'a [u8],
     what: &str,
-) -> Result<Vec<u8>, ReadError> {
+) -> Result<&'a [u8], ReadError> {
     let mut block = block;
     for _ in 0..h.line_skip {
         let nl = block.iter().position(|&b| b == b'\n').ok_or_else(|| {
@@ -124,39 +150,34 @@ fn extract(
         })?;
         block = &block[nl + 1..];
     }
-    let byte_skip = match h.byte_skip {
-        Skip::Bytes(n) => n,
-        Skip::FromEnd => 0,
-    };
-    match h.encoding {
-        Encoding::Raw => {
-            if h.byte_skip == Skip::FromEnd {
-                let start = block.len().checked_sub(nbytes).ok_or_else(|| {
-                    ReadError::invalid(
-                        path,
-                        format!(
-                            "header says {nbytes} bytes of data but {what} holds {}",
-                            block.len()
-                        ),
-                    )
-                })?;
-                return Ok(block[start..].to_vec());
-            }
-            let block = skip_bytes(path, block, byte_skip, what)?;
-            Ok(take_exact(path, block, nbytes, true, what)?.to_vec())
+    Ok(block)
+}
+
+/// The `nbytes` raw data bytes of an in-memory block (after line skip), by byte skip.
+fn raw_data<'a>(
+    path: &Path,
+    h: &Header,
+    block: &'a [u8],
+    nbytes: usize,
+    what: &str,
+) -> Result<&'a [u8], ReadError> {
+    match h.byte_skip {
+        Skip::FromEnd => {
+            let start = block.len().checked_sub(nbytes).ok_or_else(|| {
+                ReadError::invalid(
+                    path,
+                    format!(
+                        "header says {nbytes} bytes of data but {what} holds {}",
+                        block.len()
+                    ),
+                )
+            })?;
+            Ok(&block[start..])
         }
-        Encoding::Gzip => {
-            // byte skip applies to the decompressed data
-            let skip = usize::try_from(byte_skip)
-                .map_err(|_| ReadError::invalid(path, "'byte skip' is too large"))?;
-            let want = nbytes
-                .checked_add(skip)
-                .ok_or_else(|| ReadError::invalid(path, "'byte skip' is too large"))?;
-            let what = format!("gzip data in {what}");
-            let data = decompress_exact(path, MultiGzDecoder::new(block), want, true, &what)?;
-            Ok(data[skip..].to_vec())
+        Skip::Bytes(n) => {
+            let block = skip_bytes(path, block, n, what)?;
+            take_exact(path, block, nbytes, true, what)
         }
-        Encoding::Ascii => Ok(skip_bytes(path, block, byte_skip, what)?.to_vec()),
     }
 }
 

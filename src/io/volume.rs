@@ -10,7 +10,7 @@ use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
-use crate::grid::{GridError, ScalarGrid};
+use crate::grid::{GridError, SampleStorage, Samples, ScalarGrid};
 
 /// Extensions [`read_volume`] understands, for error messages.
 pub(crate) const SUPPORTED_EXTENSIONS: &str =
@@ -268,19 +268,141 @@ pub(crate) fn decode_samples(bytes: &[u8], ty: SampleType, endian: Endian) -> Ve
     out
 }
 
-/// [`decode_samples`] after checking the memory estimate of the decoded samples (see
-/// [`crate::memory::read_bytes`]): a volume that cannot fit is an error naming `path`.
+/// The storage type that holds samples of file type `ty` exactly (see [`Samples`]): the same
+/// type for u8, i16, u16, f32, f64; `i16` for i8; `f64` for 32- and 64-bit integers.
+pub(crate) fn storage_of(ty: SampleType) -> SampleStorage {
+    match ty {
+        SampleType::U8 => SampleStorage::U8,
+        SampleType::I8 | SampleType::I16 => SampleStorage::I16,
+        SampleType::U16 => SampleStorage::U16,
+        SampleType::F32 => SampleStorage::F32,
+        SampleType::F64 | SampleType::U32 | SampleType::I32 | SampleType::U64 | SampleType::I64 => {
+            SampleStorage::F64
+        }
+    }
+}
+
+/// Samples being read: storage of the final type whose first `count * ty.size()` bytes
+/// receive the file's bytes ([`SampleBuf::bytes_mut`]), then are put in native byte order and
+/// widened in place ([`SampleBuf::finish`]). The file's bytes are never held beside a decoded
+/// copy.
+pub(crate) struct SampleBuf {
+    samples: Samples,
+    ty: SampleType,
+    count: usize,
+}
+
+impl SampleBuf {
+    /// Room for `count` samples of file type `ty`, after checking the memory estimate
+    /// ([`crate::memory::read_bytes`]): a volume that cannot fit is an error naming `path`.
+    pub(crate) fn new(path: &Path, ty: SampleType, count: usize) -> Result<Self, ReadError> {
+        let storage = storage_of(ty);
+        let need =
+            crate::memory::read_bytes(count as u64, ty.size() as u64, storage.bytes() as u64);
+        crate::memory::check(need, format!("reading {count} samples"))
+            .map_err(|e| ReadError::invalid(path, format!("{e}; crop or downsample the volume")))?;
+        let cannot = |e| ReadError::invalid(path, format!("cannot hold {count} samples: {e}"));
+        let samples = match storage {
+            SampleStorage::U8 => Samples::U8(zeroed(count).map_err(cannot)?),
+            SampleStorage::I16 => Samples::I16(zeroed(count).map_err(cannot)?),
+            SampleStorage::U16 => Samples::U16(zeroed(count).map_err(cannot)?),
+            SampleStorage::F32 => Samples::F32(zeroed(count).map_err(cannot)?),
+            SampleStorage::F64 => Samples::F64(zeroed(count).map_err(cannot)?),
+        };
+        Ok(SampleBuf { samples, ty, count })
+    }
+
+    /// The bytes the file's samples go to (`count * ty.size()` of them).
+    pub(crate) fn bytes_mut(&mut self) -> &mut [u8] {
+        let n = self.count * self.ty.size();
+        &mut self.samples.as_bytes_mut()[..n]
+    }
+
+    /// The samples, from file byte order `endian`, in their storage type.
+    pub(crate) fn finish(mut self, endian: Endian) -> Samples {
+        use rayon::prelude::*;
+        let (ty, count) = (self.ty, self.count);
+        let (s, d) = (ty.size(), self.samples.bytes_per_sample());
+        let buf = self.samples.as_bytes_mut();
+        match ty {
+            SampleType::U8 => {}
+            SampleType::U16 | SampleType::I16 | SampleType::F32 | SampleType::F64 => {
+                if endian != Endian::native() {
+                    buf.par_chunks_mut(s).for_each(<[u8]>::reverse);
+                }
+            }
+            SampleType::I8 => widen_in_place(buf, count, s, d, |c, o| {
+                o.copy_from_slice(&i16::from(c[0] as i8).to_ne_bytes())
+            }),
+            _ => widen_in_place(buf, count, s, d, |c, o| {
+                let mut one = [0.0];
+                decode_into(c, ty, endian, &mut one);
+                o.copy_from_slice(&one[0].to_ne_bytes());
+            }),
+        }
+        self.samples
+    }
+}
+
+/// A zero-filled vector of `n` elements, allocated in a fallible section.
+fn zeroed<T: bytemuck::Pod>(n: usize) -> Result<Vec<T>, std::collections::TryReserveError> {
+    let mut v = Vec::new();
+    crate::memory::try_reserve(&mut v, n)?;
+    v.resize(n, T::zeroed());
+    Ok(v)
+}
+
+/// Widens the `count` samples of `s` bytes at the start of `buf` to `d` bytes each in place
+/// (`d` is `s` or `2 s`), `conv` writing the wide value of one sample. With `d = 2 s` the
+/// upper half of the samples is converted first (its wide values lie beyond every unread
+/// sample), then the upper half of the rest, and so on: log₂(count) parallel passes.
+fn widen_in_place(
+    buf: &mut [u8],
+    count: usize,
+    s: usize,
+    d: usize,
+    conv: impl Fn(&[u8], &mut [u8]) + Sync,
+) {
+    use rayon::prelude::*;
+    let mut tmp = [0u8; 8];
+    if d == s {
+        buf[..count * s].par_chunks_mut(s).for_each(|c| {
+            let mut t = [0u8; 8];
+            conv(c, &mut t[..d]);
+            c.copy_from_slice(&t[..d]);
+        });
+        return;
+    }
+    debug_assert_eq!(d, 2 * s);
+    let mut m = count;
+    while m > 1 {
+        let h = m.div_ceil(2);
+        let (lo, hi) = buf.split_at_mut(d * h);
+        let src = &lo[s * h..s * m];
+        hi[..d * (m - h)]
+            .par_chunks_mut(d)
+            .zip(src.par_chunks(s))
+            .for_each(|(o, c)| conv(c, o));
+        m = h;
+    }
+    if count > 0 {
+        conv(&buf[..s], &mut tmp[..d]);
+        buf[..d].copy_from_slice(&tmp[..d]);
+    }
+}
+
+/// The samples of `bytes` (a whole number of samples of `ty`) in their storage type, after
+/// the memory check of [`SampleBuf::new`]. For data a reader already holds in memory.
 pub(crate) fn checked_decode(
     path: &Path,
     bytes: &[u8],
     ty: SampleType,
     endian: Endian,
-) -> Result<Vec<f64>, ReadError> {
-    let count = (bytes.len() / ty.size()) as u64;
-    let need = crate::memory::read_bytes(count, ty.size() as u64);
-    crate::memory::check(need, format!("reading {count} samples"))
-        .map_err(|e| ReadError::invalid(path, format!("{e}; crop or downsample the volume")))?;
-    Ok(decode_samples(bytes, ty, endian))
+) -> Result<Samples, ReadError> {
+    let count = bytes.len() / ty.size();
+    let mut buf = SampleBuf::new(path, ty, count)?;
+    buf.bytes_mut().copy_from_slice(&bytes[..count * ty.size()]);
+    Ok(buf.finish(endian))
 }
 
 /// Decodes `out.len()` samples from the start of `bytes` into `out`.
@@ -372,16 +494,18 @@ pub(crate) enum Skip {
     FromEnd,
 }
 
-/// Reads exactly `len` data bytes of the raw data file `data_path` (referenced by the header
-/// `header`), after `skip`. The file's size is checked before allocating; unless the skip is
-/// [`Skip::FromEnd`] the file must end right after the data (`exact`) or may hold more.
-pub(crate) fn read_raw_range(
+/// Opens the raw data file `data_path` (referenced by the header `header`) for reading
+/// `len` data bytes after `skip`, positioned at the data; fill the samples with
+/// [`read_raw_into`]. The file's size is checked before anything is allocated; unless the
+/// skip is [`Skip::FromEnd`] the file must end right after the data (`exact`) or may hold
+/// more.
+pub(crate) fn open_raw_range(
     header: &Path,
     data_path: &Path,
     skip: Skip,
     len: usize,
     exact: bool,
-) -> Result<Vec<u8>, ReadError> {
+) -> Result<File, ReadError> {
     check_data_file(header, data_path)?;
     let shown = data_path.display();
     let mut file = File::open(data_path)
@@ -416,13 +540,19 @@ pub(crate) fn read_raw_range(
     }
     file.seek(SeekFrom::Start(start))
         .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))?;
-    let mut buf = Vec::new();
-    crate::memory::try_reserve(&mut buf, len)
-        .map_err(|e| ReadError::invalid(header, format!("cannot hold {len} bytes of data: {e}")))?;
-    buf.resize(len, 0);
-    file.read_exact(&mut buf)
-        .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))?;
-    Ok(buf)
+    Ok(file)
+}
+
+/// Reads `out.len()` bytes of the data file `data_path` opened by [`open_raw_range`].
+pub(crate) fn read_raw_into(
+    header: &Path,
+    data_path: &Path,
+    mut file: File,
+    out: &mut [u8],
+) -> Result<(), ReadError> {
+    let shown = data_path.display();
+    file.read_exact(out)
+        .map_err(|e| ReadError::io(header, format!("cannot read data file {shown}"), e))
 }
 
 /// Checks that an in-memory data block holds exactly (or, if `!exact`, at least) `want`
@@ -451,26 +581,43 @@ pub(crate) fn take_exact<'a>(
 /// its checksum is still verified. `what` names the stream in messages.
 pub(crate) fn decompress_exact(
     path: &Path,
-    mut reader: impl Read,
+    reader: impl Read,
     want: usize,
     exact: bool,
     what: &str,
 ) -> Result<Vec<u8>, ReadError> {
-    let corrupt = |e: std::io::Error| ReadError::invalid(path, format!("{what} is corrupt: {e}"));
     let mut out = Vec::new();
     crate::memory::try_reserve(&mut out, want)
         .map_err(|e| ReadError::invalid(path, format!("cannot hold {want} bytes of data: {e}")))?;
-    (&mut reader)
-        .take(want as u64)
-        .read_to_end(&mut out)
+    out.resize(want, 0);
+    decompress_into(path, reader, 0, &mut out, exact, what)?;
+    Ok(out)
+}
+
+/// Decompresses `reader`, drops its first `skip` bytes and fills `out` with the next ones:
+/// the stream must hold exactly `skip + out.len()` bytes (at least that many if `!exact`).
+/// The rest of the stream is decoded into a sink so its checksum is still verified. `what`
+/// names the stream in messages.
+pub(crate) fn decompress_into(
+    path: &Path,
+    mut reader: impl Read,
+    skip: usize,
+    out: &mut [u8],
+    exact: bool,
+    what: &str,
+) -> Result<(), ReadError> {
+    let corrupt = |e: std::io::Error| ReadError::invalid(path, format!("{what} is corrupt: {e}"));
+    let want = skip as u64 + out.len() as u64;
+    let skipped = std::io::copy(&mut (&mut reader).take(skip as u64), &mut std::io::sink())
         .map_err(corrupt)?;
-    if out.len() < want {
+    let mut got = skipped;
+    if skipped == skip as u64 {
+        got += read_full(&mut reader, out).map_err(corrupt)? as u64;
+    }
+    if got < want {
         return Err(ReadError::invalid(
             path,
-            format!(
-                "header says {want} bytes of data but {what} decompresses to {}",
-                out.len()
-            ),
+            format!("header says {want} bytes of data but {what} decompresses to {got}"),
         ));
     }
     let extra = std::io::copy(&mut reader, &mut std::io::sink()).map_err(corrupt)?;
@@ -479,11 +626,25 @@ pub(crate) fn decompress_exact(
             path,
             format!(
                 "header says {want} bytes of data but {what} decompresses to {}",
-                (want as u64).saturating_add(extra)
+                want.saturating_add(extra)
             ),
         ));
     }
-    Ok(out)
+    Ok(())
+}
+
+/// Reads until `out` is full or the stream ends; the number of bytes read.
+fn read_full(mut reader: impl Read, out: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < out.len() {
+        match reader.read(&mut out[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
 }
 
 /// Spacing, origin and direction of a grid, in the order [`build_grid`] takes them.
@@ -514,7 +675,7 @@ pub(crate) fn build_grid(
     spacing: [f64; 3],
     origin: [f64; 3],
     direction: [[f64; 3]; 3],
-    values: Vec<f64>,
+    values: impl Into<crate::grid::Samples>,
 ) -> Result<ScalarGrid, ReadError> {
     ScalarGrid::with_geometry(dims, spacing, origin, direction, values).map_err(|source| {
         ReadError::Grid {

@@ -16,7 +16,7 @@ use tptd::io::{
     write_spilled_pending, MeshFormat, PendingFile, SurfaceFormat,
 };
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
-use tptd::{mesh_interval, MeshOptions, MeshOutput, MeshStats, Method, ScalarGrid};
+use tptd::{mesh_interval, MeshOptions, MeshOutput, MeshStats, Method, Samples, ScalarGrid};
 
 use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
@@ -382,11 +382,11 @@ fn warn_exact_bounds(grid: &ScalarGrid, job: &Job) {
 }
 
 /// The warning for a bound that equals grid values exactly, if it does.
-fn bound_warning(values: &[f64], name: &str, bound: f64, lower: bool) -> Option<String> {
+fn bound_warning(values: &Samples, name: &str, bound: f64, lower: bool) -> Option<String> {
     if !bound.is_finite() {
         return None;
     }
-    let hits = values.iter().filter(|&&v| v == bound).count();
+    let hits = values.par_fold(|| 0usize, |n, v| n + usize::from(v == bound), |a, b| a + b);
     if hits == 0 {
         return None;
     }
@@ -405,19 +405,13 @@ fn bound_warning(values: &[f64], name: &str, bound: f64, lower: bool) -> Option<
 /// A value between `bound` and the next data value on the inside-making side (below a lower
 /// bound, above an upper one), so the vertices equal to the bound are included; `None` when
 /// there is no such data value.
-fn inside_value(values: &[f64], bound: f64, lower: bool) -> Option<f64> {
+fn inside_value(values: &Samples, bound: f64, lower: bool) -> Option<f64> {
     let next = if lower {
-        values
-            .iter()
-            .copied()
-            .filter(|&v| v < bound)
-            .fold(f64::NEG_INFINITY, f64::max)
+        let below = |m: f64, v: f64| if v < bound { m.max(v) } else { m };
+        values.par_fold(|| f64::NEG_INFINITY, below, f64::max)
     } else {
-        values
-            .iter()
-            .copied()
-            .filter(|&v| v > bound)
-            .fold(f64::INFINITY, f64::min)
+        let above = |m: f64, v: f64| if v > bound { m.min(v) } else { m };
+        values.par_fold(|| f64::INFINITY, above, f64::min)
     };
     next.is_finite().then(|| bound + (next - bound) / 2.0)
 }
@@ -426,7 +420,8 @@ fn inside_value(values: &[f64], bound: f64, lower: bool) -> Option<f64> {
 /// [`tptd::memory`]).
 fn check_memory(grid: &ScalarGrid, job: &Job) -> Result<()> {
     let tets = tptd::memory::estimate_tets(grid, job.opts.alpha, job.opts.beta);
-    let need = tptd::memory::mesh_bytes(grid.num_vertices() as u64, tets);
+    let bytes = grid.values.bytes_per_sample() as u64;
+    let need = tptd::memory::mesh_bytes(grid.num_vertices() as u64, bytes, tets);
     let what = format!(
         "meshing {} (about {:.1} M tetrahedra)",
         fmt_interval(job.opts.alpha, job.opts.beta),
@@ -539,6 +534,7 @@ fn make_report(
             output: &output_name,
             dims: grid.dims,
             spacing: grid.spacing,
+            samples: grid.values.storage(),
             method: job.opts.method,
             alpha: job.opts.alpha,
             beta: job.opts.beta,

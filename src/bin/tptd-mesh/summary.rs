@@ -76,8 +76,9 @@ fn input_lines(s: &mut String, r: &Report) {
     let _ = writeln!(s, "tptd-mesh: {} -> {}", r.input, r.output);
     let _ = writeln!(
         s,
-        "  grid      {nx} x {ny} x {nz} vertices, spacing {} x {} x {} (file units), {} cells",
-        r.spacing[0], r.spacing[1], r.spacing[2], r.cells_total
+        "  grid      {nx} x {ny} x {nz} vertices, spacing {} x {} x {} (file units), {} cells, \
+         samples {}",
+        r.spacing[0], r.spacing[1], r.spacing[2], r.cells_total, r.samples
     );
     let _ = writeln!(
         s,
