@@ -96,6 +96,22 @@ impl MeshOptions {
         self
     }
 
+    /// The slabs meshed at a time: [`MeshOptions::slabs_in_flight`], or when 0, 4 per
+    /// worker thread. (While one window is meshed the one before is handed on, so up to
+    /// twice as many slabs are held.)
+    pub fn window(&self) -> usize {
+        match self.slabs_in_flight {
+            0 => {
+                SLABS_PER_THREAD
+                    * self
+                        .threads
+                        .unwrap_or_else(rayon::current_num_threads)
+                        .max(1)
+            }
+            n => n,
+        }
+    }
+
     /// Sets the number of worker threads (`None`: rayon's global pool).
     #[must_use]
     pub fn threads(mut self, threads: Option<usize>) -> Self {
@@ -253,10 +269,7 @@ fn run(
         snaps: Vec::new(),
     };
     ctx.snaps = snap_vertices(grid, &ctx.planner, &ctx.interval, opts.warp);
-    let window = match opts.slabs_in_flight {
-        0 => SLABS_PER_THREAD * rayon::current_num_threads(),
-        n => n,
-    };
+    let window = opts.window();
     let mut stats = MeshStats {
         cells_total: grid.num_cells() as u64,
         ..Default::default()

@@ -146,6 +146,30 @@ pub fn mesh_bytes(voxels: u64, bytes_per_sample: u64, tets: u64) -> u64 {
         .saturating_add(tets.saturating_mul(BYTES_PER_TET))
 }
 
+/// Bytes per tetrahedron a streamed run keeps for the whole run: the analysis's two
+/// union–finds and flags (10 B per point, about 0.2 points per tetrahedron), rounded up.
+pub const STREAM_BYTES_PER_TET: u64 = 4;
+
+/// Bytes per tetrahedron of a slab in flight (slab-local points, keys and elements, and its
+/// chunk in global numbers).
+pub const SLAB_BYTES_PER_TET: u64 = 120;
+
+/// Estimated bytes of a streamed run (the mesh goes to disk slab by slab): the grid, what the
+/// analysis keeps, and `in_flight` slabs of `layers` holding `tets` tetrahedra in all.
+pub fn stream_bytes(
+    voxels: u64,
+    bytes_per_sample: u64,
+    tets: u64,
+    layers: u64,
+    in_flight: u64,
+) -> u64 {
+    let per_slab = tets / layers.max(1) + 1;
+    voxels
+        .saturating_mul(bytes_per_sample)
+        .saturating_add(tets.saturating_mul(STREAM_BYTES_PER_TET))
+        .saturating_add(per_slab.saturating_mul(in_flight.saturating_mul(SLAB_BYTES_PER_TET)))
+}
+
 /// Estimates the number of tetrahedra of the interval `(alpha, beta)`: 6 per cell whose
 /// corners are all inside, 12.5 per cell a bound crosses. Large grids are sampled by z layer.
 pub fn estimate_tets(grid: &ScalarGrid, alpha: f64, beta: f64) -> u64 {

@@ -36,17 +36,84 @@ pub fn read_npy(path: &Path) -> Result<ScalarGrid, ReadError> {
             format!("header says {nbytes} bytes of data but the file holds {avail}"),
         ));
     }
-    let mut buf = SampleBuf::new(path, header.ty, count)?;
     file.seek(SeekFrom::Start(header.data_start as u64))
-        .and_then(|_| file.read_exact(buf.bytes_mut()))
         .map_err(cannot)?;
-    let raw = buf.finish(header.endian);
     let values = if header.fortran_order {
-        raw
+        let mut buf = SampleBuf::new(path, header.ty, count)?;
+        file.read_exact(buf.bytes_mut()).map_err(cannot)?;
+        buf.finish(header.endian)
     } else {
-        reorder(raw, header.shape)
+        read_c_order(path, &mut file, &header, count)?
     };
     build_grid(path, header.shape, [1.0; 3], [0.0; 3], IDENTITY, values)
+}
+
+/// Bytes of a C-order file read at a time by [`read_c_order`].
+const C_BLOCK_BYTES: usize = 64 << 20;
+
+/// Reads C-order samples (element `[i, j, k]` at `(i * n1 + j) * n2 + k`) block by block of
+/// `i` and scatters each block into x-fastest storage: memory is the grid plus one block.
+fn read_c_order(
+    path: &Path,
+    file: &mut File,
+    header: &NpyHeader,
+    count: usize,
+) -> Result<Samples, ReadError> {
+    let [n0, n1, n2] = header.shape;
+    let mut out = SampleBuf::new(path, header.ty, count)?.into_zeros();
+    let plane = n1 * n2;
+    if count == 0 {
+        return Ok(out);
+    }
+    let per_block = (C_BLOCK_BYTES / (plane * header.ty.size()).max(1)).clamp(1, n0);
+    for i0 in (0..n0).step_by(per_block) {
+        let rows = per_block.min(n0 - i0);
+        let mut buf = SampleBuf::new(path, header.ty, rows * plane)?;
+        file.read_exact(buf.bytes_mut())
+            .map_err(|e| ReadError::io(path, "cannot read file", e))?;
+        scatter(&buf.finish(header.endian), &mut out, i0, header.shape);
+    }
+    Ok(out)
+}
+
+/// [`scatter_block`] in the samples' storage type (`out` and `block` share it).
+fn scatter(block: &Samples, out: &mut Samples, i0: usize, shape: [usize; 3]) {
+    match (block, out) {
+        (Samples::U8(b), Samples::U8(o)) => scatter_block(b, o, i0, shape),
+        (Samples::I16(b), Samples::I16(o)) => scatter_block(b, o, i0, shape),
+        (Samples::U16(b), Samples::U16(o)) => scatter_block(b, o, i0, shape),
+        (Samples::F32(b), Samples::F32(o)) => scatter_block(b, o, i0, shape),
+        (Samples::F64(b), Samples::F64(o)) => scatter_block(b, o, i0, shape),
+        _ => unreachable!("a block is read into the storage type of the grid"),
+    }
+}
+
+/// Writes the C-order rows `i0..` in `block` to their places in the x-fastest `out`: eight
+/// consecutive `k` at a time go to eight output planes, in parallel over the planes.
+fn scatter_block<T: Copy + Send + Sync>(
+    block: &[T],
+    out: &mut [T],
+    i0: usize,
+    [n0, n1, n2]: [usize; 3],
+) {
+    use rayon::prelude::*;
+    const KB: usize = 8;
+    let plane = n0 * n1;
+    let rows = block.len() / (n1 * n2);
+    out.par_chunks_mut(plane * KB)
+        .enumerate()
+        .for_each(|(kb, chunk)| {
+            let k0 = kb * KB;
+            let kn = chunk.len() / plane;
+            for di in 0..rows {
+                for j in 0..n1 {
+                    let src = &block[(di * n1 + j) * n2 + k0..][..kn];
+                    for (dk, &x) in src.iter().enumerate() {
+                        chunk[dk * plane + i0 + di + n0 * j] = x;
+                    }
+                }
+            }
+        });
 }
 
 /// Bytes read for the header at first (a header is a few hundred bytes).
@@ -63,46 +130,6 @@ fn read_header(path: &Path, file: &mut File, size: u64) -> Result<NpyHeader, Rea
         Err(_) if (head.len() as u64) < size => parse_npy(path, &read_all(path)?),
         r => r,
     }
-}
-
-/// [`c_to_x_fastest`] in the samples' storage type.
-fn reorder(raw: Samples, shape: [usize; 3]) -> Samples {
-    match raw {
-        Samples::U8(v) => Samples::U8(c_to_x_fastest(&v, shape)),
-        Samples::I16(v) => Samples::I16(c_to_x_fastest(&v, shape)),
-        Samples::U16(v) => Samples::U16(c_to_x_fastest(&v, shape)),
-        Samples::F32(v) => Samples::F32(c_to_x_fastest(&v, shape)),
-        Samples::F64(v) => Samples::F64(c_to_x_fastest(&v, shape)),
-    }
-}
-
-/// Reorders a C-order array (element `[i, j, k]` at `(i * n1 + j) * n2 + k`) so that `i`
-/// varies fastest. Works on blocks of eight consecutive `k` written to eight output planes,
-/// in parallel over blocks.
-fn c_to_x_fastest<T: Copy + Default + Send + Sync>(raw: &[T], [n0, n1, n2]: [usize; 3]) -> Vec<T> {
-    use rayon::prelude::*;
-    const KB: usize = 8;
-    let plane = n0 * n1;
-    if plane == 0 || n2 == 0 {
-        // An empty axis: nothing to reorder (the grid check rejects the shape).
-        return Vec::new();
-    }
-    let mut v = vec![T::default(); raw.len()];
-    v.par_chunks_mut(plane * KB)
-        .enumerate()
-        .for_each(|(kb, chunk)| {
-            let k0 = kb * KB;
-            let kn = chunk.len() / plane;
-            for j in 0..n1 {
-                for i in 0..n0 {
-                    let src = &raw[(i * n1 + j) * n2 + k0..][..kn];
-                    for (dk, &x) in src.iter().enumerate() {
-                        chunk[dk * plane + i + n0 * j] = x;
-                    }
-                }
-            }
-        });
-    v
 }
 
 /// The parsed `.npy` header.
@@ -435,7 +462,15 @@ mod tests {
     fn c_order_reorder_matches_index_formula() {
         let dims = [3, 5, 19];
         let raw: Vec<f64> = (0..dims[0] * dims[1] * dims[2]).map(|x| x as f64).collect();
-        let v = c_to_x_fastest(&raw, dims);
+        let plane = dims[1] * dims[2];
+        // The whole array as one block, and one row of `i` per block.
+        let mut whole = vec![-1.0; raw.len()];
+        scatter_block(&raw, &mut whole, 0, dims);
+        let mut v = vec![-1.0; raw.len()];
+        for i0 in 0..dims[0] {
+            scatter_block(&raw[i0 * plane..(i0 + 1) * plane], &mut v, i0, dims);
+        }
+        assert_eq!(whole, v);
         for k in 0..dims[2] {
             for j in 0..dims[1] {
                 for i in 0..dims[0] {

@@ -318,6 +318,11 @@ impl SampleBuf {
         &mut self.samples.as_bytes_mut()[..n]
     }
 
+    /// The (zero) samples, for filling in another order than the file's.
+    pub(crate) fn into_zeros(self) -> Samples {
+        self.samples
+    }
+
     /// The samples, from file byte order `endian`, in their storage type.
     pub(crate) fn finish(mut self, endian: Endian) -> Samples {
         use rayon::prelude::*;

@@ -16,7 +16,9 @@ use tptd::io::{
     write_spilled_pending, MeshFormat, PendingFile, SurfaceFormat,
 };
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
-use tptd::{mesh_interval, MeshOptions, MeshOutput, MeshStats, Method, Samples, ScalarGrid};
+use tptd::{
+    mesh_interval, MeshError, MeshOptions, MeshOutput, MeshStats, Method, Samples, ScalarGrid,
+};
 
 use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
@@ -72,9 +74,10 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let t = Instant::now();
     let (grid, curvilinear) = read_input(&cli, &job)?;
     let t_read = secs(t);
-    check_input(&cli, &job, &grid, curvilinear.is_some())?;
+    let streaming = streams(&cli, &job, curvilinear.is_some());
+    check_input(&cli, &job, &grid, curvilinear.is_some(), streaming)?;
 
-    let w = if streams(&cli, &job, curvilinear.is_some()) {
+    let w = if streaming {
         stream_to_disk(&cli, &job, &grid)?
     } else {
         mesh_in_memory(&cli, &job, &grid, curvilinear.as_ref())?
@@ -109,7 +112,10 @@ fn stream_to_disk(cli: &Cli, job: &Job, grid: &ScalarGrid) -> Result<Written> {
     let mut spill = spill_for(&job.output).map_err(write_error)?;
     let mut facts = FactsSink::new(!cli.no_analysis);
     let stats = mesh_streamed_with_progress(grid, &job.opts, cli.quiet, &mut spill, &mut facts)
-        .map_err(|e| file_error(&job.input_name, e))?;
+        .map_err(|e| match e {
+            MeshError::Output(e) => file_error(job.output.display(), e),
+            e => file_error(&job.input_name, e),
+        })?;
     let facts = facts.finish();
     check_not_empty(grid, job, facts.tets)?;
     let t_mesh = secs(t);
@@ -193,7 +199,13 @@ fn read_input(cli: &Cli, job: &Job) -> Result<(ScalarGrid, Option<CurvilinearGri
 }
 
 /// Warnings about the bounds and the geometry, and the memory check, before meshing.
-fn check_input(cli: &Cli, job: &Job, grid: &ScalarGrid, curvilinear: bool) -> Result<()> {
+fn check_input(
+    cli: &Cli,
+    job: &Job,
+    grid: &ScalarGrid,
+    curvilinear: bool,
+    streaming: bool,
+) -> Result<()> {
     warn_exact_bounds(grid, job);
     if !curvilinear {
         warn_near_singular(grid, job);
@@ -202,7 +214,7 @@ fn check_input(cli: &Cli, job: &Job, grid: &ScalarGrid, curvilinear: bool) -> Re
         let (a, b) = (job.opts.alpha, job.opts.beta);
         crate::critical::warn_critical_bounds(grid, &job.input_name, a, b, cli.critical_tol);
     }
-    check_memory(grid, job)
+    check_memory(grid, job, streaming)
 }
 
 /// Writes the mesh (or, for a surface extension, the level sets) under a temporary name;
@@ -418,10 +430,18 @@ fn inside_value(values: &Samples, bound: f64, lower: bool) -> Option<f64> {
 
 /// Checks the memory estimate of meshing and analysis before the work (see
 /// [`tptd::memory`]).
-fn check_memory(grid: &ScalarGrid, job: &Job) -> Result<()> {
-    let tets = tptd::memory::estimate_tets(grid, job.opts.alpha, job.opts.beta);
+fn check_memory(grid: &ScalarGrid, job: &Job, streaming: bool) -> Result<()> {
+    use tptd::memory::{estimate_tets, mesh_bytes, stream_bytes};
+    let tets = estimate_tets(grid, job.opts.alpha, job.opts.beta);
     let bytes = grid.values.bytes_per_sample() as u64;
-    let need = tptd::memory::mesh_bytes(grid.num_vertices() as u64, bytes, tets);
+    let voxels = grid.num_vertices() as u64;
+    let need = if streaming {
+        let layers = grid.cell_dims()[2] as u64;
+        // Two windows: one meshed while the other is handed on.
+        stream_bytes(voxels, bytes, tets, layers, 2 * job.opts.window() as u64)
+    } else {
+        mesh_bytes(voxels, bytes, tets)
+    };
     let what = format!(
         "meshing {} (about {:.1} M tetrahedra)",
         fmt_interval(job.opts.alpha, job.opts.beta),
