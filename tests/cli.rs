@@ -8,6 +8,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use common::external::{gmsh_reading, require_gmsh};
 use common::files::{listing, write_npy};
 use serde_json::Value;
 
@@ -69,6 +70,31 @@ fn demo_keeps_the_two_vessels_apart() {
     assert!(vtu.starts_with(b"<?xml") || vtu.starts_with(b"<VTKFile"));
 }
 
+/// `--msh-version 4.1-binary`: gmsh reads the demo's binary `.msh` (groups alpha and
+/// domain, node data `f`) exactly as its ASCII 4.1 file.
+#[test]
+fn demo_binary_msh_reads_as_ascii_in_gmsh() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    assert_ok(&run_in(d, &["--demo", "-o", "a.msh", "-q"]));
+    let binary = ["--demo", "-o", "b.msh", "--msh-version", "4.1-binary", "-q"];
+    assert_ok(&run_in(d, &binary));
+    let bytes = fs::read(d.join("b.msh")).unwrap();
+    assert!(bytes.starts_with(b"$MeshFormat\n4.1 1 8\n\x01\0\0\0\n$EndMeshFormat\n"));
+    if !require_gmsh() {
+        return;
+    }
+    let (a_mesh, a_view) = gmsh_reading(&d.join("a.msh"), d, "a");
+    let (b_mesh, b_view) = gmsh_reading(&d.join("b.msh"), d, "b");
+    assert!(a_mesh.contains("2 1 \"alpha\"") && a_mesh.contains("3 4 \"domain\""));
+    assert!(a_view.lines().filter(|l| l.starts_with("SS(")).count() > 1000);
+    assert!(
+        a_mesh == b_mesh,
+        "gmsh re-exports the binary demo differently"
+    );
+    assert!(a_view == b_view, "gmsh reads different node data 'f'");
+}
+
 #[test]
 fn demo_with_six_reports_the_merge() {
     let dir = tempfile::tempdir().unwrap();
@@ -96,6 +122,7 @@ fn meshes_npy_to_every_format_with_a_consistent_report() {
     for (out, extra) in [
         ("m.msh", &[][..]),
         ("m22.msh", &["--msh-version", "2.2"][..]),
+        ("mb.msh", &["--msh-version", "4.1-binary"][..]),
         ("m.inp", &[][..]),
         ("m.vtu", &[][..]),
     ] {
@@ -118,6 +145,10 @@ fn meshes_npy_to_every_format_with_a_consistent_report() {
         match out {
             "m.msh" => assert!(text.contains("$MeshFormat\n4.1"), "{}", &text[..50]),
             "m22.msh" => assert!(text.contains("$MeshFormat\n2.2"), "{}", &text[..50]),
+            "mb.msh" => {
+                let bytes = fs::read(dir.path().join(out)).unwrap();
+                assert!(bytes.starts_with(b"$MeshFormat\n4.1 1 8\n\x01\0\0\0\n"));
+            }
             "m.inp" => assert!(text.to_ascii_lowercase().contains("*node")),
             _ => {}
         }

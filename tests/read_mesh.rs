@@ -100,6 +100,15 @@ fn msh_and_inp_round_trip_through_the_readers() {
     }
 }
 
+#[test]
+fn binary_msh_is_refused_with_one_line() {
+    let mut bytes = Vec::new();
+    write_msh(&shell(), &mut bytes, MshVersion::V41Binary).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let e = error_of(dir.path(), "bin.msh", &bytes);
+    assert!(e.contains("binary .msh is not read"), "{e}");
+}
+
 /// The error of reading `text` as `name`; checks it is one line naming the file.
 fn error_of(dir: &Path, name: &str, text: &[u8]) -> String {
     let path = dir.join(name);

@@ -18,8 +18,8 @@ use std::fs;
 use std::path::Path;
 
 use common::external::{
-    check_mesh_py, dat_temperatures, gmsh_check, heat_deck, require_ccx, require_gmsh,
-    require_python_with, run_ccx_job, write_file, Format, DECK_TAIL,
+    check_mesh_py, dat_temperatures, gmsh_check, gmsh_reads_binary_as_ascii, heat_deck,
+    require_ccx, require_gmsh, require_python_with, run_ccx_job, write_file, Format, DECK_TAIL,
 };
 use tptd::io::atomic::write_atomically;
 use tptd::io::inp::write_inp;
@@ -168,6 +168,11 @@ fn meshio_reads_mesher_msh41() {
 }
 
 #[test]
+fn meshio_reads_mesher_binary_msh41() {
+    python_check("meshio", Format::Msh41Binary);
+}
+
+#[test]
 fn meshio_reads_mesher_msh22() {
     python_check("meshio", Format::Msh22);
 }
@@ -202,6 +207,17 @@ fn gmsh_checks_mesher_msh() {
         let path = write_file(&mesh, format, dir.path(), "shell");
         gmsh_check(&path, &mesh);
     }
+}
+
+/// The shell (groups alpha, beta and box) in binary `.msh` 4.1: gmsh reads the mesh, the
+/// groups and `f` exactly as from the ASCII file.
+#[test]
+fn gmsh_reads_mesher_binary_msh_as_ascii() {
+    if !require_gmsh() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    gmsh_reads_binary_as_ascii(&shell_mesh(), dir.path(), "shell");
 }
 
 // ---------------------------------------------------------------------------------------

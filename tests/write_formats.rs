@@ -14,8 +14,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use common::external::{
-    check_mesh_py, dat_temperatures, gmsh_check, require_ccx, require_gmsh, require_python_with,
-    run, run_ccx_job, write_file, Format, DECK_HEAD, DECK_TAIL,
+    check_mesh_py, dat_temperatures, gmsh_check, gmsh_reads_binary_as_ascii, require_ccx,
+    require_gmsh, require_python_with, run, run_ccx_job, write_file, Format, DECK_HEAD, DECK_TAIL,
 };
 use common::files::listing;
 use tptd::io::atomic::{write_atomically, WriteError};
@@ -247,6 +247,62 @@ fn msh_structure() {
     assert!(v22.contains("$NodeData\n1\n\"f\"\n1\n0\n3\n0\n1\n12\n"));
 }
 
+/// The byte offset just after the first occurrence of `pat` in `bytes`.
+fn after(bytes: &[u8], pat: &[u8]) -> usize {
+    bytes
+        .windows(pat.len())
+        .position(|w| w == pat)
+        .unwrap_or_else(|| panic!("no {:?}", String::from_utf8_lossy(pat)))
+        + pat.len()
+}
+
+/// `n` little-endian 8-byte numbers at `at`.
+fn sizes(bytes: &[u8], at: usize, n: usize) -> Vec<u64> {
+    (0..n)
+        .map(|k| u64::from_le_bytes(bytes[at + 8 * k..at + 8 * k + 8].try_into().unwrap()))
+        .collect()
+}
+
+#[test]
+fn binary_msh_structure() {
+    let m = slab12();
+    let ascii = String::from_utf8(render(&m, Format::Msh41)).unwrap();
+    let b = render(&m, Format::Msh41Binary);
+    assert!(b.starts_with(b"$MeshFormat\n4.1 1 8\n\x01\0\0\0\n$EndMeshFormat\n"));
+    // the text sections are those of the ASCII file
+    let names = &ascii[ascii.find("$PhysicalNames").unwrap()..ascii.find("$Entities").unwrap()];
+    assert_eq!(
+        &b[after(&b, b"$EndMeshFormat\n")..][..names.len()],
+        names.as_bytes()
+    );
+    let head = "$NodeData\n1\n\"f\"\n1\n0\n3\n0\n1\n12\n";
+    assert!(ascii.contains(head));
+    // entities: 0 points, 0 curves, 2 surfaces (alpha, box), 1 volume
+    assert_eq!(sizes(&b, after(&b, b"$Entities\n"), 4), [0, 0, 2, 1]);
+    // nodes: one block of 12 tagged 1..=12 on volume 1, then the coordinates
+    let n = after(&b, b"$Nodes\n");
+    assert_eq!(sizes(&b, n, 4), [1, 12, 1, 12]);
+    assert_eq!(b[n + 32..n + 44], [3, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]);
+    assert_eq!(
+        sizes(&b, n + 44, 13),
+        [12, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]
+    );
+    let x0 = f64::from_le_bytes(b[n + 148..n + 156].try_into().unwrap());
+    assert_eq!(x0, m.points[0][0]);
+    // elements: 3 blocks, 32 elements tagged 1..=32; the first tet is tag 1 with its nodes
+    let e = after(&b, b"$Elements\n");
+    assert_eq!(sizes(&b, e, 4), [3, 32, 1, 32]);
+    assert_eq!(b[e + 32..e + 44], [3, 0, 0, 0, 1, 0, 0, 0, 4, 0, 0, 0]);
+    let first: Vec<u64> = m.tets[0].iter().map(|&v| v as u64 + 1).collect();
+    assert_eq!(sizes(&b, e + 44, 6), [[12, 1].as_slice(), &first].concat());
+    // node data: the ASCII head, then (int tag, f64 value) per node
+    let d = after(&b, head.as_bytes());
+    assert_eq!(b[d..d + 4], 1i32.to_le_bytes());
+    assert_eq!(b[d + 4..d + 12], m.values[0].to_le_bytes());
+    assert_eq!(d + 12 * 12, b.len() - "\n$EndNodeData\n".len());
+    assert!(b.ends_with(b"\n$EndNodeData\n"));
+}
+
 /// Parses the `.inp` text: node sets and surfaces by name, element connectivity (1-based).
 struct Inp {
     elements: Vec<[u32; 4]>,
@@ -399,6 +455,7 @@ fn invalid_meshes_are_rejected() {
         let r = match format {
             Format::Msh41 => write_msh(&m, &mut out, MshVersion::V41),
             Format::Msh22 => write_msh(&m, &mut out, MshVersion::V22),
+            Format::Msh41Binary => write_msh(&m, &mut out, MshVersion::V41Binary),
             Format::Inp => write_inp(&m, &mut out),
             Format::Vtu | Format::VtuZlib | Format::VtuRaw => write_vtu(&m, &mut out),
         };
@@ -516,6 +573,11 @@ fn meshio_reads_msh41() {
 }
 
 #[test]
+fn meshio_reads_binary_msh41() {
+    python_check("meshio", Format::Msh41Binary);
+}
+
+#[test]
 fn meshio_reads_msh22() {
     python_check("meshio", Format::Msh22);
 }
@@ -553,7 +615,7 @@ fn gmsh_checks_msh() {
     }
     let dir = tempfile::tempdir().unwrap();
     for (stem, mesh) in [("cube6", cube6()), ("slab12", slab12()), ("bar", bar())] {
-        for format in [Format::Msh41, Format::Msh22] {
+        for format in [Format::Msh41, Format::Msh22, Format::Msh41Binary] {
             let path = write_file(&mesh, format, dir.path(), stem);
             gmsh_check(&path, &mesh);
             // gmsh re-exports the mesh: converting to 2.2 must keep every element
@@ -582,6 +644,17 @@ fn gmsh_checks_msh() {
                 .unwrap();
             assert_eq!(n_elem, mesh.tets.len() + mesh.boundary.len());
         }
+    }
+}
+
+#[test]
+fn gmsh_reads_binary_msh_as_ascii() {
+    if !require_gmsh() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for (stem, mesh) in [("cube6", cube6()), ("slab12", slab12()), ("bar", bar())] {
+        gmsh_reads_binary_as_ascii(&mesh, dir.path(), stem);
     }
 }
 

@@ -1,6 +1,6 @@
-//! Gmsh ASCII `.msh` writer (formats 4.1 and 2.2).
+//! Gmsh `.msh` writer: ASCII 4.1 and 2.2, binary 4.1.
 //!
-//! Numbering and tags, identical in both versions:
+//! Numbering and tags, identical in every version:
 //! * node `i` of the mesh gets tag `i + 1`; tet `t` gets element tag `t + 1`; the boundary
 //!   triangles follow, grouped by label in the order alpha, beta, box (mesh order within a
 //!   label), with tags `#T + 1, …`;
@@ -9,12 +9,17 @@
 //!   surface has the same tag as its physical group, the volume entity has tag 1;
 //! * the field is written as `$NodeData` named `f` (time 0, step 0, one component).
 //!
-//! Coordinates and values use the shortest decimal form that parses back to the same `f64`.
+//! ASCII coordinates and values use the shortest decimal form that parses back to the same
+//! `f64`. Binary 4.1 holds the same sections, entities, blocks and tags as ASCII 4.1, in Gmsh's
+//! binary encoding (little-endian, the `int` 1 after the format line): counts and node and
+//! element tags as 8-byte `size_t`, entity, physical and type numbers and the node tags of
+//! `$NodeData` as 4-byte `int`, coordinates and values as `f64`; `$PhysicalNames` and the
+//! tags of `$NodeData` stay text.
 
 use std::io::{self, Write};
 
 use super::source::{InMemory, MeshSource};
-use super::write_common::{check_lengths, TextOut};
+use super::write_common::{check_lengths, invalid, TextOut};
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// Which `.msh` format version [`write_msh`] produces.
@@ -25,6 +30,8 @@ pub enum MshVersion {
     V41,
     /// Legacy Gmsh 2.2 ASCII, read by most third-party tools.
     V22,
+    /// Gmsh 4.1 binary: the content of [`MshVersion::V41`], smaller and faster to read.
+    V41Binary,
 }
 
 /// Physical tag of the volume group `domain`.
@@ -43,14 +50,15 @@ const TETRAHEDRON: u32 = 4;
 /// Elementary tag of the single volume entity.
 const VOLUME_ENTITY: u32 = 1;
 
-/// Writes `mesh` as a Gmsh ASCII mesh of the given version: nodes, tetrahedra (volume
+/// Writes `mesh` as a Gmsh mesh of the given version: nodes, tetrahedra (volume
 /// physical group `domain`), the labelled boundary triangles (surface physical groups
 /// `alpha`, `beta`, `box`, only those that occur) and the nodal field `f` (see the module
 /// documentation for numbering and tags). The output is deterministic.
 ///
 /// # Errors
 /// Returns the first error of `w`, or [`io::ErrorKind::InvalidInput`] when the mesh is
-/// inconsistent (`values` or `boundary_labels` of the wrong length).
+/// inconsistent (`values` or `boundary_labels` of the wrong length) or, in binary 4.1, has
+/// more nodes than a 4-byte `int` numbers (the node tags of `$NodeData`).
 pub fn write_msh(mesh: &TetMesh, w: &mut dyn Write, version: MshVersion) -> io::Result<()> {
     check_lengths(mesh)?;
     write_msh_source(&InMemory::new(mesh), w, version)
@@ -62,19 +70,29 @@ pub(crate) fn write_msh_source(
     w: &mut dyn Write,
     version: MshVersion,
 ) -> io::Result<()> {
-    let mut out = TextOut::new(w);
     let present = src.present_labels();
-    match version {
-        MshVersion::V41 => write_v41(src, &present, &mut out)?,
-        MshVersion::V22 => write_v22(src, &present, &mut out)?,
-    }
+    let write_text: TextWriter = match version {
+        MshVersion::V41 => write_v41,
+        MshVersion::V22 => write_v22,
+        MshVersion::V41Binary => return write_v41_binary(src, &present, w),
+    };
+    let mut out = TextOut::new(w);
+    write_text(src, &present, &mut out)?;
     out.finish()
 }
+
+/// An ASCII writer: mesh, the labels that occur, output.
+type TextWriter = fn(&dyn MeshSource, &[(BoundaryLabel, usize)], &mut TextOut) -> io::Result<()>;
 
 fn header(out: &mut TextOut, version: &str, present: &[(BoundaryLabel, usize)]) -> io::Result<()> {
     out.s("$MeshFormat").nl()?;
     out.s(version).s(" 0 8").nl()?;
     out.s("$EndMeshFormat").nl()?;
+    physical_names(out, present)
+}
+
+/// `$PhysicalNames` (text in every version).
+fn physical_names(out: &mut TextOut, present: &[(BoundaryLabel, usize)]) -> io::Result<()> {
     out.s("$PhysicalNames").nl()?;
     out.int(present.len() + 1).nl()?;
     for &(label, _) in present {
@@ -89,7 +107,8 @@ fn header(out: &mut TextOut, version: &str, present: &[(BoundaryLabel, usize)]) 
     out.s("$EndPhysicalNames").nl()
 }
 
-fn node_data(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
+/// The text head of `$NodeData`: name `f`, time 0, step 0, one component, the node count.
+fn node_data_head(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
     out.s("$NodeData").nl()?;
     out.s("1").nl()?;
     out.s("\"f\"").nl()?;
@@ -98,7 +117,11 @@ fn node_data(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
     out.s("3").nl()?;
     out.s("0").nl()?;
     out.s("1").nl()?;
-    out.int(src.num_points()).nl()?;
+    out.int(src.num_points()).nl()
+}
+
+fn node_data(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
+    node_data_head(src, out)?;
     let mut i = 0usize;
     src.values(&mut |vs| {
         for &v in vs {
@@ -136,6 +159,43 @@ fn write_v41(
     node_data(src, out)
 }
 
+/// An elementary entity of `$Entities` (4.1) with its one physical tag.
+struct Entity {
+    tag: u32,
+    bbox: [f64; 6],
+    physical: u32,
+    /// Tags of the bounding entities (one dimension lower).
+    bounding: Vec<u32>,
+}
+
+/// The entities: one surface per boundary label that occurs (bounded by no curves), then
+/// the volume bounded by these surfaces.
+fn entity_list(src: &dyn MeshSource, present: &[(BoundaryLabel, usize)]) -> Vec<Entity> {
+    let mut list: Vec<Entity> = present
+        .iter()
+        .map(|&(label, _)| Entity {
+            tag: label_tag(label),
+            bbox: bbox(src, Some(label)),
+            physical: label_tag(label),
+            bounding: Vec::new(),
+        })
+        .collect();
+    let surfaces = list.iter().map(|e| e.tag).collect();
+    list.push(Entity {
+        tag: VOLUME_ENTITY,
+        bbox: bbox(src, None),
+        physical: DOMAIN_PHYSICAL_TAG,
+        bounding: surfaces,
+    });
+    list
+}
+
+/// The four numbers after `$Nodes` or `$Elements` (4.1): blocks, count, smallest and
+/// largest tag (tags are `1..=count`; `0 0` when empty, as gmsh writes empty meshes).
+fn section_counts(blocks: usize, count: usize) -> [usize; 4] {
+    [blocks, count, usize::from(count > 0), count]
+}
+
 /// `$Entities`: one surface per boundary label that occurs, then the volume entity.
 fn entities_v41(
     src: &dyn MeshSource,
@@ -144,23 +204,28 @@ fn entities_v41(
 ) -> io::Result<()> {
     out.s("$Entities").nl()?;
     out.s("0 0 ").int(present.len()).s(" 1").nl()?;
-    for &(label, _) in present {
-        out.int(label_tag(label));
-        bbox_fields(out, bbox(src, Some(label)));
-        // one physical tag; no bounding curves
-        out.s(" 1 ").int(label_tag(label)).s(" 0").nl()?;
+    for e in entity_list(src, present) {
+        out.int(e.tag);
+        bbox_fields(out, e.bbox);
+        out.s(" 1 ").int(e.physical).s(" ").int(e.bounding.len());
+        for b in e.bounding {
+            out.s(" ").int(b);
+        }
+        out.nl()?;
     }
-    out.int(VOLUME_ENTITY);
-    bbox_fields(out, bbox(src, None));
-    out.s(" 1 ")
-        .int(DOMAIN_PHYSICAL_TAG)
-        .s(" ")
-        .int(present.len());
-    for &(label, _) in present {
-        out.s(" ").int(label_tag(label));
-    }
-    out.nl()?;
     out.s("$EndEntities").nl()
+}
+
+/// Appends four numbers separated by spaces and ends the line.
+fn counts_line(out: &mut TextOut, c: [usize; 4]) -> io::Result<()> {
+    out.int(c[0])
+        .s(" ")
+        .int(c[1])
+        .s(" ")
+        .int(c[2])
+        .s(" ")
+        .int(c[3])
+        .nl()
 }
 
 /// Appends the six numbers of a bounding box, each preceded by a space.
@@ -174,16 +239,7 @@ fn bbox_fields(out: &mut TextOut, b: [f64; 6]) {
 fn nodes_v41(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
     let n_points = src.num_points();
     out.s("$Nodes").nl()?;
-    let max_tag = n_points; // 0 when empty, matching gmsh's own output for empty meshes
-    let min_tag = usize::from(n_points > 0);
-    out.int(1)
-        .s(" ")
-        .int(n_points)
-        .s(" ")
-        .int(min_tag)
-        .s(" ")
-        .int(max_tag)
-        .nl()?;
+    counts_line(out, section_counts(1, n_points))?;
     out.s("3 ").int(VOLUME_ENTITY).s(" 0 ").int(n_points).nl()?;
     for i in 1..=n_points {
         out.int(i).nl()?;
@@ -207,14 +263,7 @@ fn elements_v41(
     let n_tets = src.num_tets();
     let n_elems = n_tets + src.num_boundary();
     out.s("$Elements").nl()?;
-    out.int(present.len() + 1)
-        .s(" ")
-        .int(n_elems)
-        .s(" ")
-        .int(usize::from(n_elems > 0))
-        .s(" ")
-        .int(n_elems)
-        .nl()?;
+    counts_line(out, section_counts(present.len() + 1, n_elems))?;
     element_block(out, VOLUME_ENTITY, 3, TETRAHEDRON, n_tets)?;
     let mut tag = 0usize;
     src.tets(&mut |ts| {
@@ -319,4 +368,288 @@ fn elements_v22(
         })?;
     }
     out.s("$EndElements").nl()
+}
+
+// ---------------------------------------------------------------------------------------
+// Binary 4.1
+// ---------------------------------------------------------------------------------------
+
+/// Size at which [`BinOut`] hands its buffer to the underlying writer.
+const BIN_CHUNK: usize = 1 << 16;
+
+/// Buffered output of binary `.msh`: little-endian numbers and the text between them.
+struct BinOut<'a> {
+    w: &'a mut dyn Write,
+    buf: Vec<u8>,
+}
+
+impl<'a> BinOut<'a> {
+    fn new(w: &'a mut dyn Write) -> Self {
+        BinOut {
+            w,
+            buf: Vec::with_capacity(BIN_CHUNK + 4096),
+        }
+    }
+
+    /// Appends text formatted by `f` (the writers' [`TextOut`]).
+    fn text(&mut self, f: impl FnOnce(&mut TextOut) -> io::Result<()>) -> io::Result<()> {
+        let mut t = TextOut::new(&mut self.buf);
+        f(&mut t)?;
+        t.finish()?;
+        self.spill()
+    }
+
+    fn s(&mut self, s: &str) -> &mut Self {
+        self.buf.extend_from_slice(s.as_bytes());
+        self
+    }
+
+    /// Appends a `size_t` (8 bytes).
+    #[inline]
+    fn size(&mut self, v: usize) -> &mut Self {
+        self.buf.extend_from_slice(&(v as u64).to_le_bytes());
+        self
+    }
+
+    fn sizes(&mut self, v: [usize; 4]) -> &mut Self {
+        for x in v {
+            self.size(x);
+        }
+        self
+    }
+
+    /// Appends an `int` (4 bytes); `v` is at most `i32::MAX`.
+    #[inline]
+    fn int(&mut self, v: u32) -> &mut Self {
+        debug_assert!(i32::try_from(v).is_ok());
+        self.buf.extend_from_slice(&v.to_le_bytes());
+        self
+    }
+
+    #[inline]
+    fn float(&mut self, v: f64) -> &mut Self {
+        self.buf.extend_from_slice(&v.to_le_bytes());
+        self
+    }
+
+    /// Passes the buffer on when it is full.
+    #[inline]
+    fn spill(&mut self) -> io::Result<()> {
+        if self.buf.len() >= BIN_CHUNK {
+            self.w.write_all(&self.buf)?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+
+    fn finish(self) -> io::Result<()> {
+        self.w.write_all(&self.buf)?;
+        self.w.flush()
+    }
+}
+
+fn write_v41_binary(
+    src: &dyn MeshSource,
+    present: &[(BoundaryLabel, usize)],
+    w: &mut dyn Write,
+) -> io::Result<()> {
+    if i32::try_from(src.num_points()).is_err() {
+        return Err(invalid(format!(
+            "{} nodes are too many for binary .msh 4.1 ($NodeData numbers nodes by 4-byte int)",
+            src.num_points()
+        )));
+    }
+    let mut out = BinOut::new(w);
+    out.text(|t| {
+        t.s("$MeshFormat").nl()?;
+        t.s("4.1 1 8").nl()
+    })?;
+    out.int(1).s("\n$EndMeshFormat\n");
+    out.text(|t| physical_names(t, present))?;
+    entities_binary(src, present, &mut out);
+    nodes_binary(src, &mut out)?;
+    elements_binary(src, present, &mut out)?;
+    node_data_binary(src, &mut out)?;
+    out.finish()
+}
+
+/// `$Entities` of [`entity_list`]: counts, then per entity its tag, bounding box, physical
+/// tag and bounding entities.
+fn entities_binary(src: &dyn MeshSource, present: &[(BoundaryLabel, usize)], out: &mut BinOut) {
+    out.s("$Entities\n");
+    out.size(0).size(0).size(present.len()).size(1);
+    for e in entity_list(src, present) {
+        out.int(e.tag);
+        for x in e.bbox {
+            out.float(x);
+        }
+        out.size(1).int(e.physical).size(e.bounding.len());
+        for b in e.bounding {
+            out.int(b);
+        }
+    }
+    out.s("\n$EndEntities\n");
+}
+
+/// `$Nodes`: one block on the volume entity, the tags `1..=n`, then the coordinates.
+fn nodes_binary(src: &dyn MeshSource, out: &mut BinOut) -> io::Result<()> {
+    let n_points = src.num_points();
+    out.s("$Nodes\n");
+    out.sizes(section_counts(1, n_points));
+    out.int(3).int(VOLUME_ENTITY).int(0).size(n_points);
+    for i in 1..=n_points {
+        out.size(i).spill()?;
+    }
+    src.points(&mut |ps| {
+        for p in ps {
+            out.float(p[0]).float(p[1]).float(p[2]).spill()?;
+        }
+        Ok(())
+    })?;
+    out.s("\n$EndNodes\n");
+    Ok(())
+}
+
+/// `$Elements`: the blocks of [`elements_v41`]; each element is its tag and its node tags.
+fn elements_binary(
+    src: &dyn MeshSource,
+    present: &[(BoundaryLabel, usize)],
+    out: &mut BinOut,
+) -> io::Result<()> {
+    let n_tets = src.num_tets();
+    out.s("$Elements\n");
+    out.sizes(section_counts(
+        present.len() + 1,
+        n_tets + src.num_boundary(),
+    ));
+    out.int(3).int(VOLUME_ENTITY).int(TETRAHEDRON).size(n_tets);
+    let mut tag = 0usize;
+    let mut element = |out: &mut BinOut, nodes: &[u32]| {
+        tag += 1;
+        out.size(tag);
+        for &v in nodes {
+            out.size(v as usize + 1);
+        }
+        out.spill()
+    };
+    src.tets(&mut |ts| ts.iter().try_for_each(|t| element(out, t)))?;
+    for &(label, count) in present {
+        out.int(2).int(label_tag(label)).int(TRIANGLE).size(count);
+        src.triangles(label, &mut |ts| ts.iter().try_for_each(|t| element(out, t)))?;
+    }
+    out.s("\n$EndElements\n");
+    Ok(())
+}
+
+/// `$NodeData`: the text head of the ASCII file, then per node its `int` tag and value.
+fn node_data_binary(src: &dyn MeshSource, out: &mut BinOut) -> io::Result<()> {
+    out.text(|t| node_data_head(src, t))?;
+    let mut tag = 0u32;
+    src.values(&mut |vs| {
+        for &v in vs {
+            tag += 1;
+            out.int(tag).float(v).spill()?;
+        }
+        Ok(())
+    })?;
+    out.s("\n$EndNodeData\n");
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::source::Visit;
+
+    /// A [`MeshSource`] that hands every list on in slices of at most two items, as a mesh
+    /// read back from spill files is.
+    struct InTwos<'a>(InMemory<'a>);
+
+    fn in_twos<T>(all: &[T], f: Visit<T>) -> io::Result<()> {
+        all.chunks(2).try_for_each(f)
+    }
+
+    impl MeshSource for InTwos<'_> {
+        fn num_points(&self) -> usize {
+            self.0.num_points()
+        }
+        fn num_tets(&self) -> usize {
+            self.0.num_tets()
+        }
+        fn label_counts(&self) -> [usize; 3] {
+            self.0.label_counts()
+        }
+        fn bbox(&self, label: Option<BoundaryLabel>) -> [f64; 6] {
+            self.0.bbox(label)
+        }
+        fn points(&self, f: Visit<[f64; 3]>) -> io::Result<()> {
+            self.0.points(&mut |all| in_twos(all, f))
+        }
+        fn values(&self, f: Visit<f64>) -> io::Result<()> {
+            self.0.values(&mut |all| in_twos(all, f))
+        }
+        fn tets(&self, f: Visit<[u32; 4]>) -> io::Result<()> {
+            self.0.tets(&mut |all| in_twos(all, f))
+        }
+        fn triangles(&self, label: BoundaryLabel, f: Visit<[u32; 3]>) -> io::Result<()> {
+            self.0.triangles(label, &mut |all| in_twos(all, f))
+        }
+        fn faces(&self, label: BoundaryLabel, f: Visit<(u32, u8)>) -> io::Result<()> {
+            self.0.faces(label, f)
+        }
+    }
+
+    /// Two tets on a shared face; three boundary triangles labelled alpha, box, box.
+    fn two_tets() -> TetMesh {
+        TetMesh {
+            points: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 1.0, 1.5],
+            ],
+            values: vec![0.5, 1.0, 1.5, 2.0, -0.25],
+            tets: vec![[0, 1, 2, 3], [1, 2, 3, 4]],
+            boundary: vec![[0, 2, 1], [1, 2, 4], [0, 1, 3]],
+            boundary_labels: vec![BoundaryLabel::Alpha, BoundaryLabel::Box, BoundaryLabel::Box],
+        }
+    }
+
+    #[test]
+    fn slices_of_any_size_give_the_same_bytes() {
+        let mesh = two_tets();
+        for version in [MshVersion::V41, MshVersion::V22, MshVersion::V41Binary] {
+            let mut whole = Vec::new();
+            write_msh(&mesh, &mut whole, version).unwrap();
+            let mut sliced = Vec::new();
+            write_msh_source(&InTwos(InMemory::new(&mesh)), &mut sliced, version).unwrap();
+            assert_eq!(whole, sliced, "{version:?}");
+        }
+    }
+
+    #[test]
+    fn binary_holds_the_numbers_of_the_ascii_file() {
+        let mesh = two_tets();
+        let mut b = Vec::new();
+        write_msh(&mesh, &mut b, MshVersion::V41Binary).unwrap();
+        // 8-byte counts and tags (N), 4-byte ints (I), 8-byte doubles (D)
+        const N: usize = 8;
+        const I: usize = 4;
+        const D: usize = 8;
+        // section head: 4 counts; block head: dimension, entity, type or flag, count
+        let (head, block) = (4 * N, 3 * I + N);
+        // entity: tag, box, 1 physical tag, bounding tags (2 for the volume, 0 for surfaces)
+        let entities = 4 * N + 3 * (I + 6 * D + N + I + N) + 2 * I;
+        let nodes = head + block + 5 * (N + 3 * D);
+        // 2 tets, 3 triangles (1 alpha, 2 box) in 3 blocks; an element is its tag and nodes
+        let elements = head + 3 * block + 2 * 5 * N + 3 * 4 * N;
+        let node_data = 5 * (I + D);
+        let text = "$MeshFormat\n4.1 1 8\n\n$EndMeshFormat\n$PhysicalNames\n3\n\
+                    2 1 \"alpha\"\n2 3 \"box\"\n3 4 \"domain\"\n$EndPhysicalNames\n\
+                    $Entities\n\n$EndEntities\n$Nodes\n\n$EndNodes\n$Elements\n\n$EndElements\n\
+                    $NodeData\n1\n\"f\"\n1\n0\n3\n0\n1\n5\n\n$EndNodeData\n";
+        let data = I + entities + nodes + elements + node_data;
+        assert_eq!(b.len(), text.len() + data);
+    }
 }

@@ -79,7 +79,9 @@ fn mesh_format(l: &mut Lines) -> Result<u32, ParseError> {
         return Err(l.err("malformed $MeshFormat line"));
     }
     if f[1] != "0" {
-        return Err(l.err("binary .msh is not supported (write ASCII)"));
+        return Err(l.err(
+            "binary .msh is not read (write ASCII, --msh-version 4.1, or convert: gmsh FILE -0 -format msh41)",
+        ));
     }
     match f[0] {
         "4.1" => Ok(4),

@@ -25,6 +25,8 @@ use tptd::{BoundaryLabel, TetMesh};
 pub enum Format {
     Msh41,
     Msh22,
+    /// `.msh` 4.1 binary.
+    Msh41Binary,
     Inp,
     /// `.vtu` in the default encoding (base64).
     Vtu,
@@ -35,14 +37,20 @@ pub enum Format {
 }
 
 impl Format {
-    pub const ALL: [Format; 4] = [Format::Msh41, Format::Msh22, Format::Inp, Format::Vtu];
+    pub const ALL: [Format; 5] = [
+        Format::Msh41,
+        Format::Msh22,
+        Format::Msh41Binary,
+        Format::Inp,
+        Format::Vtu,
+    ];
     /// The `.vtu` encodings other than the default.
     pub const OTHER_VTU: [Format; 2] = [Format::VtuZlib, Format::VtuRaw];
 
     /// The format argument of `check_mesh.py`.
     pub fn key(self) -> &'static str {
         match self {
-            Format::Msh41 => "msh41",
+            Format::Msh41 | Format::Msh41Binary => "msh41",
             Format::Msh22 => "msh22",
             Format::Inp => "inp",
             Format::Vtu | Format::VtuZlib | Format::VtuRaw => "vtu",
@@ -53,6 +61,7 @@ impl Format {
         match self {
             Format::Msh41 => format!("{stem}.v41.msh"),
             Format::Msh22 => format!("{stem}.v22.msh"),
+            Format::Msh41Binary => format!("{stem}.v41b.msh"),
             Format::Inp => format!("{stem}.inp"),
             Format::Vtu => format!("{stem}.vtu"),
             Format::VtuZlib => format!("{stem}.zlib.vtu"),
@@ -65,6 +74,7 @@ impl Format {
         match self {
             Format::Msh41 => write_msh(mesh, w, MshVersion::V41),
             Format::Msh22 => write_msh(mesh, w, MshVersion::V22),
+            Format::Msh41Binary => write_msh(mesh, w, MshVersion::V41Binary),
             Format::Inp => write_inp(mesh, w),
             Format::Vtu => write_vtu(mesh, w),
             Format::VtuZlib => write_vtu_with(mesh, w, VtuEncoding::Zlib),
@@ -234,6 +244,73 @@ pub fn gmsh_check(path: &Path, mesh: &TetMesh) {
             path.display()
         );
     }
+}
+
+/// Runs gmsh with `args`; asserts it succeeded without an error.
+fn run_gmsh(args: &[&std::ffi::OsStr]) {
+    let (ok, out) = run(Command::new("gmsh").args(args).arg("-nopopup"));
+    assert!(ok && !out.contains("Error"), "gmsh {args:?}:\n{out}");
+}
+
+/// What gmsh reads from the `.msh` file `path`: the mesh as gmsh re-exports it (ASCII 4.1)
+/// and the node data `f` as a `.pos` view (written into `dir` as `stem.*`).
+pub fn gmsh_reading(path: &Path, dir: &Path, stem: &str) -> (String, String) {
+    let mesh = dir.join(format!("{stem}.gmsh41.msh"));
+    run_gmsh(&[
+        path.as_os_str(),
+        "-0".as_ref(),
+        "-format".as_ref(),
+        "msh41".as_ref(),
+        "-save_all".as_ref(),
+        "-o".as_ref(),
+        mesh.as_os_str(),
+    ]);
+    let view = dir.join(format!("{stem}.view.pos"));
+    let script = dir.join(format!("{stem}.geo"));
+    let geo = format!(
+        "Merge {:?};\nSave View[0] {:?};\n",
+        path.display().to_string(),
+        view.display().to_string()
+    );
+    fs::write(&script, geo).unwrap();
+    run_gmsh(&[script.as_os_str(), "-0".as_ref()]);
+    let text = |p: &Path| fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    (text(&mesh), text(&view))
+}
+
+/// Writes `mesh` as ASCII and as binary `.msh` 4.1 into `dir` and asserts that gmsh reads
+/// the same from both: the same re-exported mesh (nodes, coordinates, elements, entities,
+/// physical groups) and the same node data `f`, with the node and element counts of `mesh`.
+pub fn gmsh_reads_binary_as_ascii(mesh: &TetMesh, dir: &Path, stem: &str) {
+    let ascii = write_file(mesh, Format::Msh41, dir, stem);
+    let binary = write_file(mesh, Format::Msh41Binary, dir, stem);
+    gmsh_check(&binary, mesh);
+    let (a_mesh, a_view) = gmsh_reading(&ascii, dir, &format!("{stem}.ascii"));
+    let (b_mesh, b_view) = gmsh_reading(&binary, dir, &format!("{stem}.binary"));
+    let (n, e) = (mesh.points.len(), mesh.tets.len() + mesh.boundary.len());
+    for (section, count) in [("$Nodes\n", n), ("$Elements\n", e)] {
+        let line = a_mesh.split(section).nth(1).and_then(|r| r.lines().next());
+        let want = format!(" {count} 1 {count}");
+        assert!(
+            line.is_some_and(|l| l.ends_with(&want)),
+            "{stem}: gmsh's copy has {section:?} {line:?}, expected ...{want:?}"
+        );
+    }
+    let lines = |prefix: &str| a_view.lines().filter(|l| l.starts_with(prefix)).count();
+    assert_eq!(lines("SS("), mesh.tets.len(), "{stem}: tets in gmsh's view");
+    assert_eq!(
+        lines("ST("),
+        mesh.boundary.len(),
+        "{stem}: triangles in gmsh's view"
+    );
+    assert!(
+        a_mesh == b_mesh,
+        "{stem}: gmsh re-exports binary and ASCII differently"
+    );
+    assert!(
+        a_view == b_view,
+        "{stem}: gmsh reads different node data 'f'"
+    );
 }
 
 // ---------------------------------------------------------------------------------------
