@@ -20,7 +20,7 @@ use crate::mesh::{TetMesh, TriSurface};
 /// An output mesh format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum MeshFormat {
-    /// Gmsh ASCII `.msh` ([`write_msh`]).
+    /// Gmsh `.msh`, ASCII 4.1 / 2.2 or binary 4.1 ([`write_msh`]).
     Msh,
     /// Abaqus / CalculiX `.inp` ([`write_inp`]).
     Inp,
