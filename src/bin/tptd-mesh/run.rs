@@ -214,7 +214,7 @@ fn check_input(
         let (a, b) = (job.opts.alpha, job.opts.beta);
         crate::critical::warn_critical_bounds(grid, &job.input_name, a, b, cli.critical_tol);
     }
-    check_memory(grid, job, streaming)
+    check_memory(grid, job, streaming, cli.quality)
 }
 
 /// Writes the mesh (or, for a surface extension, the level sets) under a temporary name;
@@ -428,9 +428,9 @@ fn inside_value(values: &Samples, bound: f64, lower: bool) -> Option<f64> {
     next.is_finite().then(|| bound + (next - bound) / 2.0)
 }
 
-/// Checks the memory estimate of meshing and analysis before the work (see
+/// Checks the memory estimate of meshing, analysis and the quality pass before the work (see
 /// [`tptd::memory`]).
-fn check_memory(grid: &ScalarGrid, job: &Job, streaming: bool) -> Result<()> {
+fn check_memory(grid: &ScalarGrid, job: &Job, streaming: bool, quality: bool) -> Result<()> {
     use tptd::memory::{estimate_tets, mesh_bytes, stream_bytes};
     let tets = estimate_tets(grid, job.opts.alpha, job.opts.beta);
     let bytes = grid.values.bytes_per_sample() as u64;
@@ -440,7 +440,12 @@ fn check_memory(grid: &ScalarGrid, job: &Job, streaming: bool) -> Result<()> {
         // Two windows: one meshed while the other is handed on.
         stream_bytes(voxels, bytes, tets, layers, 2 * job.opts.window() as u64)
     } else {
-        mesh_bytes(voxels, bytes, tets)
+        let pass = if quality {
+            tets.saturating_mul(tptd::memory::QUALITY_BYTES_PER_TET)
+        } else {
+            0
+        };
+        mesh_bytes(voxels, bytes, tets).saturating_add(pass)
     };
     let what = format!(
         "meshing {} (about {:.1} M tetrahedra)",
