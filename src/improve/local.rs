@@ -407,15 +407,28 @@ impl LocalMesh {
 /// Writes the regions back into `mesh`: moved points, the regions' tets (after the tets
 /// outside them, which keep their order; regions in order) and boundary faces; merged points
 /// are dropped and the points renumbered in order.
+/// `bad` (per tet: below the target quality) follows the tets.
 /// Returns the points merged away: no tet or face uses them any more, and the caller drops
 /// them ([`drop_points`]) once, at the end of the pass.
-pub fn splice(mesh: &mut TetMesh, regions: Vec<LocalMesh>, bookkeeping: Regions) -> Vec<u32> {
+pub fn splice(
+    mesh: &mut TetMesh,
+    regions: Vec<LocalMesh>,
+    bookkeeping: Regions,
+    ctx: &Ctx,
+    bad: &mut Vec<bool>,
+) -> Vec<u32> {
     let mut tets: Vec<[u32; 4]> = mesh
         .tets
         .iter()
         .zip(&bookkeeping.of_tet)
         .filter(|(_, &r)| r == NONE)
         .map(|(t, _)| *t)
+        .collect();
+    let mut kept_bad: Vec<bool> = bad
+        .iter()
+        .zip(&bookkeeping.of_tet)
+        .filter(|(_, &r)| r == NONE)
+        .map(|(b, _)| *b)
         .collect();
     let keep = |tri: &[u32; 3]| tri.iter().all(|&v| bookkeeping.free_in[v as usize] == NONE);
     let mut boundary = Vec::with_capacity(mesh.boundary.len());
@@ -428,8 +441,15 @@ pub fn splice(mesh: &mut TetMesh, regions: Vec<LocalMesh>, bookkeeping: Regions)
     }
     let mut removed = Vec::new();
     for lm in regions {
+        kept_bad.extend(
+            lm.q.iter()
+                .zip(&lm.alive)
+                .filter(|(_, &a)| a)
+                .map(|(&q, _)| q < ctx.target),
+        );
         lm.write_back(mesh, &mut tets, &mut boundary, &mut labels, &mut removed);
     }
+    *bad = kept_bad;
     mesh.tets = tets;
     mesh.boundary = boundary;
     mesh.boundary_labels = labels;

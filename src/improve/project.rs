@@ -17,9 +17,9 @@ const REVERT_ROUNDS: usize = 8;
 
 /// Projects every level vertex of `mesh` at once (in parallel, independent of the thread
 /// count): all moves are computed from the old positions, then the moves of vertices of tets
-/// that would not stay positive are reverted until no tet is inverted. Returns the number of
-/// moved vertices.
-pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> usize {
+/// that would not stay positive are reverted until no tet is inverted. Returns, per point,
+/// whether it moved.
+pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> Vec<bool> {
     let labels = vertex_labels(mesh);
     let dims = ctx.field.grid().dims;
     // Per point: where a level vertex off its level would go.
@@ -49,13 +49,12 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> usize {
             moved.iter_mut().for_each(|m| *m = false);
         }
     }
-    let count = moved.iter().filter(|&&m| m).count();
     for (v, t) in target.iter().enumerate() {
         if moved[v] {
             mesh.points[v] = t.expect("moved vertices have a target");
         }
     }
-    count
+    moved
 }
 
 /// Per point: is it on an `alpha` (`beta`) face but farther than the tolerance from that
