@@ -10,11 +10,19 @@
 use super::local::{face_key, BoundaryFace, LocalMesh};
 use super::Ctx;
 
-/// The collapse of `a` into `b`, if legal and improving: the smallest quality of the changed
-/// tets afterwards.
-pub fn evaluate_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
-    let (new, shared) = collapse_qualities(lm, ctx, a, b, true)?;
-    link_condition(lm, a, b, &shared).then_some(new)
+/// The better legal and improving collapse of edge `ab` (either way), as
+/// `(smallest quality of the changed tets afterwards, from, to)`; `a` into `b` on a tie.
+/// The link condition is symmetric in `a` and `b`, so it is checked once.
+pub fn best_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<(f64, u32, u32)> {
+    let ab = collapse_qualities(lm, ctx, a, b, true);
+    let ba = collapse_qualities(lm, ctx, b, a, true);
+    let (best, shared) = match (ab, ba) {
+        (Some((x, s)), Some((y, _))) if y > x => ((y, b, a), s),
+        (Some((x, s)), _) => ((x, a, b), s),
+        (None, Some((y, s))) => ((y, b, a), s),
+        (None, None) => return None,
+    };
+    link_condition(lm, a, b, &shared).then_some(best)
 }
 
 /// The collapse of `a` into `b`, if legal and every remaining tet stays positive (no gain
@@ -92,7 +100,7 @@ fn short_edge(lm: &LocalMesh, a: u32, b: u32, ratio: f64) -> bool {
     n > 0 && len(b) < ratio * sum / n as f64
 }
 
-/// Merges `a` into `b` (legality and gain checked by [`evaluate_collapse`]).
+/// Merges `a` into `b` (legality and gain checked by [`best_collapse`]).
 pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
     let shared = shared_tets(lm, a, b);
     let faces = boundary_faces_at(lm, a);

@@ -348,15 +348,6 @@ impl LocalMesh {
         p
     }
 
-    /// Smallest quality over the star of `v` if `v` stood at index point `u`.
-    pub fn star_quality_at(&self, v: u32, u: [f64; 3], ctx: &Ctx) -> f64 {
-        let x = ctx.field.to_physical(u);
-        self.star[v as usize]
-            .iter()
-            .map(|&t| ctx.quality(self.corners_with(t, v, x)))
-            .fold(f64::INFINITY, f64::min)
-    }
-
     /// Whether every tet of the star of `v` would have quality above `floor` with `v` at
     /// index point `u` (stops at the first that does not).
     pub fn star_above_at(&self, v: u32, u: [f64; 3], ctx: &Ctx, floor: f64) -> bool {
@@ -366,10 +357,47 @@ impl LocalMesh {
             .all(|&t| ctx.quality(self.corners_with(t, v, x)) > floor)
     }
 
+    /// As [`LocalMesh::star_above_at`], keeping the qualities (in star order) in `out`.
+    pub fn star_qualities_above(
+        &self,
+        v: u32,
+        u: [f64; 3],
+        ctx: &Ctx,
+        floor: f64,
+        out: &mut Vec<f64>,
+    ) -> bool {
+        out.clear();
+        let x = ctx.field.to_physical(u);
+        for &t in &self.star[v as usize] {
+            let q = ctx.quality(self.corners_with(t, v, x));
+            if !(q > floor) {
+                return false;
+            }
+            out.push(q);
+        }
+        true
+    }
+
     /// Puts `v` at index point `u` and updates its physical position, its value (a level
     /// vertex carries its level exactly, other vertices the trilinear value) and the quality
     /// of its star.
     pub fn set_position(&mut self, v: u32, u: [f64; 3], ctx: &Ctx) {
+        self.place(v, u, ctx);
+        self.update_star_quality(v);
+    }
+
+    /// As [`LocalMesh::set_position`], with the star's new qualities (in star order) known
+    /// from [`LocalMesh::star_qualities_above`].
+    pub fn set_position_with(&mut self, v: u32, u: [f64; 3], ctx: &Ctx, q: &[f64]) {
+        self.place(v, u, ctx);
+        for (i, &qt) in q.iter().enumerate() {
+            let t = self.star[v as usize][i];
+            self.touch(t);
+            self.q[t as usize] = qt;
+        }
+    }
+
+    fn place(&mut self, v: u32, u: [f64; 3], ctx: &Ctx) {
         let i = v as usize;
         self.u[i] = u;
         self.x[i] = ctx.field.to_physical(u);
@@ -377,7 +405,6 @@ impl LocalMesh {
             Some(l) => ctx.levels[l as usize],
             None => ctx.field.value(u),
         };
-        self.update_star_quality(v);
     }
 
     /// Recomputes the quality of the tets around `v` (after `v` moved).
