@@ -105,12 +105,12 @@ pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
     let shared = shared_tets(lm, a, b);
     let faces = boundary_faces_at(lm, a);
     for f in &faces {
-        lm.faces.remove(&face_key(f.tri));
+        lm.remove_face(f.tri);
     }
     for f in faces {
         if !f.tri.contains(&b) {
             let tri = f.tri.map(|v| if v == a { b } else { v });
-            lm.faces.insert(face_key(tri), BoundaryFace { tri, ..f });
+            lm.insert_face(BoundaryFace { tri, ..f });
         }
     }
     for t in shared {
@@ -142,6 +142,9 @@ pub fn shared_tets(lm: &LocalMesh, a: u32, b: u32) -> Vec<u32> {
 /// Boundary faces with `v` as a corner.
 pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> Vec<BoundaryFace> {
     let mut out: Vec<BoundaryFace> = Vec::new();
+    if !lm.on_boundary(v) {
+        return out;
+    }
     for &t in &lm.star[v as usize] {
         let tet = lm.tets[t as usize];
         for skip in 0..4 {
@@ -243,6 +246,9 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
 
 /// The part of the link condition that involves the virtual vertex coning the boundary.
 fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
+    if !lm.on_boundary(a) || !lm.on_boundary(b) {
+        return true;
+    }
     let (fa, fb) = (boundary_faces_at(lm, a), boundary_faces_at(lm, b));
     if fa.is_empty() || fb.is_empty() {
         return true;

@@ -49,8 +49,11 @@ pub struct LocalMesh {
     pub q: Vec<f64>,
     /// Weight of obtuse angles in the quality.
     weight: f64,
-    /// Domain-boundary faces of the region, keyed by their sorted vertex ids.
+    /// Domain-boundary faces of the region, keyed by their sorted vertex ids (change them
+    /// through [`LocalMesh::insert_face`] and [`LocalMesh::remove_face`]).
     pub faces: FxHashMap<[u32; 3], BoundaryFace>,
+    /// Per vertex: how many of `faces` it is a corner of.
+    face_count: Vec<u32>,
     /// Memo of failed attempts (see [`LocalMesh::settled_tet`]).
     memo: Memo,
 }
@@ -213,7 +216,7 @@ impl LocalMesh {
             lm.add_tet(t);
         }
         for f in faces {
-            lm.faces.insert(face_key(f.tri), f);
+            lm.insert_face(f);
         }
         lm.classify(&ctx.field, ctx.levels);
         lm
@@ -236,6 +239,7 @@ impl LocalMesh {
             q: Vec::new(),
             weight: 1.0,
             faces: FxHashMap::default(),
+            face_count: vec![0; n],
             memo: Memo {
                 clock: 1,
                 stamp: vec![1; n],
@@ -243,6 +247,33 @@ impl LocalMesh {
                 vertex_failed: vec![0; n],
             },
         }
+    }
+
+    /// Adds boundary face `f`.
+    pub fn insert_face(&mut self, f: BoundaryFace) {
+        for v in f.tri {
+            self.face_count[v as usize] += 1;
+        }
+        if let Some(old) = self.faces.insert(face_key(f.tri), f) {
+            for v in old.tri {
+                self.face_count[v as usize] -= 1;
+            }
+        }
+    }
+
+    /// Removes the boundary face with the corners of `tri` (any order), if there is one.
+    pub fn remove_face(&mut self, tri: [u32; 3]) {
+        if let Some(f) = self.faces.remove(&face_key(tri)) {
+            for v in f.tri {
+                self.face_count[v as usize] -= 1;
+            }
+        }
+    }
+
+    /// Whether `v` is a corner of a boundary face.
+    #[inline]
+    pub fn on_boundary(&self, v: u32) -> bool {
+        self.face_count[v as usize] > 0
     }
 
     /// Records a change to tet `t` (created, removed, or a corner moved).
@@ -358,6 +389,8 @@ impl LocalMesh {
     }
 
     /// As [`LocalMesh::star_above_at`], keeping the qualities (in star order) in `out`.
+    /// `hint` is a position in the star to test first (the one that failed last time: in a
+    /// line search it usually fails again); it is set to the failing position.
     pub fn star_qualities_above(
         &self,
         v: u32,
@@ -365,12 +398,20 @@ impl LocalMesh {
         ctx: &Ctx,
         floor: f64,
         out: &mut Vec<f64>,
+        hint: &mut usize,
     ) -> bool {
         out.clear();
         let x = ctx.field.to_physical(u);
-        for &t in &self.star[v as usize] {
+        let star = &self.star[v as usize];
+        if let Some(&t) = star.get(*hint) {
+            if !(ctx.quality(self.corners_with(t, v, x)) > floor) {
+                return false;
+            }
+        }
+        for (i, &t) in star.iter().enumerate() {
             let q = ctx.quality(self.corners_with(t, v, x));
             if !(q > floor) {
+                *hint = i;
                 return false;
             }
             out.push(q);

@@ -106,6 +106,7 @@ fn line_search(
     let u = lm.u[v as usize];
     let dims = ctx.field.grid().dims;
     let mut step = 0.25 * local_scale(lm, v);
+    let mut hint = 0;
     for _ in 0..HALVINGS {
         let mut p = [0.0; 3];
         for a in 0..3 {
@@ -118,7 +119,7 @@ fn line_search(
             None => Some(p).filter(|&p| ctx.inside_interval(p)),
         };
         if let Some(p) = p {
-            if lm.star_qualities_above(v, p, ctx, q0 * (1.0 + 1e-9) + 1e-12, qs) {
+            if lm.star_qualities_above(v, p, ctx, q0 * (1.0 + 1e-9) + 1e-12, qs, &mut hint) {
                 return Some((p, qs.iter().copied().fold(f64::INFINITY, f64::min)));
             }
         }
