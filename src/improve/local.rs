@@ -485,31 +485,24 @@ pub fn splice(
     ctx: &Ctx,
     bad: &mut Vec<bool>,
 ) -> Vec<u32> {
-    let mut tets: Vec<[u32; 4]> = mesh
-        .tets
+    // Compacted in place: the tets (and their flags) outside every region keep their order.
+    retain_outside(&mut mesh.tets, &bookkeeping.of_tet);
+    retain_outside(bad, &bookkeeping.of_tet);
+    let keep: Vec<bool> = mesh
+        .boundary
         .iter()
-        .zip(&bookkeeping.of_tet)
-        .filter(|(_, &r)| r == NONE)
-        .map(|(t, _)| *t)
+        .map(|tri| tri.iter().all(|&v| bookkeeping.free_in[v as usize] == NONE))
         .collect();
-    let mut kept_bad: Vec<bool> = bad
-        .iter()
-        .zip(&bookkeeping.of_tet)
-        .filter(|(_, &r)| r == NONE)
-        .map(|(b, _)| *b)
-        .collect();
-    let keep = |tri: &[u32; 3]| tri.iter().all(|&v| bookkeeping.free_in[v as usize] == NONE);
-    let mut boundary = Vec::with_capacity(mesh.boundary.len());
-    let mut labels = Vec::with_capacity(mesh.boundary.len());
-    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
-        if keep(tri) {
-            boundary.push(*tri);
-            labels.push(label);
-        }
-    }
+    retain_flagged(&mut mesh.boundary, &keep);
+    retain_flagged(&mut mesh.boundary_labels, &keep);
+    let (mut tets, mut boundary, mut labels) = (
+        std::mem::take(&mut mesh.tets),
+        std::mem::take(&mut mesh.boundary),
+        std::mem::take(&mut mesh.boundary_labels),
+    );
     let mut removed = Vec::new();
     for lm in regions {
-        kept_bad.extend(
+        bad.extend(
             lm.q.iter()
                 .zip(&lm.alive)
                 .filter(|(_, &a)| a)
@@ -517,11 +510,28 @@ pub fn splice(
         );
         lm.write_back(mesh, &mut tets, &mut boundary, &mut labels, &mut removed);
     }
-    *bad = kept_bad;
     mesh.tets = tets;
     mesh.boundary = boundary;
     mesh.boundary_labels = labels;
     removed
+}
+
+/// Keeps the items whose region in `of` is `NONE`, in order.
+fn retain_outside<T>(items: &mut Vec<T>, of: &[u32]) {
+    let mut i = 0;
+    items.retain(|_| {
+        i += 1;
+        of[i - 1] == NONE
+    });
+}
+
+/// Keeps the items whose flag in `keep` is set, in order.
+fn retain_flagged<T>(items: &mut Vec<T>, keep: &[bool]) {
+    let mut i = 0;
+    items.retain(|_| {
+        i += 1;
+        keep[i - 1]
+    });
 }
 
 impl LocalMesh {

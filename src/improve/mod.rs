@@ -201,14 +201,16 @@ pub fn improve(
         report.projected += moved.iter().filter(|&&m| m).count();
         refresh_bad(mesh, &ctx, &moved, &mut bad);
         lap(&mut report.stage_seconds.project, &mut clock);
-        if !needs_work(mesh, &ctx, &bad).iter().any(|&w| w) {
+        let work = needs_work(mesh, &ctx, &bad);
+        lap(&mut report.stage_seconds.mark, &mut clock);
+        if !work.iter().any(|&w| w) {
             break;
         }
-        lap(&mut report.stage_seconds.mark, &mut clock);
         report.rounds += 1;
-        for phase in 0..2 {
-            removed.extend(run_phase(mesh, &ctx, phase, &mut bad, &mut report));
-        }
+        removed.extend(run_phase(mesh, &ctx, 0, work, &mut bad, &mut report));
+        let work = needs_work(mesh, &ctx, &bad);
+        lap(&mut report.stage_seconds.mark, &mut clock);
+        removed.extend(run_phase(mesh, &ctx, 1, work, &mut bad, &mut report));
     }
     removed.sort_unstable();
     local::drop_points(mesh, &removed);
@@ -243,18 +245,17 @@ fn context<'a>(
     }
 }
 
-/// One phase of a round: marks the work, improves the regions of slabs of parity `phase` and
-/// splices them back. Returns the points merged away.
+/// One phase of a round: improves the regions of the `work` vertices in slabs of parity
+/// `phase` and splices them back. Returns the points merged away.
 fn run_phase(
     mesh: &mut TetMesh,
     ctx: &Ctx,
     phase: u32,
+    work: Vec<bool>,
     bad: &mut Vec<bool>,
     report: &mut ImproveReport,
 ) -> Vec<u32> {
     let mut clock = Instant::now();
-    let work = needs_work(mesh, ctx, bad);
-    lap(&mut report.stage_seconds.mark, &mut clock);
     let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, ctx, phase);
     lap(&mut report.stage_seconds.extract, &mut clock);
     let counts: Vec<ImproveReport> = regions
