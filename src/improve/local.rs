@@ -403,18 +403,18 @@ impl LocalMesh {
         out.clear();
         let x = ctx.field.to_physical(u);
         let star = &self.star[v as usize];
-        if let Some(&t) = star.get(*hint) {
-            if !(ctx.quality(self.corners_with(t, v, x)) > floor) {
-                return false;
-            }
+        let above = |t: u32| Some(ctx.quality(self.corners_with(t, v, x))).filter(|&q| q > floor);
+        if star.get(*hint).is_some_and(|&t| above(t).is_none()) {
+            return false;
         }
         for (i, &t) in star.iter().enumerate() {
-            let q = ctx.quality(self.corners_with(t, v, x));
-            if !(q > floor) {
-                *hint = i;
-                return false;
+            match above(t) {
+                Some(q) => out.push(q),
+                None => {
+                    *hint = i;
+                    return false;
+                }
             }
-            out.push(q);
         }
         true
     }
