@@ -26,6 +26,9 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> Vec<bool> {
     let target: Vec<Option<[f64; 3]>> = (0..mesh.points.len())
         .into_par_iter()
         .map(|v| {
+            if labels[v] & 3 == 0 {
+                return None; // on no level
+            }
             let mut u = ctx.field.to_index(mesh.points[v]);
             let c = Constraint::classify(labels[v], &mut u, dims);
             let level = ctx.levels[c.level? as usize];
