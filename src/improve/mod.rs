@@ -208,6 +208,7 @@ pub fn improve(
         }
         report.rounds += 1;
         removed.extend(run_phase(mesh, &ctx, 0, work, &mut bad, &mut report));
+        clock = Instant::now();
         let work = needs_work(mesh, &ctx, &bad);
         lap(&mut report.stage_seconds.mark, &mut clock);
         removed.extend(run_phase(mesh, &ctx, 1, work, &mut bad, &mut report));
