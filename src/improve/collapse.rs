@@ -10,45 +10,47 @@
 use super::local::{face_key, BoundaryFace, LocalMesh};
 use super::Ctx;
 
-/// The collapse of `a` into `b`, if legal and improving: the smallest quality of the changed
-/// tets afterwards.
-pub fn evaluate_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
-    let (new, shared) = collapse_qualities(lm, ctx, a, b, true)?;
-    link_condition(lm, a, b, &shared).then_some(new)
+/// The better legal and improving collapse of edge `ab` (either way), as
+/// `(smallest quality of the changed tets afterwards, from, to)`; `a` into `b` on a tie.
+/// The link condition is symmetric in `a` and `b`, so it is checked once.
+pub fn best_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<(f64, u32, u32)> {
+    let ab = collapse_quality(lm, ctx, a, b, true);
+    let ba = collapse_quality(lm, ctx, b, a, true);
+    let best = match (ab, ba) {
+        (Some(x), Some(y)) if y > x => (y, b, a),
+        (Some(x), _) => (x, a, b),
+        (None, Some(y)) => (y, b, a),
+        (None, None) => return None,
+    };
+    link_condition(lm, a, b, &shared_tets(lm, a, b)).then_some(best)
 }
 
 /// The collapse of `a` into `b`, if legal and every remaining tet stays positive (no gain
 /// needed: used to remove vertices that cannot reach their level set).
 pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
-    let (new, shared) = collapse_qualities(lm, ctx, a, b, false)?;
-    link_condition(lm, a, b, &shared).then_some(new)
+    let new = collapse_quality(lm, ctx, a, b, false)?;
+    link_condition(lm, a, b, &shared_tets(lm, a, b)).then_some(new)
 }
 
-/// For a collapse of `a` into `b` that the constraints allow and that leaves every changed tet
-/// positive (and, with `gain`, better than the worst tet of the star of `a` before): the
-/// smallest quality of the changed tets after, and the tets around the edge. Stops at the
+/// For a collapse of `a` into `b` along an edge of the mesh that the constraints allow and
+/// that leaves every changed tet positive (and, with `gain`, better than the worst tet of
+/// the star of `a` before): the smallest quality of the changed tets after. Stops at the
 /// first changed tet that fails.
-fn collapse_qualities(
-    lm: &LocalMesh,
-    ctx: &Ctx,
-    a: u32,
-    b: u32,
-    gain: bool,
-) -> Option<(f64, Vec<u32>)> {
+fn collapse_quality(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32, gain: bool) -> Option<f64> {
     if !lm.is_free(a) || !lm.is_free(b) {
         return None;
     }
     if !lm.con[a as usize].may_merge_into(&lm.con[b as usize]) {
         return None;
     }
-    let shared = shared_tets(lm, a, b);
-    if shared.is_empty() {
+    let star = &lm.star[a as usize];
+    let around_edge = |t: &u32| lm.tets[*t as usize].contains(&b);
+    if !star.iter().any(around_edge) {
         return None;
     }
     if lm.con[a as usize].level.is_some() && !short_edge(lm, a, b, ctx.boundary_collapse_ratio) {
         return None;
     }
-    let star = &lm.star[a as usize];
     let floor = if gain {
         star.iter()
             .map(|&t| lm.q[t as usize])
@@ -59,13 +61,13 @@ fn collapse_qualities(
     };
     let mut new = f64::INFINITY;
     let xb = lm.x[b as usize];
-    for &t in star.iter().filter(|t| !shared.contains(t)) {
+    for &t in star.iter().filter(|t| !around_edge(t)) {
         new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
         if new <= floor {
             return None;
         }
     }
-    Some((new, shared))
+    Some(new)
 }
 
 /// Whether edge `ab` is short against the other edges at `a`: boundary collapses are kept to
@@ -92,17 +94,17 @@ fn short_edge(lm: &LocalMesh, a: u32, b: u32, ratio: f64) -> bool {
     n > 0 && len(b) < ratio * sum / n as f64
 }
 
-/// Merges `a` into `b` (legality and gain checked by [`evaluate_collapse`]).
+/// Merges `a` into `b` (legality and gain checked by [`best_collapse`]).
 pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
     let shared = shared_tets(lm, a, b);
     let faces = boundary_faces_at(lm, a);
     for f in &faces {
-        lm.faces.remove(&face_key(f.tri));
+        lm.remove_face(f.tri);
     }
     for f in faces {
         if !f.tri.contains(&b) {
             let tri = f.tri.map(|v| if v == a { b } else { v });
-            lm.faces.insert(face_key(tri), BoundaryFace { tri, ..f });
+            lm.insert_face(BoundaryFace { tri, ..f });
         }
     }
     for t in shared {
@@ -134,6 +136,9 @@ pub fn shared_tets(lm: &LocalMesh, a: u32, b: u32) -> Vec<u32> {
 /// Boundary faces with `v` as a corner.
 pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> Vec<BoundaryFace> {
     let mut out: Vec<BoundaryFace> = Vec::new();
+    if !lm.on_boundary(v) {
+        return out;
+    }
     for &t in &lm.star[v as usize] {
         let tet = lm.tets[t as usize];
         for skip in 0..4 {
@@ -173,10 +178,11 @@ struct Link {
 }
 
 fn link_of(lm: &LocalMesh, v: u32) -> Link {
+    let n = lm.star[v as usize].len();
     let mut l = Link {
-        verts: Vec::new(),
-        edges: Vec::new(),
-        tris: Vec::new(),
+        verts: Vec::with_capacity(3 * n),
+        edges: Vec::with_capacity(3 * n),
+        tris: Vec::with_capacity(n),
     };
     for &t in &lm.star[v as usize] {
         let tet = lm.tets[t as usize];
@@ -235,6 +241,9 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
 
 /// The part of the link condition that involves the virtual vertex coning the boundary.
 fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
+    if !lm.on_boundary(a) || !lm.on_boundary(b) {
+        return true;
+    }
     let (fa, fb) = (boundary_faces_at(lm, a), boundary_faces_at(lm, b));
     if fa.is_empty() || fb.is_empty() {
         return true;

@@ -49,8 +49,11 @@ pub struct LocalMesh {
     pub q: Vec<f64>,
     /// Weight of obtuse angles in the quality.
     weight: f64,
-    /// Domain-boundary faces of the region, keyed by their sorted vertex ids.
+    /// Domain-boundary faces of the region, keyed by their sorted vertex ids (change them
+    /// through [`LocalMesh::insert_face`] and [`LocalMesh::remove_face`]).
     pub faces: FxHashMap<[u32; 3], BoundaryFace>,
+    /// Per vertex: how many of `faces` it is a corner of.
+    face_count: Vec<u32>,
     /// Memo of failed attempts (see [`LocalMesh::settled_tet`]).
     memo: Memo,
 }
@@ -213,7 +216,7 @@ impl LocalMesh {
             lm.add_tet(t);
         }
         for f in faces {
-            lm.faces.insert(face_key(f.tri), f);
+            lm.insert_face(f);
         }
         lm.classify(&ctx.field, ctx.levels);
         lm
@@ -236,6 +239,7 @@ impl LocalMesh {
             q: Vec::new(),
             weight: 1.0,
             faces: FxHashMap::default(),
+            face_count: vec![0; n],
             memo: Memo {
                 clock: 1,
                 stamp: vec![1; n],
@@ -243,6 +247,33 @@ impl LocalMesh {
                 vertex_failed: vec![0; n],
             },
         }
+    }
+
+    /// Adds boundary face `f`.
+    pub fn insert_face(&mut self, f: BoundaryFace) {
+        for v in f.tri {
+            self.face_count[v as usize] += 1;
+        }
+        if let Some(old) = self.faces.insert(face_key(f.tri), f) {
+            for v in old.tri {
+                self.face_count[v as usize] -= 1;
+            }
+        }
+    }
+
+    /// Removes the boundary face with the corners of `tri` (any order), if there is one.
+    pub fn remove_face(&mut self, tri: [u32; 3]) {
+        if let Some(f) = self.faces.remove(&face_key(tri)) {
+            for v in f.tri {
+                self.face_count[v as usize] -= 1;
+            }
+        }
+    }
+
+    /// Whether `v` is a corner of a boundary face.
+    #[inline]
+    pub fn on_boundary(&self, v: u32) -> bool {
+        self.face_count[v as usize] > 0
     }
 
     /// Records a change to tet `t` (created, removed, or a corner moved).
@@ -348,15 +379,6 @@ impl LocalMesh {
         p
     }
 
-    /// Smallest quality over the star of `v` if `v` stood at index point `u`.
-    pub fn star_quality_at(&self, v: u32, u: [f64; 3], ctx: &Ctx) -> f64 {
-        let x = ctx.field.to_physical(u);
-        self.star[v as usize]
-            .iter()
-            .map(|&t| ctx.quality(self.corners_with(t, v, x)))
-            .fold(f64::INFINITY, f64::min)
-    }
-
     /// Whether every tet of the star of `v` would have quality above `floor` with `v` at
     /// index point `u` (stops at the first that does not).
     pub fn star_above_at(&self, v: u32, u: [f64; 3], ctx: &Ctx, floor: f64) -> bool {
@@ -366,10 +388,57 @@ impl LocalMesh {
             .all(|&t| ctx.quality(self.corners_with(t, v, x)) > floor)
     }
 
+    /// As [`LocalMesh::star_above_at`], keeping the qualities (in star order) in `out`.
+    /// `hint` is a position in the star to test first (the one that failed last time: in a
+    /// line search it usually fails again); it is set to the failing position.
+    pub fn star_qualities_above(
+        &self,
+        v: u32,
+        u: [f64; 3],
+        ctx: &Ctx,
+        floor: f64,
+        out: &mut Vec<f64>,
+        hint: &mut usize,
+    ) -> bool {
+        out.clear();
+        let x = ctx.field.to_physical(u);
+        let star = &self.star[v as usize];
+        let above = |t: u32| Some(ctx.quality(self.corners_with(t, v, x))).filter(|&q| q > floor);
+        if star.get(*hint).is_some_and(|&t| above(t).is_none()) {
+            return false;
+        }
+        for (i, &t) in star.iter().enumerate() {
+            match above(t) {
+                Some(q) => out.push(q),
+                None => {
+                    *hint = i;
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
     /// Puts `v` at index point `u` and updates its physical position, its value (a level
     /// vertex carries its level exactly, other vertices the trilinear value) and the quality
     /// of its star.
     pub fn set_position(&mut self, v: u32, u: [f64; 3], ctx: &Ctx) {
+        self.place(v, u, ctx);
+        self.update_star_quality(v);
+    }
+
+    /// As [`LocalMesh::set_position`], with the star's new qualities (in star order) known
+    /// from [`LocalMesh::star_qualities_above`].
+    pub fn set_position_with(&mut self, v: u32, u: [f64; 3], ctx: &Ctx, q: &[f64]) {
+        self.place(v, u, ctx);
+        for (i, &qt) in q.iter().enumerate() {
+            let t = self.star[v as usize][i];
+            self.touch(t);
+            self.q[t as usize] = qt;
+        }
+    }
+
+    fn place(&mut self, v: u32, u: [f64; 3], ctx: &Ctx) {
         let i = v as usize;
         self.u[i] = u;
         self.x[i] = ctx.field.to_physical(u);
@@ -377,7 +446,6 @@ impl LocalMesh {
             Some(l) => ctx.levels[l as usize],
             None => ctx.field.value(u),
         };
-        self.update_star_quality(v);
     }
 
     /// Recomputes the quality of the tets around `v` (after `v` moved).
@@ -407,33 +475,63 @@ impl LocalMesh {
 /// Writes the regions back into `mesh`: moved points, the regions' tets (after the tets
 /// outside them, which keep their order; regions in order) and boundary faces; merged points
 /// are dropped and the points renumbered in order.
+/// `bad` (per tet: below the target quality) follows the tets.
 /// Returns the points merged away: no tet or face uses them any more, and the caller drops
 /// them ([`drop_points`]) once, at the end of the pass.
-pub fn splice(mesh: &mut TetMesh, regions: Vec<LocalMesh>, bookkeeping: Regions) -> Vec<u32> {
-    let mut tets: Vec<[u32; 4]> = mesh
-        .tets
+pub fn splice(
+    mesh: &mut TetMesh,
+    regions: Vec<LocalMesh>,
+    bookkeeping: Regions,
+    ctx: &Ctx,
+    bad: &mut Vec<bool>,
+) -> Vec<u32> {
+    // Compacted in place: the tets (and their flags) outside every region keep their order.
+    retain_outside(&mut mesh.tets, &bookkeeping.of_tet);
+    retain_outside(bad, &bookkeeping.of_tet);
+    let keep: Vec<bool> = mesh
+        .boundary
         .iter()
-        .zip(&bookkeeping.of_tet)
-        .filter(|(_, &r)| r == NONE)
-        .map(|(t, _)| *t)
+        .map(|tri| tri.iter().all(|&v| bookkeeping.free_in[v as usize] == NONE))
         .collect();
-    let keep = |tri: &[u32; 3]| tri.iter().all(|&v| bookkeeping.free_in[v as usize] == NONE);
-    let mut boundary = Vec::with_capacity(mesh.boundary.len());
-    let mut labels = Vec::with_capacity(mesh.boundary.len());
-    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
-        if keep(tri) {
-            boundary.push(*tri);
-            labels.push(label);
-        }
-    }
+    retain_flagged(&mut mesh.boundary, &keep);
+    retain_flagged(&mut mesh.boundary_labels, &keep);
+    let (mut tets, mut boundary, mut labels) = (
+        std::mem::take(&mut mesh.tets),
+        std::mem::take(&mut mesh.boundary),
+        std::mem::take(&mut mesh.boundary_labels),
+    );
     let mut removed = Vec::new();
     for lm in regions {
+        bad.extend(
+            lm.q.iter()
+                .zip(&lm.alive)
+                .filter(|(_, &a)| a)
+                .map(|(&q, _)| q < ctx.target),
+        );
         lm.write_back(mesh, &mut tets, &mut boundary, &mut labels, &mut removed);
     }
     mesh.tets = tets;
     mesh.boundary = boundary;
     mesh.boundary_labels = labels;
     removed
+}
+
+/// Keeps the items whose region in `of` is `NONE`, in order.
+fn retain_outside<T>(items: &mut Vec<T>, of: &[u32]) {
+    let mut i = 0;
+    items.retain(|_| {
+        i += 1;
+        of[i - 1] == NONE
+    });
+}
+
+/// Keeps the items whose flag in `keep` is set, in order.
+fn retain_flagged<T>(items: &mut Vec<T>, keep: &[bool]) {
+    let mut i = 0;
+    items.retain(|_| {
+        i += 1;
+        keep[i - 1]
+    });
 }
 
 impl LocalMesh {

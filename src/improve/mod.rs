@@ -89,8 +89,32 @@ pub struct ImproveReport {
     pub smoothed: usize,
     /// Seconds spent.
     pub seconds: f64,
+    /// Seconds spent in each stage, summed over rounds.
+    pub stage_seconds: StageSeconds,
     /// The time budget ran out before the pass was done.
     pub out_of_time: bool,
+}
+
+/// Where the quality pass spends its time (wall-clock seconds, summed over rounds).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct StageSeconds {
+    /// Projecting the level vertices of the whole mesh onto their level sets.
+    pub project: f64,
+    /// Marking the vertices that need work.
+    pub mark: f64,
+    /// Copying the regions out.
+    pub extract: f64,
+    /// Improving the regions.
+    pub local: f64,
+    /// Writing the regions back.
+    pub splice: f64,
+}
+
+/// Adds the seconds since `*since` to `*to` and restarts the clock.
+fn lap(to: &mut f64, since: &mut Instant) {
+    let now = Instant::now();
+    *to += (now - *since).as_secs_f64();
+    *since = now;
 }
 
 impl ImproveReport {
@@ -164,38 +188,30 @@ pub fn improve(
     // Points merged away stay (unused) until the end: renumbering once keeps every
     // round's work proportional to what it touches, and keeps the relative order of ids.
     let mut removed: Vec<u32> = Vec::new();
+    // Per tet: below the target? Kept up to date through projections and splices, so that
+    // each round evaluates only the tets that changed.
+    let mut bad = bad_tets(mesh, &ctx);
     for _ in 0..opts.max_rounds {
         if ctx.out_of_time() {
             report.out_of_time = true;
             break;
         }
-        report.projected += project::project_mesh(mesh, &ctx);
-        let mut work = needs_work(mesh, &ctx);
+        let mut clock = Instant::now();
+        let moved = project::project_mesh(mesh, &ctx);
+        report.projected += moved.iter().filter(|&&m| m).count();
+        refresh_bad(mesh, &ctx, &moved, &mut bad);
+        lap(&mut report.stage_seconds.project, &mut clock);
+        let work = needs_work(mesh, &ctx, &bad);
+        lap(&mut report.stage_seconds.mark, &mut clock);
         if !work.iter().any(|&w| w) {
             break;
         }
         report.rounds += 1;
-        for phase in 0..2 {
-            if phase == 1 {
-                work = needs_work(mesh, &ctx);
-            }
-            let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, &ctx, phase);
-            let counts: Vec<ImproveReport> = regions
-                .par_iter_mut()
-                .map(|lm| {
-                    let mut r = ImproveReport {
-                        region_tets: lm.tets.len(),
-                        ..Default::default()
-                    };
-                    schedule::improve_local(lm, &ctx, &mut r);
-                    r
-                })
-                .collect();
-            for c in counts {
-                report.add(&c);
-            }
-            removed.extend(local::splice(mesh, regions, bookkeeping));
-        }
+        removed.extend(run_phase(mesh, &ctx, 0, work, &mut bad, &mut report));
+        clock = Instant::now();
+        let work = needs_work(mesh, &ctx, &bad);
+        lap(&mut report.stage_seconds.mark, &mut clock);
+        removed.extend(run_phase(mesh, &ctx, 1, work, &mut bad, &mut report));
     }
     removed.sort_unstable();
     local::drop_points(mesh, &removed);
@@ -230,15 +246,61 @@ fn context<'a>(
     }
 }
 
-/// Per point: is it a corner of a tet below the target, or a level vertex off its level?
-fn needs_work(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
-    let bad: Vec<bool> = mesh
-        .tets
+/// One phase of a round: improves the regions of the `work` vertices in slabs of parity
+/// `phase` and splices them back. Returns the points merged away.
+fn run_phase(
+    mesh: &mut TetMesh,
+    ctx: &Ctx,
+    phase: u32,
+    work: Vec<bool>,
+    bad: &mut Vec<bool>,
+    report: &mut ImproveReport,
+) -> Vec<u32> {
+    let mut clock = Instant::now();
+    let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, ctx, phase);
+    lap(&mut report.stage_seconds.extract, &mut clock);
+    let counts: Vec<ImproveReport> = regions
+        .par_iter_mut()
+        .map(|lm| {
+            let mut r = ImproveReport {
+                region_tets: lm.tets.len(),
+                ..Default::default()
+            };
+            schedule::improve_local(lm, ctx, &mut r);
+            r
+        })
+        .collect();
+    for c in counts {
+        report.add(&c);
+    }
+    lap(&mut report.stage_seconds.local, &mut clock);
+    let removed = local::splice(mesh, regions, bookkeeping, ctx, bad);
+    lap(&mut report.stage_seconds.splice, &mut clock);
+    removed
+}
+
+/// Per tet: is its quality below the target?
+fn bad_tets(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
+    mesh.tets
         .par_iter()
         .map(|t| ctx.quality(t.map(|v| mesh.points[v as usize])) < ctx.target)
-        .collect();
+        .collect()
+}
+
+/// Re-evaluates `bad` for the tets with a corner in `moved`.
+fn refresh_bad(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], bad: &mut [bool]) {
+    mesh.tets.par_iter().zip(bad).for_each(|(t, b)| {
+        if t.iter().any(|&v| moved[v as usize]) {
+            *b = ctx.quality(t.map(|v| mesh.points[v as usize])) < ctx.target;
+        }
+    });
+}
+
+/// Per point: is it a corner of a tet below the target (`bad`), or a level vertex off its
+/// level?
+fn needs_work(mesh: &TetMesh, ctx: &Ctx, bad: &[bool]) -> Vec<bool> {
     let mut work = project::off_level_points(mesh, ctx);
-    for (t, &b) in mesh.tets.iter().zip(&bad) {
+    for (t, &b) in mesh.tets.iter().zip(bad) {
         if b {
             for &v in t {
                 work[v as usize] = true;

@@ -17,15 +17,18 @@ const REVERT_ROUNDS: usize = 8;
 
 /// Projects every level vertex of `mesh` at once (in parallel, independent of the thread
 /// count): all moves are computed from the old positions, then the moves of vertices of tets
-/// that would not stay positive are reverted until no tet is inverted. Returns the number of
-/// moved vertices.
-pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> usize {
+/// that would not stay positive are reverted until no tet is inverted. Returns, per point,
+/// whether it moved.
+pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> Vec<bool> {
     let labels = vertex_labels(mesh);
     let dims = ctx.field.grid().dims;
     // Per point: where a level vertex off its level would go.
     let target: Vec<Option<[f64; 3]>> = (0..mesh.points.len())
         .into_par_iter()
         .map(|v| {
+            if labels[v] & 3 == 0 {
+                return None; // on no level
+            }
             let mut u = ctx.field.to_index(mesh.points[v]);
             let c = Constraint::classify(labels[v], &mut u, dims);
             let level = ctx.levels[c.level? as usize];
@@ -37,25 +40,40 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> usize {
         })
         .collect();
     let mut moved: Vec<bool> = target.iter().map(Option::is_some).collect();
+    // Only tets with a moved corner can invert; after a revert, only those around the
+    // reverted vertices changed (an inverted tet has all its moved corners reverted).
+    let around_moved: Vec<u32> = (0..mesh.tets.len() as u32)
+        .into_par_iter()
+        .filter(|&t| mesh.tets[t as usize].iter().any(|&v| moved[v as usize]))
+        .collect();
+    let mut check = around_moved.clone();
     for round in 0..=REVERT_ROUNDS {
-        let bad = inverted_moves(mesh, &target, &moved, ctx);
+        let bad = inverted_moves(mesh, &target, &moved, &check, ctx);
         if bad.is_empty() {
             break;
         }
-        for v in bad {
+        for &v in &bad {
             moved[v as usize] = false;
         }
         if round == REVERT_ROUNDS {
             moved.iter_mut().for_each(|m| *m = false);
         }
+        let mut reverted = vec![false; mesh.points.len()];
+        for &v in &bad {
+            reverted[v as usize] = true;
+        }
+        check = around_moved
+            .par_iter()
+            .copied()
+            .filter(|&t| mesh.tets[t as usize].iter().any(|&v| reverted[v as usize]))
+            .collect();
     }
-    let count = moved.iter().filter(|&&m| m).count();
     for (v, t) in target.iter().enumerate() {
         if moved[v] {
             mesh.points[v] = t.expect("moved vertices have a target");
         }
     }
-    count
+    moved
 }
 
 /// Per point: is it on an `alpha` (`beta`) face but farther than the tolerance from that
@@ -86,16 +104,18 @@ fn vertex_labels(mesh: &TetMesh) -> Vec<u8> {
     bits
 }
 
-/// The moved vertices of the tets that the moves would leave non-positive, sorted.
+/// The moved vertices of the tets among `check` that the moves would leave non-positive,
+/// sorted.
 fn inverted_moves(
     mesh: &TetMesh,
     target: &[Option<[f64; 3]>],
     moved: &[bool],
+    check: &[u32],
     ctx: &Ctx,
 ) -> Vec<u32> {
-    let mut bad: Vec<u32> = mesh
-        .tets
+    let mut bad: Vec<u32> = check
         .par_iter()
+        .map(|&t| mesh.tets[t as usize])
         .filter(|t| t.iter().any(|&v| moved[v as usize]))
         .filter(|t| {
             let p = t.map(|v| match (moved[v as usize], target[v as usize]) {
@@ -104,7 +124,7 @@ fn inverted_moves(
             });
             ctx.quality(p) <= 0.0
         })
-        .flat_map_iter(|t| t.iter().copied().filter(|&v| moved[v as usize]))
+        .flat_map_iter(|t| t.into_iter().filter(|&v| moved[v as usize]))
         .collect();
     bad.par_sort_unstable();
     bad.dedup();

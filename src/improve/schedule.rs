@@ -1,7 +1,7 @@
 //! The order in which the operations run on a region (after Stellar: cheap, safe moves first,
 //! topology changes where moves are not enough, then smoothing again).
 
-use super::collapse::{apply_collapse, evaluate_collapse, evaluate_merge};
+use super::collapse::{apply_collapse, best_collapse, evaluate_merge};
 use super::flip::{try_flip23, try_flip32};
 use super::local::LocalMesh;
 use super::project::project_levels;
@@ -133,13 +133,7 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
     }
     edges.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
     for (_, a, b) in edges {
-        let ab = evaluate_collapse(lm, ctx, a, b).map(|q| (q, a, b));
-        let ba = evaluate_collapse(lm, ctx, b, a).map(|q| (q, b, a));
-        let best = match (ab, ba) {
-            (Some(x), Some(y)) => Some(if y.0 > x.0 { y } else { x }),
-            (x, y) => x.or(y),
-        };
-        if let Some((_, from, to)) = best {
+        if let Some((_, from, to)) = best_collapse(lm, ctx, a, b) {
             apply_collapse(lm, from, to);
             return true;
         }

@@ -24,6 +24,7 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         return false;
     }
     let mut moved = false;
+    let mut qs = Vec::new();
     let mut q0 = lm.star[v as usize]
         .iter()
         .map(|&t| lm.q[t as usize])
@@ -32,9 +33,9 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         let Some(d) = ascent_direction(lm, ctx, v, q0) else {
             break;
         };
-        match line_search(lm, ctx, v, d, q0) {
+        match line_search(lm, ctx, v, d, q0, &mut qs) {
             Some((u, q)) => {
-                lm.set_position(v, u, ctx);
+                lm.set_position_with(v, u, ctx, &qs);
                 q0 = q;
                 moved = true;
             }
@@ -91,12 +92,21 @@ fn ascent_direction(lm: &LocalMesh, ctx: &Ctx, v: u32, q0: f64) -> Option<[f64; 
 }
 
 /// Backtracking search along `d` from the vertex's position: the first step (longest first)
-/// that raises the star's worst quality above `q0`.
-fn line_search(lm: &LocalMesh, ctx: &Ctx, v: u32, d: [f64; 3], q0: f64) -> Option<([f64; 3], f64)> {
+/// that raises the star's worst quality above `q0`, with that quality; the star's qualities
+/// there are left in `qs`.
+fn line_search(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    d: [f64; 3],
+    q0: f64,
+    qs: &mut Vec<f64>,
+) -> Option<([f64; 3], f64)> {
     let c = lm.con[v as usize];
     let u = lm.u[v as usize];
     let dims = ctx.field.grid().dims;
     let mut step = 0.25 * local_scale(lm, v);
+    let mut hint = 0;
     for _ in 0..HALVINGS {
         let mut p = [0.0; 3];
         for a in 0..3 {
@@ -109,8 +119,8 @@ fn line_search(lm: &LocalMesh, ctx: &Ctx, v: u32, d: [f64; 3], q0: f64) -> Optio
             None => Some(p).filter(|&p| ctx.inside_interval(p)),
         };
         if let Some(p) = p {
-            if lm.star_above_at(v, p, ctx, q0 * (1.0 + 1e-9) + 1e-12) {
-                return Some((p, lm.star_quality_at(v, p, ctx)));
+            if lm.star_qualities_above(v, p, ctx, q0 * (1.0 + 1e-9) + 1e-12, qs, &mut hint) {
+                return Some((p, qs.iter().copied().fold(f64::INFINITY, f64::min)));
             }
         }
         step *= 0.5;
