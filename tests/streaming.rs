@@ -51,6 +51,7 @@ fn outputs() -> Vec<(&'static str, WriteOptions)> {
     vec![
         ("m41.msh", w()),
         ("m22.msh", w().with_msh_version(MshVersion::V22)),
+        ("m41b.msh", w().with_msh_version(MshVersion::V41Binary)),
         ("m.inp", w()),
         ("b64.vtu", w()),
         ("zlib.vtu", w().with_vtu_encoding(VtuEncoding::Zlib)),

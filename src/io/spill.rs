@@ -97,6 +97,56 @@ impl<T> Drop for SpillFile<T> {
     }
 }
 
+/// Bytes kept in memory by a [`ByteStore`] before it moves them to a file.
+const STORE_IN_MEMORY: usize = 64 << 20;
+
+/// Bytes appended in pieces and read back in order: in memory while small, then in an
+/// anonymous temporary file (in the system's temporary folder), e.g. a `.vtu` array's zlib
+/// blocks, whose sizes must be written before them.
+pub(crate) struct ByteStore {
+    mem: Vec<u8>,
+    file: Option<SpillFile<u8>>,
+}
+
+impl ByteStore {
+    pub(crate) fn new() -> Self {
+        ByteStore {
+            mem: Vec::new(),
+            file: None,
+        }
+    }
+
+    /// Appends `data`.
+    pub(crate) fn push(&mut self, data: &[u8]) -> io::Result<()> {
+        if let Some(f) = &mut self.file {
+            return f.push(data);
+        }
+        if self.mem.len() + data.len() <= STORE_IN_MEMORY {
+            self.mem.extend_from_slice(data);
+            return Ok(());
+        }
+        let mut f = SpillFile::create(&std::env::temp_dir())?;
+        f.push(&self.mem)?;
+        f.push(data)?;
+        self.mem = Vec::new();
+        self.file = Some(f);
+        Ok(())
+    }
+
+    /// Ends the appending.
+    pub(crate) fn finish(&mut self) -> io::Result<()> {
+        self.file.as_mut().map_or(Ok(()), SpillFile::finish)
+    }
+
+    /// Visits the bytes in order (after [`ByteStore::finish`]).
+    pub(crate) fn visit(&self, f: Visit<u8>) -> io::Result<()> {
+        match &self.file {
+            Some(file) => file.visit(f),
+            None => f(&self.mem),
+        }
+    }
+}
+
 /// A mesh spilled to temporary files, chunk by chunk (see the module documentation).
 pub struct SpilledMesh {
     points: SpillFile<[f64; 3]>,

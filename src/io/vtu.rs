@@ -37,6 +37,7 @@ use flate2::Compression;
 use rayon::prelude::*;
 
 use super::source::{visit_iter, InMemory, MeshSource};
+use super::spill::ByteStore;
 use super::write_common::{check_lengths, invalid};
 use crate::mesh::TetMesh;
 
@@ -182,8 +183,8 @@ fn b64_len(n: u64) -> u64 {
 enum Stored<'a> {
     /// The bytes, written after their UInt64 count (raw, or base64 as one stream).
     Plain(Array<'a>, u64),
-    /// The zlib block header and the compressed blocks.
-    Blocks(Vec<u64>, Vec<Vec<u8>>),
+    /// The zlib block header and the compressed blocks (concatenated).
+    Blocks(Vec<u64>, ByteStore),
 }
 
 impl Stored<'_> {
@@ -192,8 +193,8 @@ impl Stored<'_> {
         match (self, encoding) {
             (Stored::Plain(_, n), VtuEncoding::Raw) => 8 + n,
             (Stored::Plain(_, n), _) => b64_len(8 + n),
-            (Stored::Blocks(h, blocks), _) => {
-                let data: u64 = blocks.iter().map(|b| b.len() as u64).sum();
+            (Stored::Blocks(h, _), _) => {
+                let data: u64 = h[3..].iter().sum();
                 b64_len(8 * h.len() as u64) + b64_len(data)
             }
         }
@@ -219,9 +220,7 @@ impl Stored<'_> {
                 }
                 out.finish()?;
                 let mut out = Base64Out::new(w);
-                for b in blocks {
-                    out.put(b)?;
-                }
+                blocks.visit(&mut |b| out.put(b))?;
                 out.finish()
             }
         }
@@ -236,9 +235,10 @@ const ZLIB_BATCH: usize = 64;
 /// arrive.
 fn compress(arrays: &Arrays, a: &Array) -> io::Result<Stored<'static>> {
     let n = arrays.byte_len(a);
-    let mut blocks: Vec<Vec<u8>> = Vec::new();
+    let mut sizes: Vec<u64> = Vec::new();
+    let mut blocks = ByteStore::new();
     let mut pending: Vec<u8> = Vec::with_capacity(ZLIB_BLOCK * ZLIB_BATCH);
-    let flush = |pending: &mut Vec<u8>, blocks: &mut Vec<Vec<u8>>| -> io::Result<()> {
+    let mut flush = |pending: &mut Vec<u8>| -> io::Result<()> {
         let z = pending
             .par_chunks(ZLIB_BLOCK)
             .map(|block| {
@@ -247,7 +247,10 @@ fn compress(arrays: &Arrays, a: &Array) -> io::Result<Stored<'static>> {
                 z.finish()
             })
             .collect::<io::Result<Vec<_>>>()?;
-        blocks.extend(z);
+        for b in z {
+            sizes.push(b.len() as u64);
+            blocks.push(&b)?;
+        }
         pending.clear();
         Ok(())
     };
@@ -257,20 +260,18 @@ fn compress(arrays: &Arrays, a: &Array) -> io::Result<Stored<'static>> {
             pending.extend_from_slice(&bytes[..take]);
             bytes = &bytes[take..];
             if pending.len() == ZLIB_BLOCK * ZLIB_BATCH {
-                flush(&mut pending, &mut blocks)?;
+                flush(&mut pending)?;
             }
         }
         Ok(())
     })?;
     if !pending.is_empty() {
-        flush(&mut pending, &mut blocks)?;
+        flush(&mut pending)?;
     }
-    let mut header = vec![
-        blocks.len() as u64,
-        ZLIB_BLOCK as u64,
-        n % ZLIB_BLOCK as u64,
-    ];
-    header.extend(blocks.iter().map(|b| b.len() as u64));
+    drop(flush);
+    blocks.finish()?;
+    let mut header = vec![sizes.len() as u64, ZLIB_BLOCK as u64, n % ZLIB_BLOCK as u64];
+    header.extend(sizes);
     Ok(Stored::Blocks(header, blocks))
 }
 
