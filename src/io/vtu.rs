@@ -268,7 +268,6 @@ fn compress(arrays: &Arrays, a: &Array) -> io::Result<Stored<'static>> {
     if !pending.is_empty() {
         flush(&mut pending)?;
     }
-    drop(flush);
     blocks.finish()?;
     let mut header = vec![sizes.len() as u64, ZLIB_BLOCK as u64, n % ZLIB_BLOCK as u64];
     header.extend(sizes);
