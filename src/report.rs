@@ -10,6 +10,7 @@ use serde::{Serialize, Serializer};
 use crate::decompose::CellCase;
 use crate::extract::{MeshStats, Method};
 use crate::facts::MeshFacts;
+use crate::improve::forced::ForcedReport;
 use crate::improve::quality::QualitySummary;
 use crate::improve::ImproveReport;
 use crate::mesh::BoundaryLabel;
@@ -154,6 +155,9 @@ pub struct QualitySection {
     pub after: Option<QualitySummary>,
     /// The pass's operation counts and time.
     pub pass: ImproveReport,
+    /// The tets left below the floor after the pass, with their reasons (`None` with
+    /// `--no-analysis`).
+    pub forced: Option<ForcedReport>,
 }
 
 /// Everything about a run that is not derived from the mesh itself.

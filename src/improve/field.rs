@@ -32,6 +32,12 @@ impl<'a> Field<'a> {
         Field { grid, inverse }
     }
 
+    /// Inverse of [`ScalarGrid::linear_map`] (physical offset → index offset); row `a` is the
+    /// physical gradient of index coordinate `a`.
+    pub fn inverse(&self) -> &[[f64; 3]; 3] {
+        &self.inverse
+    }
+
     /// The grid.
     pub fn grid(&self) -> &ScalarGrid {
         self.grid

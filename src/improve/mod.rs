@@ -12,6 +12,7 @@ pub(crate) mod collapse;
 pub(crate) mod constraint;
 pub mod field;
 pub(crate) mod flip;
+pub mod forced;
 pub(crate) mod local;
 pub(crate) mod project;
 pub mod quality;
@@ -52,6 +53,15 @@ pub struct QualityOptions {
     /// surface is inscribed in the level set); a smaller ratio keeps the volume closer and
     /// leaves more bad elements.
     pub boundary_collapse_ratio: f64,
+    /// Tets whose smallest dihedral angle stays below this (degrees) after the pass are listed
+    /// with a reason ([`forced::classify_forced`]).
+    pub forced_floor: f64,
+    /// A critical value within this of alpha or beta (relative to the data range) explains a
+    /// bad tet in a cell with that critical point (`near_critical`).
+    pub forced_critical_tol: f64,
+    /// At most this many of the listed tets are given one by one (worst first); the counts
+    /// per reason cover all.
+    pub forced_list_cap: usize,
 }
 
 impl Default for QualityOptions {
@@ -63,6 +73,9 @@ impl Default for QualityOptions {
             time_budget: None,
             level_tolerance: 1e-9,
             boundary_collapse_ratio: f64::INFINITY,
+            forced_floor: 5.0,
+            forced_critical_tol: 1e-5,
+            forced_list_cap: 1000,
         }
     }
 }

@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tptd::facts::{FactsSink, Tee};
+use tptd::improve::forced::{classify_forced, ForcedReport};
 use tptd::improve::{improve, ImproveReport, QualityOptions};
 use tptd::io::SpilledMesh;
 use tptd::{
@@ -81,14 +82,16 @@ pub(crate) fn mesh_streamed_with_progress(
 }
 
 /// Runs the quality pass on `mesh` (in `job`'s thread pool), with a spinner on stderr unless
-/// `quiet` or stderr is not a terminal.
+/// `quiet` or stderr is not a terminal; then, if `classify`, lists the tets left below the
+/// floor with their reasons.
 pub(crate) fn improve_with_progress(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,
     job: &Job,
     opts: &QualityOptions,
     quiet: bool,
-) -> ImproveReport {
+    classify: bool,
+) -> (ImproveReport, Option<ForcedReport>) {
     let pb = if quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
     } else {
@@ -102,9 +105,14 @@ pub(crate) fn improve_with_progress(
         .opts
         .threads
         .and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
+    let work = |mesh: &mut TetMesh| {
+        let r = improve(mesh, grid, alpha, beta, opts);
+        let f = classify.then(|| classify_forced(mesh, grid, alpha, beta, opts));
+        (r, f)
+    };
     let report = match pool {
-        Some(pool) => pool.install(|| improve(mesh, grid, alpha, beta, opts)),
-        None => improve(mesh, grid, alpha, beta, opts),
+        Some(pool) => pool.install(|| work(mesh)),
+        None => work(mesh),
     };
     pb.finish_and_clear();
     report

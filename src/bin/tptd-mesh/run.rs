@@ -503,12 +503,15 @@ fn improve_mesh(
         ..QualityOptions::default()
     };
     let t = Instant::now();
-    let pass = improve_with_progress(&mut out.mesh, grid, job, &opts, cli.quiet);
+    let classify = !cli.no_analysis;
+    let (pass, forced) =
+        improve_with_progress(&mut out.mesh, grid, job, &opts, cli.quiet, classify);
     let section = QualitySection {
         target_degrees: [opts.min_angle, opts.max_angle],
         before,
         after: None,
         pass,
+        forced,
     };
     (Some(section), Some(secs(t)))
 }

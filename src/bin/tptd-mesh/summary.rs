@@ -165,6 +165,15 @@ fn quality_lines(s: &mut String, r: &Report) {
             );
         }
     }
+    if let Some(f) = &q.forced {
+        let c = &f.counts;
+        let _ = writeln!(
+            s,
+            "            below {} deg after: {} near a critical value, {} at a sharp box angle, {} \
+             unexplained",
+            f.floor_degrees, c.near_critical, c.box_angle, c.unexplained
+        );
+    }
 }
 
 /// The meshed cells by case.

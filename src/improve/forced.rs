@@ -1,0 +1,436 @@
+//! Domain-forced bad elements: after the quality pass, every tet whose smallest dihedral angle
+//! is below a floor is given a reason.
+//!
+//! * `near_critical`: a critical point of the trilinear field (a critical grid vertex, or a
+//!   face or body saddle) in a cell the tet touches has a value `s` near alpha or beta: either
+//!   `|s − level|` is within the tolerance (relative to the data range, as `--critical-tol`),
+//!   or the neck (or gap) the level set makes there is narrower than the tet can span above the
+//!   floor. Near a saddle with Hessian magnitude `k` (index units) the level set at
+//!   `δ = |s − level|` leaves a neck of width `w = 2·sqrt(δ / k)` voxels; a tet whose longest
+//!   edge `L` crosses it has a dihedral angle of about `w / L` there, so with no vertex
+//!   insertion the floor cannot hold when `w < L · floor` (radians).
+//! * `box_angle`: the tet has an edge (or a face) on a grid box plane and one on a level set,
+//!   and the level set meets the box at an interior dihedral angle below the floor at the tet.
+//! * `unexplained`: neither; the pass failed there.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::field::Field;
+use super::quality::tet_dihedral_range;
+use super::QualityOptions;
+use crate::critical::find::vertex_class;
+use crate::grid::{corner_offset, ScalarGrid};
+use crate::mesh::TetMesh;
+use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle};
+
+/// Why an element stays below the floor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ForcedReason {
+    /// A critical value of the field near a bound pinches the domain in a cell it touches.
+    NearCritical,
+    /// A level set meets the grid box at an angle below the floor at the element.
+    BoxAngle,
+    /// No domain reason found: the pass failed there.
+    Unexplained,
+}
+
+/// One element below the floor.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ForcedElement {
+    /// Tet index (in the mesh after the pass).
+    pub tet: usize,
+    /// Smallest dihedral angle (degrees).
+    pub min_dihedral: f64,
+    /// Largest dihedral angle (degrees).
+    pub max_dihedral: f64,
+    /// Why.
+    pub reason: ForcedReason,
+    /// Centroid, physical coordinates.
+    pub point: [f64; 3],
+    /// Smallest `|critical value − bound|` over the cells the tet touches, relative to the
+    /// data range (`None`: no critical point there).
+    pub critical_distance: Option<f64>,
+    /// Narrowest neck `2·sqrt(δ / k)` (voxels) at those critical points.
+    pub neck_width: Option<f64>,
+    /// Smallest interior dihedral angle (degrees) between a box plane and a level set at the
+    /// tet, when it has an edge on each.
+    pub box_angle: Option<f64>,
+}
+
+/// Elements below the floor, per reason.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct ForcedCounts {
+    /// [`ForcedReason::NearCritical`].
+    pub near_critical: usize,
+    /// [`ForcedReason::BoxAngle`].
+    pub box_angle: usize,
+    /// [`ForcedReason::Unexplained`].
+    pub unexplained: usize,
+}
+
+/// The elements below the floor after the pass, with their reasons.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ForcedReport {
+    /// The floor (degrees), [`QualityOptions::forced_floor`].
+    pub floor_degrees: f64,
+    /// [`QualityOptions::forced_critical_tol`] (relative to the data range).
+    pub critical_tolerance: f64,
+    /// Counts per reason (of all elements below the floor).
+    pub counts: ForcedCounts,
+    /// The elements, worst first, at most [`QualityOptions::forced_list_cap`].
+    pub elements: Vec<ForcedElement>,
+}
+
+impl ForcedReport {
+    /// Elements below the floor in all.
+    pub fn total(&self) -> usize {
+        self.counts.near_critical + self.counts.box_angle + self.counts.unexplained
+    }
+}
+
+/// Everything the classification of one tet needs.
+struct Classifier<'a> {
+    mesh: &'a TetMesh,
+    field: Field<'a>,
+    levels: [f64; 2],
+    range: f64,
+    /// The floor, radians.
+    floor: f64,
+    tol: f64,
+}
+
+/// Classifies every tet of `mesh` (a mesh of `{alpha <= f <= beta}` of `grid`, in the grid's
+/// physical coordinates, level vertices carrying their level as value) whose smallest
+/// dihedral angle is below `opts.forced_floor`.
+pub fn classify_forced(
+    mesh: &TetMesh,
+    grid: &ScalarGrid,
+    alpha: f64,
+    beta: f64,
+    opts: &QualityOptions,
+) -> ForcedReport {
+    let floor = opts.forced_floor;
+    let (lo, hi) = grid.value_range();
+    let c = Classifier {
+        mesh,
+        field: Field::new(grid),
+        levels: [alpha, beta],
+        range: (hi - lo).max(f64::MIN_POSITIVE),
+        floor: floor.to_radians(),
+        tol: opts.forced_critical_tol,
+    };
+    let mut elements: Vec<ForcedElement> = (0..mesh.tets.len())
+        .into_par_iter()
+        .filter_map(|t| {
+            let (lo, hi) = tet_dihedral_range(tet_points(mesh, t));
+            (lo < floor).then(|| c.classify(t, lo, hi))
+        })
+        .collect();
+    let mut counts = ForcedCounts::default();
+    for e in &elements {
+        *match e.reason {
+            ForcedReason::NearCritical => &mut counts.near_critical,
+            ForcedReason::BoxAngle => &mut counts.box_angle,
+            ForcedReason::Unexplained => &mut counts.unexplained,
+        } += 1;
+    }
+    elements.sort_by(|a, b| {
+        a.min_dihedral
+            .total_cmp(&b.min_dihedral)
+            .then(a.tet.cmp(&b.tet))
+    });
+    elements.truncate(opts.forced_list_cap);
+    ForcedReport {
+        floor_degrees: floor,
+        critical_tolerance: opts.forced_critical_tol,
+        counts,
+        elements,
+    }
+}
+
+fn tet_points(mesh: &TetMesh, t: usize) -> [[f64; 3]; 4] {
+    mesh.tets[t].map(|v| mesh.points[v as usize])
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Magnitude `sqrt(Fxy² + Fyz² + Fxz²)` of the Hessian (zero diagonal) of the trilinear
+/// function with coefficients `k` at cell-local point `p`: `sqrt(Σλ² / 2)`.
+fn hessian_magnitude(k: &[f64; 8], p: [f64; 3]) -> f64 {
+    let [_, _, _, _, e, f, g, h] = *k;
+    let (fxy, fyz, fxz) = (e + h * p[2], f + h * p[0], g + h * p[1]);
+    (fxy * fxy + fyz * fyz + fxz * fxz).sqrt()
+}
+
+/// The tet's cells: the index-space box of its corners, a few cells per axis at most.
+fn tet_cells(index: &[[f64; 3]; 4], cd: [usize; 3]) -> ([usize; 3], [usize; 3]) {
+    let mut lo = [0usize; 3];
+    let mut hi = [0usize; 3];
+    for a in 0..3 {
+        let mn = index.iter().map(|u| u[a]).fold(f64::INFINITY, f64::min);
+        let mx = index.iter().map(|u| u[a]).fold(f64::NEG_INFINITY, f64::max);
+        let cell = |x: f64| (x.floor().max(0.0) as usize).min(cd[a] - 1);
+        lo[a] = cell(mn - 1e-9);
+        hi[a] = cell(mx + 1e-9).min(lo[a] + 3);
+    }
+    (lo, hi)
+}
+
+impl Classifier<'_> {
+    fn classify(&self, t: usize, lo: f64, hi: f64) -> ForcedElement {
+        let p = tet_points(self.mesh, t);
+        let centroid = [0, 1, 2].map(|a| p.iter().map(|q| q[a]).sum::<f64>() / 4.0);
+        let index = p.map(|q| self.field.to_index(q));
+        let (critical_distance, neck_width) = self.nearest_critical(&index);
+        let box_angle = self.box_angle(self.mesh.tets[t], &index);
+        let longest = (0..4)
+            .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+            .map(|(i, j)| dot(sub(index[i], index[j]), sub(index[i], index[j])).sqrt())
+            .fold(0.0, f64::max);
+        let reason = if critical_distance.is_some_and(|d| d <= self.tol)
+            || neck_width.is_some_and(|w| w < longest * self.floor)
+        {
+            ForcedReason::NearCritical
+        } else if box_angle.is_some_and(|a| a.to_radians() < self.floor) {
+            ForcedReason::BoxAngle
+        } else {
+            ForcedReason::Unexplained
+        };
+        ForcedElement {
+            tet: t,
+            min_dihedral: lo,
+            max_dihedral: hi,
+            reason,
+            point: centroid,
+            critical_distance,
+            neck_width,
+            box_angle,
+        }
+    }
+
+    /// Over the critical points in the cells touched by the tet with index-space corners
+    /// `index`: the smallest `|value − bound|` relative to the data range, and the narrowest
+    /// neck `2·sqrt(|value − bound| / k)`.
+    fn nearest_critical(&self, index: &[[f64; 3]; 4]) -> (Option<f64>, Option<f64>) {
+        let (lo, hi) = tet_cells(index, self.field.grid().cell_dims());
+        let (mut dist, mut neck): (Option<f64>, Option<f64>) = (None, None);
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    for (v, hess) in self.cell_critical_points([i, j, k]) {
+                        let d = self.levels.map(|l| (v - l).abs());
+                        let d = d[0].min(d[1]);
+                        let w = if d == 0.0 {
+                            0.0
+                        } else {
+                            2.0 * (d / hess).sqrt()
+                        };
+                        dist = Some(dist.map_or(d / self.range, |b| b.min(d / self.range)));
+                        neck = Some(neck.map_or(w, |b| b.min(w)));
+                    }
+                }
+            }
+        }
+        (dist, neck)
+    }
+
+    /// Critical points in cell `c` as (value, Hessian magnitude there): its critical (or
+    /// plateau) corners, its face saddles and its body saddles.
+    fn cell_critical_points(&self, c: [usize; 3]) -> Vec<(f64, f64)> {
+        let grid = self.field.grid();
+        let v = grid.cell_values(c[0], c[1], c[2]);
+        let k = coefficients(&v);
+        let mut out = Vec::new();
+        for (corner, &value) in v.iter().enumerate() {
+            let o = corner_offset(corner);
+            let p = [0, 1, 2].map(|a| c[a] + o[a]);
+            if vertex_class(grid, p).is_none_or(|class| class.critical()) {
+                out.push((value, hessian_magnitude(&k, o.map(|x| x as f64))));
+            }
+        }
+        for f in 0..6 {
+            if let Some(s) = face_saddle(&v, f) {
+                out.push((s.value, hessian_magnitude(&k, face_point(f, s.uv))));
+            }
+        }
+        let (bs, n) = body_saddles(&v);
+        out.extend(
+            bs[..n]
+                .iter()
+                .map(|s| (s.value, hessian_magnitude(&k, s.pos))),
+        );
+        out
+    }
+
+    /// Smallest interior dihedral angle (degrees) of the domain between a box plane on which
+    /// the tet (`verts`, index-space corners `index`) has an edge and a level set on which it
+    /// has an edge (two corners carrying the level as value), at those level corners' middle.
+    fn box_angle(&self, verts: [u32; 4], index: &[[f64; 3]; 4]) -> Option<f64> {
+        let dims = self.field.grid().dims;
+        let mut best: Option<f64> = None;
+        for (l, &level) in self.levels.iter().enumerate() {
+            let on: Vec<usize> = (0..4)
+                .filter(|&i| self.mesh.values[verts[i] as usize] == level)
+                .collect();
+            if on.len() < 2 {
+                continue;
+            }
+            let at =
+                [0, 1, 2].map(|a| on.iter().map(|&i| index[i][a]).sum::<f64>() / on.len() as f64);
+            for a in 0..3 {
+                for (side, plane) in [0.0, (dims[a] - 1) as f64].into_iter().enumerate() {
+                    let hits = index.iter().filter(|u| (u[a] - plane).abs() < 1e-6).count();
+                    if hits >= 2 {
+                        let angle = self.wedge(at, l == 1, a, side == 1);
+                        best = match (best, angle) {
+                            (Some(b), Some(x)) => Some(b.min(x)),
+                            (b, x) => b.or(x),
+                        };
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// Interior dihedral angle (degrees) at index point `u` between the level set (of beta if
+    /// `beta`, the domain on its lower side; else of alpha) and the box plane normal to `axis`
+    /// (its high side if `high`).
+    fn wedge(&self, u: [f64; 3], beta: bool, axis: usize, high: bool) -> Option<f64> {
+        let (_, g) = self.field.value_gradient(u);
+        let inv = self.field.inverse();
+        // physical gradient = inverse^T · index gradient; row `axis` of inverse is the box
+        // plane's normal
+        let gx = [0, 1, 2].map(|j| (0..3).map(|i| g[i] * inv[i][j]).sum::<f64>());
+        let nl = gx.map(|x| if beta { -x } else { x });
+        let nb = inv[axis].map(|x| if high { -x } else { x });
+        let norm = (dot(nl, nl) * dot(nb, nb)).sqrt();
+        if norm == 0.0 || !norm.is_finite() {
+            return None;
+        }
+        // half-spaces with inward normals n1, n2 meet at the angle π − ∠(n1, n2)
+        Some((-dot(nl, nb) / norm).clamp(-1.0, 1.0).acos().to_degrees())
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::improve::quality::summarize;
+    use crate::improve::{improve, DEFAULT_WARP};
+    use crate::{mesh_interval, MeshOptions, Method};
+
+    /// `f` sampled at the integer points of an `n[0] × n[1] × n[2]` grid.
+    fn grid(n: [usize; 3], f: impl Fn(f64, f64, f64) -> f64) -> ScalarGrid {
+        let mut values = Vec::with_capacity(n[0] * n[1] * n[2]);
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    values.push(f(i as f64, j as f64, k as f64));
+                }
+            }
+        }
+        ScalarGrid::new(n, values).unwrap()
+    }
+
+    /// As `tptd-mesh --quality` does: warped clipping, the pass, then the classification.
+    fn run(
+        g: &ScalarGrid,
+        alpha: f64,
+        beta: f64,
+        opts: &QualityOptions,
+    ) -> (TetMesh, ForcedReport) {
+        let mo = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
+        let mut mesh = mesh_interval(g, &mo).unwrap().mesh;
+        improve(&mut mesh, g, alpha, beta, opts);
+        let r = classify_forced(&mesh, g, alpha, beta, opts);
+        (mesh, r)
+    }
+
+    fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+        (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
+    }
+
+    #[test]
+    fn a_pinch_at_a_saddle_value_is_near_critical_there() {
+        // f = x² + y² − z² around (5, 5, 5): the grid vertex there is a saddle of value 0 =
+        // alpha, where {f >= 0} pinches to a point (the tip of a double cone).
+        let c = 5.0;
+        let g = grid([11, 11, 11], |x, y, z| {
+            (x - c).powi(2) + (y - c).powi(2) - (z - c).powi(2)
+        });
+        // A floor at the target angle, so the pass surely leaves tets below it.
+        let opts = QualityOptions {
+            forced_floor: 15.0,
+            ..QualityOptions::default()
+        };
+        let (mesh, r) = run(&g, 0.0, f64::INFINITY, &opts);
+        let below = (0..mesh.tets.len())
+            .filter(|&t| tet_dihedral_range(tet_points(&mesh, t)).0 < 15.0)
+            .count();
+        assert_eq!(r.total(), below);
+        assert!(r.counts.near_critical > 0, "{:?}", r.counts);
+        for e in &r.elements {
+            let near = dist(e.point, [c; 3]) < 2.0;
+            assert_eq!(e.reason == ForcedReason::NearCritical, near, "{e:?}");
+        }
+    }
+
+    #[test]
+    fn a_level_set_meeting_the_box_at_a_shallow_angle_is_box_angle() {
+        // {z <= 0.05 x − 0.33}: a wedge of 2.9° between the plane and the box face z = 0.
+        let s: f64 = 0.05;
+        let g = grid([17, 4, 6], |x, _, z| s * x - z);
+        let (_, r) = run(&g, 0.33, f64::INFINITY, &QualityOptions::default());
+        assert!(r.counts.box_angle > 0, "{:?}", r.counts);
+        assert_eq!(r.counts.near_critical, 0);
+        let wedge = s.atan().to_degrees();
+        for e in r
+            .elements
+            .iter()
+            .filter(|e| e.reason == ForcedReason::BoxAngle)
+        {
+            let a = e.box_angle.unwrap();
+            assert!((a - wedge).abs() < 1e-6, "{a} vs {wedge}");
+            assert!(e.point[2] < s * e.point[0] - 0.33 + 1e-9 && e.point[0] > 6.6);
+        }
+    }
+
+    #[test]
+    fn a_smooth_sphere_lists_nothing() {
+        let c = 9.5;
+        let g = grid([20, 20, 20], |x, y, z| {
+            ((x - c).powi(2) + (y - c).powi(2) + (z - c).powi(2)).sqrt() - 6.3
+        });
+        let (mesh, r) = run(&g, f64::NEG_INFINITY, 0.0, &QualityOptions::default());
+        assert_eq!(summarize(&mesh).below[0], 0);
+        assert_eq!(r.total(), 0);
+        assert!(r.elements.is_empty());
+    }
+
+    #[test]
+    fn the_list_is_capped_worst_first_but_counts_cover_all() {
+        let s: f64 = 0.05;
+        let g = grid([17, 4, 6], |x, _, z| s * x - z);
+        let opts = QualityOptions {
+            forced_floor: 30.0,
+            forced_list_cap: 3,
+            ..QualityOptions::default()
+        };
+        let (_, r) = run(&g, 0.33, f64::INFINITY, &opts);
+        assert!(r.total() > 3);
+        assert_eq!(r.elements.len(), 3);
+        assert!(r
+            .elements
+            .windows(2)
+            .all(|w| w[0].min_dihedral <= w[1].min_dihedral));
+    }
+}
