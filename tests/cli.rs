@@ -422,6 +422,14 @@ fn quality_improves_the_demo_and_reports_before_and_after() {
     assert_eq!(after["histogram"].as_array().unwrap().len(), 180);
     assert!(r["timings_seconds"]["quality"].as_f64().unwrap() > 0.0);
     assert_eq!(r["betti"], serde_json::json!([2, 0, 0]));
+    // every tet left below 5° is listed with a reason
+    let c = &q["forced"]["counts"];
+    let listed: u64 = ["near_critical", "box_angle", "unexplained"]
+        .iter()
+        .map(|k| c[k].as_u64().unwrap())
+        .sum();
+    assert_eq!(Some(listed), after["below"][0].as_u64(), "{q}");
+    assert!(out.contains("below 5 deg after:"), "{out}");
 }
 
 #[test]
