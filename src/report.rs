@@ -82,6 +82,9 @@ pub struct Timings {
     pub write: f64,
     /// Whole run.
     pub total: f64,
+    /// The mesh went to disk slab by slab while it was made: `mesh` then includes the
+    /// analysis (and `analysis` is 0).
+    pub streamed: bool,
 }
 
 /// Smallest and largest dihedral angle, in degrees.

@@ -196,6 +196,9 @@ fn meshes_npy_to_every_format_with_a_consistent_report() {
         for k in ["read", "mesh", "analysis", "write", "total"] {
             assert!(t[k].as_f64().unwrap() >= 0.0, "{k}");
         }
+        // Without --quality the mesh streams to disk, and the analysis happens on the way.
+        assert_eq!(t["streamed"], Value::Bool(true));
+        assert_eq!(t["analysis"].as_f64(), Some(0.0));
     }
 }
 
@@ -421,6 +424,7 @@ fn quality_improves_the_demo_and_reports_before_and_after() {
     assert_eq!(after["tets"].as_u64(), r["tets"].as_u64());
     assert_eq!(after["histogram"].as_array().unwrap().len(), 180);
     assert!(r["timings_seconds"]["quality"].as_f64().unwrap() > 0.0);
+    assert_eq!(r["timings_seconds"]["streamed"], Value::Bool(false));
     assert_eq!(r["betti"], serde_json::json!([2, 0, 0]));
     // every tet left below 5° is listed with a reason
     let c = &q["forced"]["counts"];

@@ -83,6 +83,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         mesh_in_memory(&cli, &job, &grid, curvilinear.as_ref())?
     };
     let timings = Timings {
+        streamed: streaming,
         read: t_read,
         mesh: w.t_mesh,
         analysis: w.t_analysis,

@@ -197,16 +197,21 @@ fn cells_line(s: &mut String, r: &Report) {
 /// Timings and the files written.
 fn output_lines(s: &mut String, r: &Report, report_path: Option<&Path>) {
     let t = &r.timings_seconds;
+    let middle = if t.streamed {
+        format!("mesh and analysis (streamed to disk) {:.3} s", t.mesh)
+    } else {
+        let quality = t
+            .quality
+            .map_or_else(String::new, |q| format!("quality {q:.3} s, "));
+        format!(
+            "mesh {:.3} s, {quality}analysis {:.3} s",
+            t.mesh, t.analysis
+        )
+    };
     let _ = writeln!(
         s,
-        "  time      read {:.3} s, mesh {:.3} s, {}analysis {:.3} s, write {:.3} s, total {:.3} s",
-        t.read,
-        t.mesh,
-        t.quality
-            .map_or_else(String::new, |q| format!("quality {q:.3} s, ")),
-        t.analysis,
-        t.write,
-        t.total
+        "  time      read {:.3} s, {middle}, write {:.3} s, total {:.3} s",
+        t.read, t.write, t.total
     );
     if let Some(sf) = &r.surface {
         let _ = writeln!(
