@@ -141,9 +141,31 @@ pub fn classify_region(
 ) -> Option<CriticalPoint> {
     let v = grid.values.get(region[0]);
     let in_region = |idx: usize| labels[idx] == id;
-    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
     // a plateau whose exits all go up (down) is a minimum (maximum): no graph needed, a
     // contractible one has one connected part around it
+    let (up, down) = exit_sides(grid, &in_region, region, v);
+    if !(up && down) {
+        let parts = Parts {
+            np: up as usize,
+            nn: down as usize,
+            np_free: 0,
+            nn_free: 0,
+        };
+        return region_point(grid, labels, id, region, v, parts);
+    }
+    let cells = region_cells(grid, &in_region, region);
+    let graph = link_graph(grid, &in_region, &cells, v);
+    region_point(grid, labels, id, region, v, graph.parts(grid))
+}
+
+/// Whether the plateau `region` (value `v`) has neighbours above (`.0`) and below (`.1`).
+fn exit_sides(
+    grid: &ScalarGrid,
+    in_region: &dyn Fn(usize) -> bool,
+    region: &[usize],
+    v: f64,
+) -> (bool, bool) {
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
     let (mut up, mut down) = (false, false);
     for &r in region {
         let p = grid.vertex_ijk(r);
@@ -160,19 +182,26 @@ pub fn classify_region(
             }
         }
     }
-    if !(up && down) {
-        let parts = Parts {
-            np: up as usize,
-            nn: down as usize,
-            np_free: 0,
-            nn_free: 0,
-        };
-        return region_point(grid, labels, id, region, v, parts);
-    }
-    let mut nodes: FxHashMap<(usize, usize), usize> = FxHashMap::default();
-    let mut sign: Vec<bool> = Vec::new();
+    (up, down)
+}
+
+/// The grid indices of the eight corners of cell `c`.
+fn cell_corners(grid: &ScalarGrid, c: [usize; 3]) -> [usize; 8] {
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let base = grid.index(c[0], c[1], c[2]);
+    std::array::from_fn(|k| {
+        let o = corner_offset(k);
+        base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2]
+    })
+}
+
+/// Every cell holding a vertex of the region, once (visited from its smallest such vertex).
+fn region_cells(
+    grid: &ScalarGrid,
+    in_region: &dyn Fn(usize) -> bool,
+    region: &[usize],
+) -> Vec<[usize; 3]> {
     let cd = grid.cell_dims();
-    // every cell holding a vertex of the region, visited from its smallest such vertex
     let mut cells: Vec<[usize; 3]> = Vec::new();
     for &r in region {
         let p = grid.vertex_ijk(r);
@@ -187,33 +216,38 @@ pub fn classify_region(
             if (0..3).any(|a| c[a] >= cd[a]) {
                 continue;
             }
-            let base = grid.index(c[0], c[1], c[2]);
-            let first = (0..8)
-                .map(|k| {
-                    let q = corner_offset(k);
-                    base + q[0] * stride[0] + q[1] * stride[1] + q[2] * stride[2]
-                })
-                .find(|&g| in_region(g));
+            let first = cell_corners(grid, c).into_iter().find(|&g| in_region(g));
             if first == Some(r) {
                 cells.push(c);
             }
         }
     }
-    let mut links: Vec<(usize, usize)> = Vec::new();
-    let mut node = |a: usize, b: usize, up: bool, sign: &mut Vec<bool>| -> usize {
-        let key = (a.min(b), a.max(b));
-        let n = nodes.len();
-        *nodes.entry(key).or_insert_with(|| {
-            sign.push(up);
-            n
-        })
+    cells
+}
+
+/// The graph of the sides of a plateau: a node per grid edge leaving it (keyed by its ends,
+/// with the side it leaves to), linked where a cell joins two of them.
+struct LinkGraph {
+    nodes: FxHashMap<(usize, usize), usize>,
+    /// Per node: does it lead up?
+    sign: Vec<bool>,
+    links: Vec<(usize, usize)>,
+}
+
+/// The [`LinkGraph`] of the plateau (value `v`) over its `cells`.
+fn link_graph(
+    grid: &ScalarGrid,
+    in_region: &dyn Fn(usize) -> bool,
+    cells: &[[usize; 3]],
+    v: f64,
+) -> LinkGraph {
+    let mut g = LinkGraph {
+        nodes: FxHashMap::default(),
+        sign: Vec::new(),
+        links: Vec::new(),
     };
-    for c in &cells {
-        let base = grid.index(c[0], c[1], c[2]);
-        let gidx: [usize; 8] = std::array::from_fn(|k| {
-            let o = corner_offset(k);
-            base + o[0] * stride[0] + o[1] * stride[1] + o[2] * stride[2]
-        });
+    for &c in cells {
+        let gidx = cell_corners(grid, c);
         let vals = grid.values.gather(gidx);
         let mut rmask = 0u8;
         for k in 0..8 {
@@ -224,40 +258,59 @@ pub fn classify_region(
         let mut local = Vec::new();
         join_in_cell(&vals, v, rmask, &mut local);
         for (e1, e2) in local {
-            let n1 = node(gidx[e1.0], gidx[e1.1], vals[e1.1] > v, &mut sign);
-            let n2 = node(gidx[e2.0], gidx[e2.1], vals[e2.1] > v, &mut sign);
-            links.push((n1, n2));
+            let n1 = g.node(gidx[e1.0], gidx[e1.1], vals[e1.1] > v);
+            let n2 = g.node(gidx[e2.0], gidx[e2.1], vals[e2.1] > v);
+            g.links.push((n1, n2));
         }
     }
-    let mut uf = Uf((0..sign.len()).collect());
-    for (a, b) in links {
-        uf.union(a, b);
+    g
+}
+
+impl LinkGraph {
+    /// The node of grid edge `{a, b}` (new ones lead up when `up`).
+    fn node(&mut self, a: usize, b: usize, up: bool) -> usize {
+        let key = (a.min(b), a.max(b));
+        let n = self.nodes.len();
+        let sign = &mut self.sign;
+        *self.nodes.entry(key).or_insert_with(|| {
+            sign.push(up);
+            n
+        })
     }
-    // which nodes lie on the grid box (both ends on one box plane)
-    let mut on_box_node = vec![false; sign.len()];
-    for (&(a, b), &i) in &nodes {
-        let (pa, pb) = (grid.vertex_ijk(a), grid.vertex_ijk(b));
-        on_box_node[i] =
-            (0..3).any(|x| pa[x] == pb[x] && (pa[x] == 0 || pa[x] + 1 == grid.dims[x]));
-    }
-    let mut touch = vec![false; sign.len()];
-    for i in 0..sign.len() {
-        let r = uf.find(i);
-        touch[r] |= on_box_node[i];
-    }
-    let mut parts = Parts::default();
-    for i in 0..sign.len() {
-        if uf.find(i) == i {
-            let (n, free) = if sign[i] {
-                (&mut parts.np, &mut parts.np_free)
-            } else {
-                (&mut parts.nn, &mut parts.nn_free)
-            };
-            *n += 1;
-            *free += !touch[i] as usize;
+
+    /// The connected parts above and below, and which of them do not reach the grid box.
+    fn parts(&self, grid: &ScalarGrid) -> Parts {
+        let n = self.sign.len();
+        let mut uf = Uf((0..n).collect());
+        for &(a, b) in &self.links {
+            uf.union(a, b);
         }
+        // which nodes lie on the grid box (both ends on one box plane)
+        let mut on_box_node = vec![false; n];
+        for (&(a, b), &i) in &self.nodes {
+            let (pa, pb) = (grid.vertex_ijk(a), grid.vertex_ijk(b));
+            on_box_node[i] =
+                (0..3).any(|x| pa[x] == pb[x] && (pa[x] == 0 || pa[x] + 1 == grid.dims[x]));
+        }
+        let mut touch = vec![false; n];
+        for i in 0..n {
+            let r = uf.find(i);
+            touch[r] |= on_box_node[i];
+        }
+        let mut parts = Parts::default();
+        for i in 0..n {
+            if uf.find(i) == i {
+                let (count, free) = if self.sign[i] {
+                    (&mut parts.np, &mut parts.np_free)
+                } else {
+                    (&mut parts.nn, &mut parts.nn_free)
+                };
+                *count += 1;
+                *free += !touch[i] as usize;
+            }
+        }
+        parts
     }
-    region_point(grid, labels, id, region, v, parts)
 }
 
 /// Connected parts of `{f > f(R)}` (`np`) and `{f < f(R)}` (`nn`) near a plateau `R`, and how
