@@ -9,13 +9,12 @@ use std::io;
 use rayon::prelude::*;
 
 use crate::geom::signed_volume;
-use crate::improve::quality::{dihedral_cosines, dihedral_range};
-use crate::mesh::TetMesh;
-use crate::topology::{betti, Dsu};
+use crate::improve::quality::{
+    cosine_extremes, cosines_to_degrees, dihedral_range, widest, NO_COSINES,
+};
+use crate::mesh::{TetMesh, VOLUME_BLOCK};
+use crate::topology::{betti, tet_links, triangle_links, Dsu};
 use crate::weld::{MeshChunk, MeshSink};
-
-/// Tets per block of the volume sum (as [`TetMesh::volume`]).
-const VOLUME_BLOCK: usize = 1 << 14;
 
 /// What the report says about a mesh.
 #[derive(Clone, Debug, PartialEq)]
@@ -71,16 +70,17 @@ impl Components {
             for &v in t {
                 self.used[v as usize] = true;
             }
-            for k in 1..4 {
-                self.solid.union(t[0], t[k]);
+            for (a, b) in tet_links(t) {
+                self.solid.union(a, b);
             }
         }
         for t in &c.boundary {
             for &v in t {
                 self.on_boundary[v as usize] = true;
             }
-            self.surface.union(t[0], t[1]);
-            self.surface.union(t[0], t[2]);
+            for (a, b) in triangle_links(t) {
+                self.surface.union(a, b);
+            }
         }
     }
 
@@ -122,7 +122,7 @@ impl FactsSink {
             boundary_triangles: [0; 3],
             block: Vec::with_capacity(VOLUME_BLOCK),
             partials: Vec::new(),
-            cos_range: (f64::NEG_INFINITY, f64::INFINITY),
+            cos_range: NO_COSINES,
             components: analyse.then(|| Components {
                 solid: Dsu::new(0),
                 surface: Dsu::new(0),
@@ -139,10 +139,7 @@ impl FactsSink {
         if !self.block.is_empty() {
             self.partials.push(self.block.iter().sum());
         }
-        let dihedral = (self.analyse && self.tets > 0).then(|| {
-            let (hi, lo) = self.cos_range;
-            (hi.acos().to_degrees(), lo.acos().to_degrees())
-        });
+        let dihedral = (self.analyse && self.tets > 0).then(|| cosines_to_degrees(self.cos_range));
         let nb = self.boundary_triangles.iter().sum();
         MeshFacts {
             nodes: self.nodes,
@@ -189,18 +186,9 @@ impl FactsSink {
     fn add_cosines(&mut self, tets: &[[u32; 4]]) {
         let r = tets
             .par_iter()
-            .map(|t| {
-                dihedral_cosines(self.corners(t))
-                    .iter()
-                    .fold((f64::NEG_INFINITY, f64::INFINITY), |(hi, lo), &c| {
-                        (hi.max(c), lo.min(c))
-                    })
-            })
-            .reduce(
-                || (f64::NEG_INFINITY, f64::INFINITY),
-                |a, b| (a.0.max(b.0), a.1.min(b.1)),
-            );
-        self.cos_range = (self.cos_range.0.max(r.0), self.cos_range.1.min(r.1));
+            .map(|t| cosine_extremes(self.corners(t)))
+            .reduce(|| NO_COSINES, widest);
+        self.cos_range = widest(self.cos_range, r);
     }
 }
 

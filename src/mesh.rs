@@ -55,6 +55,10 @@ pub struct TetMesh {
     pub boundary_labels: Vec<BoundaryLabel>,
 }
 
+/// Tets per block of [`TetMesh::volume`]'s sum (blocks are summed in order, so the volume
+/// does not depend on the thread count; `facts` sums a streamed mesh in the same blocks).
+pub(crate) const VOLUME_BLOCK: usize = 1 << 14;
+
 impl TetMesh {
     /// Signed volume of tet `t` (positive for the mesher's output).
     pub fn tet_volume(&self, t: usize) -> f64 {
@@ -68,7 +72,7 @@ impl TetMesh {
         use rayon::prelude::*;
         let partial: Vec<f64> = self
             .tets
-            .par_chunks(1 << 14)
+            .par_chunks(VOLUME_BLOCK)
             .map(|c| {
                 c.iter()
                     .map(|t| {

@@ -81,6 +81,16 @@ fn count_components<T: Sync>(
         .count()
 }
 
+/// The pairs that join a tet's corners (a spanning star).
+pub(crate) fn tet_links(t: &[u32; 4]) -> [(u32, u32); 3] {
+    [(t[0], t[1]), (t[0], t[2]), (t[0], t[3])]
+}
+
+/// The pairs that join a triangle's corners.
+pub(crate) fn triangle_links(t: &[u32; 3]) -> [(u32, u32); 3] {
+    [(t[0], t[1]), (t[0], t[2]), (t[1], t[2])]
+}
+
 /// Betti numbers `[b0, b1, b2]` of the meshed domain.
 pub fn betti(mesh: &TetMesh) -> [usize; 3] {
     let n = mesh.points.len();
@@ -93,18 +103,14 @@ pub fn betti(mesh: &TetMesh) -> [usize; 3] {
             used[i as usize] = true;
         }
     }
-    let b0 = count_components(n, &used, &mesh.tets, |t| {
-        [(t[0], t[1]), (t[0], t[2]), (t[0], t[3])]
-    });
+    let b0 = count_components(n, &used, &mesh.tets, tet_links);
     let mut on_b = vec![false; n];
     for t in &mesh.boundary {
         for &i in t {
             on_b[i as usize] = true;
         }
     }
-    let surfaces = count_components(n, &on_b, &mesh.boundary, |t| {
-        [(t[0], t[1]), (t[0], t[2]), (t[1], t[2])]
-    });
+    let surfaces = count_components(n, &on_b, &mesh.boundary, triangle_links);
     let vb = on_b.iter().filter(|&&x| x).count() as i64;
     betti_from_counts(b0, surfaces, vb, mesh.boundary.len() as i64)
 }

@@ -338,7 +338,9 @@ impl Welder {
         }
     }
 
-    /// Index-space `p` in physical coordinates.
+    /// Index-space `p` in physical coordinates, summed as the mesher always has
+    /// (`origin + a·x + b·y + c·z`, left to right), which is not the association of
+    /// [`ScalarGrid::to_physical`]: keeping it keeps every output byte.
     #[inline]
     fn physical(&self, p: [f64; 3]) -> [f64; 3] {
         let (lin, o) = (&self.lin, self.origin);

@@ -170,15 +170,30 @@ pub fn gamma(p: [[f64; 3]; 4]) -> f64 {
 pub fn dihedral_range(mesh: &TetMesh) -> Option<(f64, f64)> {
     mesh.tets
         .par_iter()
-        .map(|t| {
-            dihedral_cosines(t.map(|i| mesh.points[i as usize]))
-                .iter()
-                .fold((f64::NEG_INFINITY, f64::INFINITY), |(hi, lo), &c| {
-                    (hi.max(c), lo.min(c))
-                })
-        })
-        .reduce_with(|a, b| (a.0.max(b.0), a.1.min(b.1)))
-        .map(|(cos_max, cos_min)| (cos_max.acos().to_degrees(), cos_min.acos().to_degrees()))
+        .map(|t| cosine_extremes(t.map(|i| mesh.points[i as usize])))
+        .reduce_with(widest)
+        .map(cosines_to_degrees)
+}
+
+/// Largest and smallest dihedral cosine of one tet (its smallest and largest angle).
+#[inline]
+pub(crate) fn cosine_extremes(p: [[f64; 3]; 4]) -> (f64, f64) {
+    dihedral_cosines(p)
+        .iter()
+        .fold(NO_COSINES, |(hi, lo), &c| (hi.max(c), lo.min(c)))
+}
+
+/// The cosine extremes of no tet (the identity of [`widest`]).
+pub(crate) const NO_COSINES: (f64, f64) = (f64::NEG_INFINITY, f64::INFINITY);
+
+/// Both ranges of cosine extremes together.
+pub(crate) fn widest(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    (a.0.max(b.0), a.1.min(b.1))
+}
+
+/// (smallest, largest) dihedral angle in degrees from the cosine extremes.
+pub(crate) fn cosines_to_degrees((cos_max, cos_min): (f64, f64)) -> (f64, f64) {
+    (cos_max.acos().to_degrees(), cos_min.acos().to_degrees())
 }
 
 /// Number of histogram bins of dihedral angles (one per degree, 0° to 180°).

@@ -153,13 +153,19 @@ impl Arrays<'_> {
                 .src
                 .points(&mut |p| f(&le_f64(bytemuck::cast_slice(p)))),
             Array::Connectivity => self.src.tets(&mut |ts| f(&self.connectivity(ts))),
-            Array::Offsets if self.wide => visit_iter((1..=t as i64).map(|k| 4 * k), &mut |o| {
-                f(&o.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>())
-            }),
-            Array::Offsets => visit_iter((1..=t as i32).map(|k| 4 * k), &mut |o| {
-                f(&o.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>())
-            }),
+            Array::Offsets => {
+                visit_iter((1..=t as u64).map(|k| 4 * k), &mut |o| f(&self.id_bytes(o)))
+            }
             Array::Types => visit_iter(std::iter::repeat_n(VTK_TETRA, t), f),
+        }
+    }
+
+    /// `ids` as Int64 or Int32 little-endian bytes (every id fits unless the layout is wide).
+    fn id_bytes(&self, ids: &[u64]) -> Vec<u8> {
+        if self.wide {
+            ids.iter().flat_map(|&x| (x as i64).to_le_bytes()).collect()
+        } else {
+            ids.iter().flat_map(|&x| (x as i32).to_le_bytes()).collect()
         }
     }
 
