@@ -12,10 +12,18 @@ use super::Ctx;
 
 /// The better legal and improving collapse of edge `ab` (either way), as
 /// `(smallest quality of the changed tets afterwards, from, to)`; `a` into `b` on a tie.
-/// The link condition is symmetric in `a` and `b`, so it is checked once.
-pub fn best_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<(f64, u32, u32)> {
-    let ab = collapse_quality(lm, ctx, a, b, true);
-    let ba = collapse_quality(lm, ctx, b, a, true);
+/// `floors` are [`star_floor`] of `a` and `b`: a collapse must do better than the worst tet
+/// of the star it removes. The link condition is symmetric in `a` and `b`, so it is checked
+/// once.
+pub fn best_collapse(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    a: u32,
+    b: u32,
+    floors: [f64; 2],
+) -> Option<(f64, u32, u32)> {
+    let ab = collapse_quality(lm, ctx, a, b, floors[0]);
+    let ba = collapse_quality(lm, ctx, b, a, floors[1]);
     let best = match (ab, ba) {
         (Some(x), Some(y)) if y > x => (y, b, a),
         (Some(x), _) => (x, a, b),
@@ -28,15 +36,23 @@ pub fn best_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<(f64, 
 /// The collapse of `a` into `b`, if legal and every remaining tet stays positive (no gain
 /// needed: used to remove vertices that cannot reach their level set).
 pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
-    let new = collapse_quality(lm, ctx, a, b, false)?;
+    let new = collapse_quality(lm, ctx, a, b, 0.0)?;
     link_condition(lm, a, b, &shared_tets(lm, a, b)).then_some(new)
 }
 
+/// The worst quality in the star of `v` (at least 0): what a collapse of `v` must beat.
+pub fn star_floor(lm: &LocalMesh, v: u32) -> f64 {
+    lm.star[v as usize]
+        .iter()
+        .map(|&t| lm.q[t as usize])
+        .fold(f64::INFINITY, f64::min)
+        .max(0.0)
+}
+
 /// For a collapse of `a` into `b` along an edge of the mesh that the constraints allow and
-/// that leaves every changed tet positive (and, with `gain`, better than the worst tet of
-/// the star of `a` before): the smallest quality of the changed tets after. Stops at the
-/// first changed tet that fails.
-fn collapse_quality(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32, gain: bool) -> Option<f64> {
+/// that leaves every changed tet above `floor`: the smallest quality of the changed tets
+/// after. Stops at the first changed tet that fails.
+fn collapse_quality(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32, floor: f64) -> Option<f64> {
     if !lm.is_free(a) || !lm.is_free(b) {
         return None;
     }
@@ -51,14 +67,6 @@ fn collapse_quality(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32, gain: bool) -> Op
     if lm.con[a as usize].level.is_some() && !short_edge(lm, a, b, ctx.boundary_collapse_ratio) {
         return None;
     }
-    let floor = if gain {
-        star.iter()
-            .map(|&t| lm.q[t as usize])
-            .fold(f64::INFINITY, f64::min)
-            .max(0.0)
-    } else {
-        0.0
-    };
     let mut new = f64::INFINITY;
     let xb = lm.x[b as usize];
     for &t in star.iter().filter(|t| !around_edge(t)) {
@@ -143,7 +151,7 @@ pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> Vec<BoundaryFace> {
         let tet = lm.tets[t as usize];
         for skip in 0..4 {
             let tri = face_without(tet, skip);
-            if tri.contains(&v) {
+            if tri.contains(&v) && tri.iter().all(|&w| lm.on_boundary(w)) {
                 if let Some(f) = lm.faces.get(&face_key(tri)) {
                     if !out.contains(f) {
                         out.push(*f);
@@ -169,74 +177,96 @@ fn face_without(tet: [u32; 4], skip: usize) -> [u32; 3] {
     f
 }
 
-/// The link of `v`, as sorted lists of its vertices, edges and triangles (from the tets of
-/// its star; the virtual boundary vertex is handled separately).
-struct Link {
-    verts: Vec<u32>,
-    edges: Vec<[u32; 2]>,
-    tris: Vec<[u32; 3]>,
+/// The vertices of the tets around `v` other than `v`, sorted (the vertices of its link).
+fn link_vertices(lm: &LocalMesh, v: u32) -> Vec<u32> {
+    let star = &lm.star[v as usize];
+    let mut out = Vec::with_capacity(3 * star.len());
+    for &t in star {
+        out.extend(lm.tets[t as usize].into_iter().filter(|&w| w != v));
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
-fn link_of(lm: &LocalMesh, v: u32) -> Link {
-    let n = lm.star[v as usize].len();
-    let mut l = Link {
-        verts: Vec::with_capacity(3 * n),
-        edges: Vec::with_capacity(3 * n),
-        tris: Vec::with_capacity(n),
-    };
-    for &t in &lm.star[v as usize] {
-        let tet = lm.tets[t as usize];
-        let i = tet.iter().position(|&w| w == v).unwrap_or(0);
-        let tri = face_key(face_without(tet, i));
-        l.verts.extend_from_slice(&tri);
-        l.edges
-            .extend_from_slice(&[[tri[0], tri[1]], [tri[0], tri[2]], [tri[1], tri[2]]]);
-        l.tris.push(tri);
-    }
-    l.verts.sort_unstable();
-    l.verts.dedup();
-    l.edges.sort_unstable();
-    l.edges.dedup();
-    l.tris.sort_unstable();
-    l
-}
-
-/// The link condition for collapsing the edge `ab`, whose tets are `shared`.
-fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
-    let (la, lb) = (link_of(lm, a), link_of(lm, b));
-    let mut edge_verts: Vec<u32> = Vec::new();
-    let mut edge_edges: Vec<[u32; 2]> = Vec::new();
-    for &t in shared {
-        let mut o: Vec<u32> = lm.tets[t as usize]
-            .into_iter()
-            .filter(|&w| w != a && w != b)
-            .collect();
-        o.sort_unstable();
-        edge_verts.extend_from_slice(&o);
-        edge_edges.push([o[0], o[1]]);
-    }
-    edge_verts.sort_unstable();
-    edge_verts.dedup();
-    let outside = |x: &u32| *x != a && *x != b;
-    let common_verts: Vec<u32> = la
-        .verts
+/// Whether some tet around `v` has all of `ws` as corners.
+fn star_has(lm: &LocalMesh, v: u32, ws: &[u32]) -> bool {
+    lm.star[v as usize]
         .iter()
-        .filter(|x| outside(x) && lb.verts.binary_search(x).is_ok())
-        .copied()
+        .any(|&t| ws.iter().all(|w| lm.tets[t as usize].contains(w)))
+}
+
+/// The link condition for collapsing the edge `ab`, whose tets are `shared`: the links of `a`
+/// and `b` meet exactly in the link of `ab` (its *ring*: the edges opposite `ab` in `shared`).
+///
+/// Vertices first: the common vertices must be the ring's. Then a common edge or triangle
+/// has all its corners on the ring, so only faces of the star of `a` over ring vertices are
+/// looked up in the star of `b`: an edge `vw` of both links must lie in a tet of `shared`,
+/// and no triangle may be in both links (the two tets would become one).
+fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
+    let mut ring: Vec<u32> = shared
+        .iter()
+        .flat_map(|&t| lm.tets[t as usize])
+        .filter(|&w| w != a && w != b)
         .collect();
-    if common_verts != edge_verts {
+    ring.sort_unstable();
+    ring.dedup();
+    if !common_vertices_are(&link_vertices(lm, a), &link_vertices(lm, b), &ring, [a, b]) {
         return false;
     }
-    let edge_ok = la
-        .edges
+    let on_ring = |w: u32| ring.binary_search(&w).is_ok();
+    for &t in &lm.star[a as usize] {
+        let tet = lm.tets[t as usize];
+        if tet.contains(&b) {
+            continue;
+        }
+        let tri = face_without(tet, tet.iter().position(|&w| w == a).unwrap_or(0));
+        for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+            let e = [tri[i], tri[j]];
+            if on_ring(e[0]) && on_ring(e[1]) && !edge_allowed(lm, a, b, shared, e) {
+                return false;
+            }
+        }
+        if tri.iter().all(|&w| on_ring(w)) && star_has(lm, b, &tri) {
+            return false;
+        }
+    }
+    boundary_link_condition(lm, a, b)
+}
+
+/// Whether the sorted `la` and `lb` (vertex lists) share exactly the vertices `ring` (sorted),
+/// apart from `skip`.
+fn common_vertices_are(la: &[u32], lb: &[u32], ring: &[u32], skip: [u32; 2]) -> bool {
+    let (mut i, mut j, mut k) = (0, 0, 0);
+    while i < la.len() && j < lb.len() {
+        match la[i].cmp(&lb[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                if !skip.contains(&la[i]) {
+                    if ring.get(k) != Some(&la[i]) {
+                        return false;
+                    }
+                    k += 1;
+                }
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    k == ring.len()
+}
+
+/// For an edge `vw` (no end `a` or `b`) of the link of `a`: it is also in the link of `b`
+/// only if it is in the link of `ab` (some tet of `shared` has both ends).
+fn edge_allowed(lm: &LocalMesh, a: u32, b: u32, shared: &[u32], e: [u32; 2]) -> bool {
+    if e.contains(&a) || e.contains(&b) {
+        return true;
+    }
+    let in_shared = shared
         .iter()
-        .filter(|e| outside(&e[0]) && outside(&e[1]) && lb.edges.binary_search(e).is_ok())
-        .all(|e| edge_edges.contains(e));
-    let tri_clash = la
-        .tris
-        .iter()
-        .any(|t| t.iter().all(outside) && lb.tris.binary_search(t).is_ok());
-    edge_ok && !tri_clash && boundary_link_condition(lm, a, b)
+        .any(|&t| e.iter().all(|w| lm.tets[t as usize].contains(w)));
+    in_shared || !star_has(lm, b, &e)
 }
 
 /// The part of the link condition that involves the virtual vertex coning the boundary.
@@ -286,4 +316,139 @@ fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
         .iter()
         .any(|e| outside(&e[0]) && outside(&e[1]) && eb.binary_search(e).is_ok());
     verts_ok && faces_ok
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::improve::{context, local::extract_regions, QualityOptions, DEFAULT_WARP};
+    use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
+
+    /// The link of `v`, as sorted lists of its vertices, edges and triangles (from the tets of
+    /// its star; the virtual boundary vertex is handled separately).
+    struct Link {
+        verts: Vec<u32>,
+        edges: Vec<[u32; 2]>,
+        tris: Vec<[u32; 3]>,
+    }
+
+    fn link_of(lm: &LocalMesh, v: u32) -> Link {
+        let n = lm.star[v as usize].len();
+        let mut l = Link {
+            verts: Vec::with_capacity(3 * n),
+            edges: Vec::with_capacity(3 * n),
+            tris: Vec::with_capacity(n),
+        };
+        for &t in &lm.star[v as usize] {
+            let tet = lm.tets[t as usize];
+            let i = tet.iter().position(|&w| w == v).unwrap_or(0);
+            let tri = face_key(face_without(tet, i));
+            l.verts.extend_from_slice(&tri);
+            l.edges
+                .extend_from_slice(&[[tri[0], tri[1]], [tri[0], tri[2]], [tri[1], tri[2]]]);
+            l.tris.push(tri);
+        }
+        l.verts.sort_unstable();
+        l.verts.dedup();
+        l.edges.sort_unstable();
+        l.edges.dedup();
+        l.tris.sort_unstable();
+        l
+    }
+
+    /// The link condition as set operations on whole links (the first implementation).
+    fn reference_link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
+        let (la, lb) = (link_of(lm, a), link_of(lm, b));
+        let mut edge_verts: Vec<u32> = Vec::new();
+        let mut edge_edges: Vec<[u32; 2]> = Vec::new();
+        for &t in shared {
+            let mut o: Vec<u32> = lm.tets[t as usize]
+                .into_iter()
+                .filter(|&w| w != a && w != b)
+                .collect();
+            o.sort_unstable();
+            edge_verts.extend_from_slice(&o);
+            edge_edges.push([o[0], o[1]]);
+        }
+        edge_verts.sort_unstable();
+        edge_verts.dedup();
+        let outside = |x: &u32| *x != a && *x != b;
+        let common_verts: Vec<u32> = la
+            .verts
+            .iter()
+            .filter(|x| outside(x) && lb.verts.binary_search(x).is_ok())
+            .copied()
+            .collect();
+        if common_verts != edge_verts {
+            return false;
+        }
+        let edge_ok = la
+            .edges
+            .iter()
+            .filter(|e| outside(&e[0]) && outside(&e[1]) && lb.edges.binary_search(e).is_ok())
+            .all(|e| edge_edges.contains(e));
+        let tri_clash = la
+            .tris
+            .iter()
+            .any(|t| t.iter().all(outside) && lb.tris.binary_search(t).is_ok());
+        edge_ok && !tri_clash && boundary_link_condition(lm, a, b)
+    }
+
+    /// A torus with a wavy surface on a coarse grid: many boundary vertices, short edges and
+    /// both outcomes of the link condition.
+    fn wavy_torus() -> (ScalarGrid, f64, f64) {
+        let n = 18;
+        let mut values = Vec::with_capacity(n * n * n);
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let (x, y, z) = (i as f64 - 8.3, j as f64 - 8.6, k as f64 - 8.9);
+                    let ring = ((x * x + y * y).sqrt() - 5.0).hypot(z);
+                    values.push(ring + 0.4 * (1.7 * x).sin() * (1.3 * y + z).cos());
+                }
+            }
+        }
+        (ScalarGrid::new([n, n, n], values).unwrap(), -10.0, 2.2)
+    }
+
+    #[test]
+    fn link_condition_matches_the_set_definition() {
+        let (grid, alpha, beta) = wavy_torus();
+        let opts = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
+        let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
+        let start = std::time::Instant::now();
+        let ctx = context(&grid, alpha, beta, &QualityOptions::default(), start);
+        let work = vec![true; mesh.points.len()];
+        let (mut regions, _) = extract_regions(&mesh, &work, &ctx, 0);
+        let (mut legal, mut illegal, mut applied) = (0, 0, 0);
+        for lm in &mut regions {
+            for t in 0..lm.tets.len() {
+                for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+                    let tet = lm.tets[t];
+                    if !lm.alive[t] || !lm.is_free(tet[i]) || !lm.is_free(tet[j]) {
+                        continue;
+                    }
+                    let (a, b) = (tet[i], tet[j]);
+                    let shared = shared_tets(lm, a, b);
+                    let fast = link_condition(lm, a, b, &shared);
+                    assert_eq!(fast, reference_link_condition(lm, a, b, &shared), "{a} {b}");
+                    if !fast {
+                        illegal += 1;
+                        continue;
+                    }
+                    legal += 1;
+                    // Change the mesh now and then (keeping it valid), so that later edges
+                    // meet the configurations collapses make.
+                    if legal % 5 == 0 && lm.con[a as usize].may_merge_into(&lm.con[b as usize]) {
+                        apply_collapse(lm, a, b);
+                        applied += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            legal > 1000 && illegal > 100 && applied > 100,
+            "{legal} {illegal} {applied}"
+        );
+    }
 }

@@ -388,37 +388,6 @@ impl LocalMesh {
             .all(|&t| ctx.quality(self.corners_with(t, v, x)) > floor)
     }
 
-    /// As [`LocalMesh::star_above_at`], keeping the qualities (in star order) in `out`.
-    /// `hint` is a position in the star to test first (the one that failed last time: in a
-    /// line search it usually fails again); it is set to the failing position.
-    pub fn star_qualities_above(
-        &self,
-        v: u32,
-        u: [f64; 3],
-        ctx: &Ctx,
-        floor: f64,
-        out: &mut Vec<f64>,
-        hint: &mut usize,
-    ) -> bool {
-        out.clear();
-        let x = ctx.field.to_physical(u);
-        let star = &self.star[v as usize];
-        let above = |t: u32| Some(ctx.quality(self.corners_with(t, v, x))).filter(|&q| q > floor);
-        if star.get(*hint).is_some_and(|&t| above(t).is_none()) {
-            return false;
-        }
-        for (i, &t) in star.iter().enumerate() {
-            match above(t) {
-                Some(q) => out.push(q),
-                None => {
-                    *hint = i;
-                    return false;
-                }
-            }
-        }
-        true
-    }
-
     /// Puts `v` at index point `u` and updates its physical position, its value (a level
     /// vertex carries its level exactly, other vertices the trilinear value) and the quality
     /// of its star.
@@ -428,7 +397,7 @@ impl LocalMesh {
     }
 
     /// As [`LocalMesh::set_position`], with the star's new qualities (in star order) known
-    /// from [`LocalMesh::star_qualities_above`].
+    /// from [`StarCorners::qualities_above`].
     pub fn set_position_with(&mut self, v: u32, u: [f64; 3], ctx: &Ctx, q: &[f64]) {
         self.place(v, u, ctx);
         for (i, &qt) in q.iter().enumerate() {
@@ -469,6 +438,74 @@ impl LocalMesh {
     #[inline]
     pub fn is_free(&self, v: u32) -> bool {
         !self.frozen[v as usize] && !self.removed[v as usize]
+    }
+}
+
+/// The tets around one vertex with the positions of their other corners: what a search
+/// for a better position of that vertex evaluates again and again while only it moves.
+pub struct StarCorners {
+    /// Per tet of the star (in star order): its corners.
+    corners: Vec<[[f64; 3]; 4]>,
+    /// Per tet: which corner is the vertex.
+    slot: Vec<usize>,
+}
+
+impl StarCorners {
+    /// The star of `v` in `lm`.
+    pub fn of(lm: &LocalMesh, v: u32) -> Self {
+        let star = &lm.star[v as usize];
+        StarCorners {
+            corners: star
+                .iter()
+                .map(|&t| lm.corners(lm.tets[t as usize]))
+                .collect(),
+            slot: star
+                .iter()
+                .map(|&t| {
+                    lm.tets[t as usize]
+                        .iter()
+                        .position(|&w| w == v)
+                        .unwrap_or(0)
+                })
+                .collect(),
+        }
+    }
+
+    /// Quality of the `i`-th tet with the vertex at physical point `x`.
+    #[inline]
+    pub fn quality(&self, i: usize, x: [f64; 3], ctx: &Ctx) -> f64 {
+        let mut p = self.corners[i];
+        p[self.slot[i]] = x;
+        ctx.quality(p)
+    }
+
+    /// Whether every tet would have quality above `floor` with the vertex at physical point
+    /// `x`, keeping the qualities (in star order) in `out`. `hint` is a tet to test first
+    /// (the one that failed last time: in a line search it usually fails again); it is set
+    /// to the failing one.
+    pub fn qualities_above(
+        &self,
+        x: [f64; 3],
+        ctx: &Ctx,
+        floor: f64,
+        out: &mut Vec<f64>,
+        hint: &mut usize,
+    ) -> bool {
+        out.clear();
+        let above = |i: usize| Some(self.quality(i, x, ctx)).filter(|&q| q > floor);
+        if *hint < self.corners.len() && above(*hint).is_none() {
+            return false;
+        }
+        for i in 0..self.corners.len() {
+            match above(i) {
+                Some(q) => out.push(q),
+                None => {
+                    *hint = i;
+                    return false;
+                }
+            }
+        }
+        true
     }
 }
 

@@ -1,7 +1,7 @@
 //! The order in which the operations run on a region (after Stellar: cheap, safe moves first,
 //! topology changes where moves are not enough, then smoothing again).
 
-use super::collapse::{apply_collapse, best_collapse, evaluate_merge};
+use super::collapse::{apply_collapse, best_collapse, evaluate_merge, star_floor};
 use super::flip::{try_flip23, try_flip32};
 use super::local::LocalMesh;
 use super::project::project_levels;
@@ -132,8 +132,10 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
         }
     }
     edges.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
+    let floors = tet.map(|v| star_floor(lm, v));
+    let floor = |v: u32| floors[tet.iter().position(|&w| w == v).unwrap_or(0)];
     for (_, a, b) in edges {
-        if let Some((_, from, to)) = best_collapse(lm, ctx, a, b) {
+        if let Some((_, from, to)) = best_collapse(lm, ctx, a, b, [floor(a), floor(b)]) {
             apply_collapse(lm, from, to);
             return true;
         }

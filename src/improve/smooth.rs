@@ -6,7 +6,7 @@
 //! every evaluation. Moving a vertex with every tet of its star positive is a homeomorphism of
 //! the mesh, so smoothing never changes the topology.
 
-use super::local::LocalMesh;
+use super::local::{LocalMesh, StarCorners};
 use super::Ctx;
 use crate::geom::{dot, sub};
 
@@ -29,11 +29,14 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         .iter()
         .map(|&t| lm.q[t as usize])
         .fold(f64::INFINITY, f64::min);
+    // The other corners stay where they are while `v` moves.
+    let star = StarCorners::of(lm, v);
     for _ in 0..ITERATIONS {
-        let Some(d) = ascent_direction(lm, ctx, v, q0) else {
+        let scale = local_scale(lm, v);
+        let Some(d) = ascent_direction(lm, ctx, v, &star, q0, scale) else {
             break;
         };
-        match line_search(lm, ctx, v, d, q0, &mut qs) {
+        match line_search(lm, ctx, v, &star, (d, q0, scale), &mut qs) {
             Some((u, q)) => {
                 lm.set_position_with(v, u, ctx, &qs);
                 q0 = q;
@@ -47,12 +50,20 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
 
 /// A direction (index space, over the free axes, tangent to the level set) along which the
 /// worst tets of the star improve: the normalised sum of their normalised gradients.
-fn ascent_direction(lm: &LocalMesh, ctx: &Ctx, v: u32, q0: f64) -> Option<[f64; 3]> {
+/// `star` is the star of `v`, `scale` [`local_scale`] at `v`.
+fn ascent_direction(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    star: &StarCorners,
+    q0: f64,
+    scale: f64,
+) -> Option<[f64; 3]> {
     let u = lm.u[v as usize];
     let free = lm.con[v as usize].free_axes();
-    let h = 1e-7 * local_scale(lm, v).max(1e-12);
+    let h = 1e-7 * scale.max(1e-12);
     let mut sum = [0.0; 3];
-    for &t in &lm.star[v as usize] {
+    for (i, &t) in lm.star[v as usize].iter().enumerate() {
         let q = lm.q[t as usize];
         if q > q0 + ACTIVE_BAND * q0.abs().max(1e-3) {
             continue;
@@ -62,7 +73,7 @@ fn ascent_direction(lm: &LocalMesh, ctx: &Ctx, v: u32, q0: f64) -> Option<[f64; 
             if free & (1 << a) != 0 {
                 let mut p = u;
                 p[a] += h;
-                g[a] = (tet_quality_with(lm, ctx, t, v, p) - q) / h;
+                g[a] = (star.quality(i, ctx.field.to_physical(p), ctx) - q) / h;
             }
         }
         let n = norm(g);
@@ -93,19 +104,19 @@ fn ascent_direction(lm: &LocalMesh, ctx: &Ctx, v: u32, q0: f64) -> Option<[f64; 
 
 /// Backtracking search along `d` from the vertex's position: the first step (longest first)
 /// that raises the star's worst quality above `q0`, with that quality; the star's qualities
-/// there are left in `qs`.
+/// there are left in `qs`. The first step is a quarter of `scale` ([`local_scale`]).
 fn line_search(
     lm: &LocalMesh,
     ctx: &Ctx,
     v: u32,
-    d: [f64; 3],
-    q0: f64,
+    star: &StarCorners,
+    (d, q0, scale): ([f64; 3], f64, f64),
     qs: &mut Vec<f64>,
 ) -> Option<([f64; 3], f64)> {
     let c = lm.con[v as usize];
     let u = lm.u[v as usize];
     let dims = ctx.field.grid().dims;
-    let mut step = 0.25 * local_scale(lm, v);
+    let mut step = 0.25 * scale;
     let mut hint = 0;
     for _ in 0..HALVINGS {
         let mut p = [0.0; 3];
@@ -119,18 +130,14 @@ fn line_search(
             None => Some(p).filter(|&p| ctx.inside_interval(p)),
         };
         if let Some(p) = p {
-            if lm.star_qualities_above(v, p, ctx, q0 * (1.0 + 1e-9) + 1e-12, qs, &mut hint) {
+            let floor = q0 * (1.0 + 1e-9) + 1e-12;
+            if star.qualities_above(ctx.field.to_physical(p), ctx, floor, qs, &mut hint) {
                 return Some((p, qs.iter().copied().fold(f64::INFINITY, f64::min)));
             }
         }
         step *= 0.5;
     }
     None
-}
-
-/// Quality of tet `t` with vertex `v` at index point `u`.
-fn tet_quality_with(lm: &LocalMesh, ctx: &Ctx, t: u32, v: u32, u: [f64; 3]) -> f64 {
-    ctx.quality(lm.corners_with(t, v, ctx.field.to_physical(u)))
 }
 
 /// Mean index-space length of the edges at `v` (each counted once per tet).
