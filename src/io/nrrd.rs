@@ -52,18 +52,8 @@ fn read_samples(
     count: usize,
     nbytes: usize,
 ) -> Result<Samples, ReadError> {
-    let endian = h.endian.unwrap_or(Endian::Little);
     if let (Some(file), Encoding::Raw, 0) = (&h.data_file, h.encoding, h.line_skip) {
-        let f = open_raw_range(
-            path,
-            file,
-            h.byte_skip,
-            nbytes,
-            h.byte_skip != Skip::FromEnd,
-        )?;
-        let mut buf = SampleBuf::new(path, h.ty, count)?;
-        read_raw_into(path, file, f, buf.bytes_mut())?;
-        return Ok(buf.finish(endian));
+        return read_detached_raw(path, h, file, count, nbytes);
     }
     let all;
     let (block, what) = match &h.data_file {
@@ -82,10 +72,44 @@ fn read_samples(
         }
     };
     let block = skip_lines(path, h, block, &what)?;
+    decode_block(path, h, block, &what, count, nbytes)
+}
+
+/// The `count` samples (`nbytes` bytes) of detached raw data without line skips, read from
+/// the data file `file` of the header `path` straight into the samples' storage.
+fn read_detached_raw(
+    path: &Path,
+    h: &Header,
+    file: &Path,
+    count: usize,
+    nbytes: usize,
+) -> Result<Samples, ReadError> {
+    let f = open_raw_range(
+        path,
+        file,
+        h.byte_skip,
+        nbytes,
+        h.byte_skip != Skip::FromEnd,
+    )?;
+    let mut buf = SampleBuf::new(path, h.ty, count)?;
+    read_raw_into(path, file, f, buf.bytes_mut())?;
+    Ok(buf.finish(h.data_endian()))
+}
+
+/// Decodes the `count` samples (`nbytes` bytes) of `block`, the data after the line skips
+/// (`what` names it in errors), by the header's encoding and byte skip.
+fn decode_block(
+    path: &Path,
+    h: &Header,
+    block: &[u8],
+    what: &str,
+    count: usize,
+    nbytes: usize,
+) -> Result<Samples, ReadError> {
     match h.encoding {
         Encoding::Raw => {
-            let data = raw_data(path, h, block, nbytes, &what)?;
-            checked_decode(path, data, h.ty, endian)
+            let data = raw_data(path, h, block, nbytes, what)?;
+            checked_decode(path, data, h.ty, h.data_endian())
         }
         Encoding::Gzip => {
             // byte skip applies to the decompressed data
@@ -99,14 +123,14 @@ fn read_samples(
             let what = format!("gzip data in {what}");
             let gz = MultiGzDecoder::new(block);
             decompress_into(path, gz, skip, buf.bytes_mut(), true, &what)?;
-            Ok(buf.finish(endian))
+            Ok(buf.finish(h.data_endian()))
         }
         Encoding::Ascii => {
             let byte_skip = match h.byte_skip {
                 Skip::Bytes(n) => n,
                 Skip::FromEnd => 0,
             };
-            let text = skip_bytes(path, block, byte_skip, &what)?;
+            let text = skip_bytes(path, block, byte_skip, what)?;
             Ok(parse_ascii(path, text, count)?.into())
         }
     }
@@ -134,6 +158,14 @@ struct Header {
     byte_skip: Skip,
     /// Offset of the attached data, if the header ended with a blank line.
     data_start: Option<usize>,
+}
+
+impl Header {
+    /// The byte order of the data: the `endian` field, little when there is none (it is
+    /// required only for multi-byte types stored in binary).
+    fn data_endian(&self) -> Endian {
+        self.endian.unwrap_or(Endian::Little)
+    }
 }
 
 /// `block` after the header's `line skip` lines.
