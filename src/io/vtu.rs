@@ -341,12 +341,7 @@ fn xml_header(
         VtuEncoding::Zlib => " compressor=\"vtkZLibDataCompressor\"",
         _ => "",
     };
-    let data_encoding = match encoding {
-        VtuEncoding::Raw => "raw",
-        _ => "base64",
-    };
     let np = point.len();
-    let it = if wide { "Int64" } else { "Int32" };
     let mut h = format!(
         concat!(
             "<?xml version=\"1.0\"?>\n",
@@ -363,7 +358,21 @@ fn xml_header(
         h += &data_arrays(point, &o[..np]);
         h += "      </PointData>\n";
     }
-    h += &format!(
+    h += &geometry_arrays(wide, &o[np..np + 4]);
+    if !cell.is_empty() {
+        h += "      <CellData>\n";
+        h += &data_arrays(cell, &o[np + 4..]);
+        h += "      </CellData>\n";
+    }
+    h += &appended_data_start(encoding);
+    h
+}
+
+/// The `Points` and `Cells` elements: the points, connectivity, offsets and types arrays at
+/// offsets `o` (connectivity and offsets `Int64` if `wide`, else `Int32`).
+fn geometry_arrays(wide: bool, o: &[u64]) -> String {
+    let it = if wide { "Int64" } else { "Int32" };
+    format!(
         concat!(
             "      <Points>\n",
             "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"{o1}\"/>\n",
@@ -375,17 +384,20 @@ fn xml_header(
             "      </Cells>\n",
         ),
         it = it,
-        o1 = o[np],
-        o2 = o[np + 1],
-        o3 = o[np + 2],
-        o4 = o[np + 3],
-    );
-    if !cell.is_empty() {
-        h += "      <CellData>\n";
-        h += &data_arrays(cell, &o[np + 4..]);
-        h += "      </CellData>\n";
-    }
-    h += &format!(
+        o1 = o[0],
+        o2 = o[1],
+        o3 = o[2],
+        o4 = o[3],
+    )
+}
+
+/// Closes the piece and opens the `AppendedData` of `encoding`, up to and including its `_`.
+fn appended_data_start(encoding: VtuEncoding) -> String {
+    let data_encoding = match encoding {
+        VtuEncoding::Raw => "raw",
+        _ => "base64",
+    };
+    format!(
         concat!(
             "    </Piece>\n",
             "  </UnstructuredGrid>\n",
@@ -393,8 +405,7 @@ fn xml_header(
             "   _"
         ),
         enc = data_encoding
-    );
-    h
+    )
 }
 
 /// The `DataArray` lines of `fields` at offsets `o`.
