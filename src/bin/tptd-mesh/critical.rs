@@ -233,45 +233,83 @@ pub(crate) fn warn_critical_bounds(
             .filter(|p| (p.value - bound).abs() <= reach && !grid_value(p))
             .cloned()
             .collect();
-        let flat = face_saddles_in(grid, bound - tol, bound + tol);
-        if let Some((v, p)) = flat.first() {
-            eprintln!(
-                "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} face saddle(s) of \
-                 the bilinear interpolant (e.g. {} at ({:.3}, {:.3}, {:.3}); a checkerboard face \
-                 with corners k, k+1 has its saddle at k+0.5): they are vertices of the \
-                 decomposition, so elements there get a vertex on the bound",
-                fmt_bound(bound),
-                flat.len(),
-                fmt_bound(*v),
-                p[0],
-                p[1],
-                p[2]
-            );
-        }
-        let Some(near) = near_critical(&around, bound, lower, tol) else {
-            continue;
+        let bound = Bound {
+            input,
+            name,
+            value: bound,
+            tol,
         };
-        let first = &near.hits[0];
-        let p = first.position;
-        let safe = |v: Option<(f64, f64)>| {
-            v.filter(|x| (x.0 - bound).abs() < reach)
-                .map_or(format!("none within {}", fmt_bound(reach)), |(x, d)| {
-                    format!("{x:.4} ({d:.4} from the nearest)")
-                })
-        };
+        warn_face_saddles(grid, &bound);
+        warn_near_critical(&bound, &around, lower, reach);
+    }
+}
+
+/// A bound being checked: `--{name} {value}` of `input`, with the warning tolerance `tol`.
+struct Bound<'a> {
+    input: &'a str,
+    name: &'a str,
+    value: f64,
+    tol: f64,
+}
+
+/// Warns when face saddles of the bilinear interpolant lie within `tol` of the bound.
+fn warn_face_saddles(grid: &ScalarGrid, b: &Bound) {
+    let Bound {
+        input,
+        name,
+        value: bound,
+        tol,
+    } = *b;
+    let flat = face_saddles_in(grid, bound - tol, bound + tol);
+    if let Some((v, p)) = flat.first() {
         eprintln!(
-            "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} critical value(s) of \
-             the trilinear field (e.g. {} {} at ({:.3}, {:.3}, {:.3})): the domain pinches there \
-             and its elements degenerate; nearest safer values: {} below, {} above",
+            "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} face saddle(s) of \
+             the bilinear interpolant (e.g. {} at ({:.3}, {:.3}, {:.3}); a checkerboard face \
+             with corners k, k+1 has its saddle at k+0.5): they are vertices of the \
+             decomposition, so elements there get a vertex on the bound",
             fmt_bound(bound),
-            near.hits.len(),
-            first.kind.name(),
-            fmt_bound(first.value),
+            flat.len(),
+            fmt_bound(*v),
             p[0],
             p[1],
-            p[2],
-            safe(near.safe_below),
-            safe(near.safe_above),
+            p[2]
         );
     }
+}
+
+/// Warns when critical values among `around` (those within `reach` of the bound) change the
+/// filtration of the bound (`lower`: `{f >= w}`, else `{f <= w}`) within `tol`, naming the
+/// nearest safer values within `reach`.
+fn warn_near_critical(b: &Bound, around: &[CriticalPoint], lower: bool, reach: f64) {
+    let Bound {
+        input,
+        name,
+        value: bound,
+        tol,
+    } = *b;
+    let Some(near) = near_critical(around, bound, lower, tol) else {
+        return;
+    };
+    let first = &near.hits[0];
+    let p = first.position;
+    let safe = |v: Option<(f64, f64)>| {
+        v.filter(|x| (x.0 - bound).abs() < reach)
+            .map_or(format!("none within {}", fmt_bound(reach)), |(x, d)| {
+                format!("{x:.4} ({d:.4} from the nearest)")
+            })
+    };
+    eprintln!(
+        "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} critical value(s) of \
+         the trilinear field (e.g. {} {} at ({:.3}, {:.3}, {:.3})): the domain pinches there \
+         and its elements degenerate; nearest safer values: {} below, {} above",
+        fmt_bound(bound),
+        near.hits.len(),
+        first.kind.name(),
+        fmt_bound(first.value),
+        p[0],
+        p[1],
+        p[2],
+        safe(near.safe_below),
+        safe(near.safe_above),
+    );
 }
