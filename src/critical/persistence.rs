@@ -35,50 +35,11 @@ struct Graph {
     adj: Vec<u32>,
 }
 
+/// The graph of `grid`: its saddle tets and fans ([`saddle_tets`]), their non-corner vertices
+/// as the extra vertices, and their edges as CSR adjacency.
 fn build_graph(grid: &ScalarGrid) -> Graph {
-    let cd = grid.cell_dims();
-    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
-    // per slab: the tets of cells with a body saddle, and the fans of saddle faces (each face
-    // from the cell whose low side it is, plus the box faces on the high side)
-    let tets: Vec<([u64; 4], [f64; 4])> = (0..cd[2])
-        .into_par_iter()
-        .flat_map_iter(|k| {
-            let mut out = Vec::new();
-            for j in 0..cd[1] {
-                for i in 0..cd[0] {
-                    let v = grid.cell_values(i, j, k);
-                    if body_saddles(&v).1 > 0 {
-                        cell_tets(grid, [i, j, k], &mut out);
-                        continue;
-                    }
-                    let base = grid.index(i, j, k);
-                    for f in 0..6 {
-                        let own = f % 2 == 0 || [i, j, k][f / 2] + 1 == cd[f / 2];
-                        let Some(s) = face_saddle(&v, f).filter(|_| own) else {
-                            continue;
-                        };
-                        let key = local_key(base, stride, 8 + f);
-                        let fc = face_corners(f);
-                        // a degenerate "tet" (s, corner, corner, corner) whose edges include the fan
-                        for t in 0..2 {
-                            let (a, b) = (fc[2 * t], fc[2 * t + 1]);
-                            let ka = local_key(base, stride, a);
-                            let kb = local_key(base, stride, b);
-                            out.push(([key, ka, kb, kb], [s.value, v[a], v[b], v[b]]));
-                        }
-                    }
-                }
-            }
-            out
-        })
-        .collect();
-    let mut extra: Vec<(u64, f64)> = tets
-        .iter()
-        .flat_map(|(k, v)| k.iter().copied().zip(v.iter().copied()))
-        .filter(|(k, _)| k & 7 != CORNER)
-        .collect();
-    extra.par_sort_unstable_by_key(|x| x.0);
-    extra.dedup_by_key(|x| x.0);
+    let tets = saddle_tets(grid);
+    let extra = extra_vertices(&tets);
     let n = grid.num_vertices();
     let extra_keys: Vec<u64> = extra.iter().map(|x| x.0).collect();
     let id = |k: u64| -> u32 {
@@ -88,10 +49,85 @@ fn build_graph(grid: &ScalarGrid) -> Graph {
             (n + extra_keys.binary_search(&k).expect("saddle key")) as u32
         }
     };
+    let (start, adj) = csr_edges(&tets, id, n + extra_keys.len());
+    Graph {
+        extra_values: extra.iter().map(|x| x.1).collect(),
+        extra_keys,
+        start,
+        adj,
+    }
+}
+
+/// Keys and values of the tets that carry the saddles' connections: per slab, the TPTD tets
+/// of cells with a body saddle, and the fans of saddle faces (each face from the cell whose
+/// low side it is, plus the box faces on the high side; see [`face_fans`]).
+fn saddle_tets(grid: &ScalarGrid) -> Vec<([u64; 4], [f64; 4])> {
+    let cd = grid.cell_dims();
+    (0..cd[2])
+        .into_par_iter()
+        .flat_map_iter(|k| {
+            let mut out = Vec::new();
+            for j in 0..cd[1] {
+                for i in 0..cd[0] {
+                    let v = grid.cell_values(i, j, k);
+                    if body_saddles(&v).1 > 0 {
+                        cell_tets(grid, [i, j, k], &mut out);
+                    } else {
+                        face_fans(grid, [i, j, k], &v, &mut out);
+                    }
+                }
+            }
+            out
+        })
+        .collect()
+}
+
+/// Appends the fans of the saddle faces that cell `c` (corner values `v`) owns: each face
+/// saddle joined to its four face corners, as two degenerate "tets" (saddle, corner, corner,
+/// corner) whose edges include the fan.
+fn face_fans(grid: &ScalarGrid, c: [usize; 3], v: &[f64; 8], out: &mut Vec<([u64; 4], [f64; 4])>) {
+    let cd = grid.cell_dims();
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let base = grid.index(c[0], c[1], c[2]);
+    for f in 0..6 {
+        let own = f % 2 == 0 || c[f / 2] + 1 == cd[f / 2];
+        let Some(s) = face_saddle(v, f).filter(|_| own) else {
+            continue;
+        };
+        let key = local_key(base, stride, 8 + f);
+        let fc = face_corners(f);
+        for t in 0..2 {
+            let (a, b) = (fc[2 * t], fc[2 * t + 1]);
+            let ka = local_key(base, stride, a);
+            let kb = local_key(base, stride, b);
+            out.push(([key, ka, kb, kb], [s.value, v[a], v[b], v[b]]));
+        }
+    }
+}
+
+/// The distinct non-corner vertices (saddles) of `tets` with their values, sorted by key.
+fn extra_vertices(tets: &[([u64; 4], [f64; 4])]) -> Vec<(u64, f64)> {
+    let mut extra: Vec<(u64, f64)> = tets
+        .iter()
+        .flat_map(|(k, v)| k.iter().copied().zip(v.iter().copied()))
+        .filter(|(k, _)| k & 7 != CORNER)
+        .collect();
+    extra.par_sort_unstable_by_key(|x| x.0);
+    extra.dedup_by_key(|x| x.0);
+    extra
+}
+
+/// The edges of `tets` over the dense ids `id` (`total` of them), both ways and without
+/// repeats, as CSR `(start, adj)`.
+fn csr_edges(
+    tets: &[([u64; 4], [f64; 4])],
+    id: impl Fn(u64) -> u32 + Sync,
+    total: usize,
+) -> (Vec<u32>, Vec<u32>) {
     let mut pairs: Vec<[u32; 2]> = tets
         .par_iter()
         .flat_map_iter(|(k, _)| {
-            let t = k.map(id);
+            let t = k.map(&id);
             [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
                 .into_iter()
                 .flat_map(move |(a, b)| [[t[a], t[b]], [t[b], t[a]]])
@@ -99,7 +135,6 @@ fn build_graph(grid: &ScalarGrid) -> Graph {
         .collect();
     pairs.par_sort_unstable();
     pairs.dedup();
-    let total = n + extra_keys.len();
     let mut start = vec![0u32; total + 1];
     for p in &pairs {
         start[p[0] as usize + 1] += 1;
@@ -107,12 +142,7 @@ fn build_graph(grid: &ScalarGrid) -> Graph {
     for i in 0..total {
         start[i + 1] += start[i];
     }
-    Graph {
-        extra_values: extra.iter().map(|x| x.1).collect(),
-        extra_keys,
-        start,
-        adj: pairs.iter().map(|p| p[1]).collect(),
-    }
+    (start, pairs.iter().map(|p| p[1]).collect())
 }
 
 /// Order-preserving integer image of a finite f64.
@@ -176,9 +206,7 @@ fn sweep(
     value: &dyn Fn(usize) -> f64,
 ) -> Vec<f64> {
     let mut pers = vec![0.0f64; order.len()];
-    let n = grid.num_vertices();
     let total = order.len();
-    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
     let mut parent: Vec<u32> = (0..total as u32).collect();
     // birth vertex of each root; u32::MAX = not yet processed
     let mut birth = vec![u32::MAX; total];
@@ -197,46 +225,14 @@ fn sweep(
         Box::new(order.iter())
     };
     for &(_, x) in seq {
-        roots.clear();
         let xi = x as usize;
-        let visit = |y: u32, parent: &mut Vec<u32>, roots: &mut Vec<u32>| {
-            if birth[y as usize] != u32::MAX {
-                let r = find(parent, y);
-                if !roots.contains(&r) {
-                    roots.push(r);
-                }
-            }
-        };
-        if xi < n {
-            let p = grid.vertex_ijk(xi);
-            for a in 0..3 {
-                if p[a] > 0 {
-                    visit((xi - stride[a]) as u32, &mut parent, &mut roots);
-                }
-                if p[a] + 1 < grid.dims[a] {
-                    visit((xi + stride[a]) as u32, &mut parent, &mut roots);
-                }
-            }
-        }
-        for &y in &g.adj[g.start[xi] as usize..g.start[xi + 1] as usize] {
-            visit(y, &mut parent, &mut roots);
-        }
+        neighbour_roots(grid, g, xi, &birth, &mut parent, &mut roots);
         if roots.is_empty() {
             birth[xi] = x;
             pers[xi] = f64::INFINITY;
             continue;
         }
-        // the elder root is the one born first
-        let elder = *roots
-            .iter()
-            .min_by(|&&a, &&b| {
-                if before(birth[a as usize], birth[b as usize]) {
-                    std::cmp::Ordering::Less
-                } else {
-                    std::cmp::Ordering::Greater
-                }
-            })
-            .expect("non-empty");
+        let elder = elder_root(&roots, &birth, before);
         let fx = value(xi);
         for &r in &roots {
             if r != elder {
@@ -256,6 +252,57 @@ fn sweep(
         birth[xi] = birth[elder as usize];
     }
     pers
+}
+
+/// Fills `roots` with the distinct roots of the processed neighbours of vertex id `xi` (those
+/// with a `birth`): its grid neighbours along the axes if it is a grid vertex, and its extra
+/// edges in `g`.
+fn neighbour_roots(
+    grid: &ScalarGrid,
+    g: &Graph,
+    xi: usize,
+    birth: &[u32],
+    parent: &mut [u32],
+    roots: &mut Vec<u32>,
+) {
+    roots.clear();
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let visit = |y: u32, parent: &mut [u32], roots: &mut Vec<u32>| {
+        if birth[y as usize] != u32::MAX {
+            let r = find(parent, y);
+            if !roots.contains(&r) {
+                roots.push(r);
+            }
+        }
+    };
+    if xi < grid.num_vertices() {
+        let p = grid.vertex_ijk(xi);
+        for a in 0..3 {
+            if p[a] > 0 {
+                visit((xi - stride[a]) as u32, parent, roots);
+            }
+            if p[a] + 1 < grid.dims[a] {
+                visit((xi + stride[a]) as u32, parent, roots);
+            }
+        }
+    }
+    for &y in &g.adj[g.start[xi] as usize..g.start[xi + 1] as usize] {
+        visit(y, parent, roots);
+    }
+}
+
+/// The elder of the non-empty `roots`: the one born first (`before` on the birth vertices).
+fn elder_root(roots: &[u32], birth: &[u32], before: impl Fn(u32, u32) -> bool) -> u32 {
+    *roots
+        .iter()
+        .min_by(|&&a, &&b| {
+            if before(birth[a as usize], birth[b as usize]) {
+                std::cmp::Ordering::Less
+            } else {
+                std::cmp::Ordering::Greater
+            }
+        })
+        .expect("non-empty")
 }
 
 /// Sets [`CriticalPoint::persistence`] of every point from its vertices' spans (a region: the
