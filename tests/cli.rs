@@ -428,7 +428,7 @@ fn quality_improves_the_demo_and_reports_before_and_after() {
     assert_eq!(r["betti"], serde_json::json!([2, 0, 0]));
     // every tet left below 5° is listed with a reason
     let c = &q["forced"]["counts"];
-    let listed: u64 = ["near_critical", "box_angle", "unexplained"]
+    let listed: u64 = ["near_critical", "thin_layer", "box_angle", "unexplained"]
         .iter()
         .map(|k| c[k].as_u64().unwrap())
         .sum();

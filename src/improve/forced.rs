@@ -9,6 +9,13 @@
 //!   `δ = |s − level|` leaves a neck of width `w = 2·sqrt(δ / k)` voxels; a tet whose longest
 //!   edge `L` crosses it has a dihedral angle of about `w / L` there, so with no vertex
 //!   insertion the floor cannot hold when `w < L · floor` (radians).
+//! * `thin_layer`: the domain between the alpha and beta level sets is thinner at the tet than
+//!   `L · floor` (`L` its longest edge). The thickness `h` is the smaller of the shortest
+//!   distance between a corner on alpha and one on beta (a bound: that segment crosses the
+//!   layer) and `(beta − alpha) / |∇f|` at the centroid (first order). A tet inside a layer of
+//!   thickness `h` with extent `L` along it has a dihedral angle of about `h / L`, and the pass
+//!   adds no vertices, so it cannot make `L` smaller than the boundary's own spacing. Like the
+//!   neck rule, this is an estimate; both numbers are in the report.
 //! * `box_angle`: the tet has an edge (or a face) on a grid box plane and one on a level set,
 //!   and the level set meets the box at an interior dihedral angle below the floor at the tet.
 //! * `unexplained`: neither; the pass failed there.
@@ -21,7 +28,7 @@ use super::quality::tet_dihedral_range;
 use super::QualityOptions;
 use crate::critical::find::vertex_class;
 use crate::grid::{corner_offset, ScalarGrid};
-use crate::mesh::TetMesh;
+use crate::mesh::{BoundaryLabel, TetMesh};
 use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle};
 
 /// Why an element stays below the floor.
@@ -30,6 +37,9 @@ use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle};
 pub enum ForcedReason {
     /// A critical value of the field near a bound pinches the domain in a cell it touches.
     NearCritical,
+    /// The layer between the alpha and beta level sets is thinner than the element can span
+    /// above the floor.
+    ThinLayer,
     /// A level set meets the grid box at an angle below the floor at the element.
     BoxAngle,
     /// No domain reason found: the pass failed there.
@@ -54,6 +64,9 @@ pub struct ForcedElement {
     pub critical_distance: Option<f64>,
     /// Narrowest neck `2·sqrt(δ / k)` (voxels) at those critical points.
     pub neck_width: Option<f64>,
+    /// Thickness (voxels) of the layer between the alpha and beta level sets at the tet (see
+    /// [`ForcedReason::ThinLayer`]; `None` for a one-sided interval).
+    pub layer_thickness: Option<f64>,
     /// Smallest interior dihedral angle (degrees) between a box plane and a level set at the
     /// tet, when it has an edge on each.
     pub box_angle: Option<f64>,
@@ -64,6 +77,8 @@ pub struct ForcedElement {
 pub struct ForcedCounts {
     /// [`ForcedReason::NearCritical`].
     pub near_critical: usize,
+    /// [`ForcedReason::ThinLayer`].
+    pub thin_layer: usize,
     /// [`ForcedReason::BoxAngle`].
     pub box_angle: usize,
     /// [`ForcedReason::Unexplained`].
@@ -86,7 +101,10 @@ pub struct ForcedReport {
 impl ForcedReport {
     /// Elements below the floor in all.
     pub fn total(&self) -> usize {
-        self.counts.near_critical + self.counts.box_angle + self.counts.unexplained
+        self.counts.near_critical
+            + self.counts.thin_layer
+            + self.counts.box_angle
+            + self.counts.unexplained
     }
 }
 
@@ -99,6 +117,8 @@ struct Classifier<'a> {
     /// The floor, radians.
     floor: f64,
     tol: f64,
+    /// Per point: bit `1 << label` of the boundary triangles around it.
+    labels: Vec<u8>,
 }
 
 /// Classifies every tet of `mesh` (a mesh of `{alpha <= f <= beta}` of `grid`, in the grid's
@@ -120,6 +140,7 @@ pub fn classify_forced(
         range: (hi - lo).max(f64::MIN_POSITIVE),
         floor: floor.to_radians(),
         tol: opts.forced_critical_tol,
+        labels: vertex_labels(mesh),
     };
     let mut elements: Vec<ForcedElement> = (0..mesh.tets.len())
         .into_par_iter()
@@ -132,6 +153,7 @@ pub fn classify_forced(
     for e in &elements {
         *match e.reason {
             ForcedReason::NearCritical => &mut counts.near_critical,
+            ForcedReason::ThinLayer => &mut counts.thin_layer,
             ForcedReason::BoxAngle => &mut counts.box_angle,
             ForcedReason::Unexplained => &mut counts.unexplained,
         } += 1;
@@ -148,6 +170,17 @@ pub fn classify_forced(
         counts,
         elements,
     }
+}
+
+/// Per point: bits `1 << label` of the boundary triangles around it.
+fn vertex_labels(mesh: &TetMesh) -> Vec<u8> {
+    let mut bits = vec![0u8; mesh.points.len()];
+    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
+        for &v in tri {
+            bits[v as usize] |= 1 << (label as u8);
+        }
+    }
+    bits
 }
 
 fn tet_points(mesh: &TetMesh, t: usize) -> [[f64; 3]; 4] {
@@ -191,10 +224,13 @@ impl Classifier<'_> {
             .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
             .map(|(i, j)| dot(sub(index[i], index[j]), sub(index[i], index[j])).sqrt())
             .fold(0.0, f64::max);
+        let layer_thickness = self.layer_thickness(self.mesh.tets[t], &index);
         let reason = if critical_distance.is_some_and(|d| d <= self.tol)
             || neck_width.is_some_and(|w| w < longest * self.floor)
         {
             ForcedReason::NearCritical
+        } else if layer_thickness.is_some_and(|h| h < longest * self.floor) {
+            ForcedReason::ThinLayer
         } else if box_angle.is_some_and(|a| a.to_radians() < self.floor) {
             ForcedReason::BoxAngle
         } else {
@@ -208,8 +244,32 @@ impl Classifier<'_> {
             point: centroid,
             critical_distance,
             neck_width,
+            layer_thickness,
             box_angle,
         }
+    }
+
+    /// How thick (index space) the layer between the two level sets is at the tet: the
+    /// shortest distance between a corner on the alpha level set and one on the beta level
+    /// set (a bound: the segment crosses the layer), and `(beta − alpha) / |∇f|` at the
+    /// centroid (the first-order distance between the level sets), whichever is smaller.
+    /// `None` for a one-sided interval.
+    fn layer_thickness(&self, tet: [u32; 4], index: &[[f64; 3]; 4]) -> Option<f64> {
+        let gap = self.levels[1] - self.levels[0];
+        if !gap.is_finite() {
+            return None;
+        }
+        let centroid = [0, 1, 2].map(|a| index.iter().map(|u| u[a]).sum::<f64>() / 4.0);
+        let (_, g) = self.field.value_gradient(centroid);
+        let mut thinnest = gap / dot(g, g).sqrt();
+        let on = |i: usize, l: BoundaryLabel| self.labels[tet[i] as usize] & (1 << l as u8) != 0;
+        for i in (0..4).filter(|&i| on(i, BoundaryLabel::Alpha)) {
+            for j in (0..4).filter(|&j| j != i && on(j, BoundaryLabel::Beta)) {
+                thinnest =
+                    thinnest.min(dot(sub(index[i], index[j]), sub(index[i], index[j])).sqrt());
+            }
+        }
+        Some(thinnest)
     }
 
     /// Over the critical points in the cells touched by the tet with index-space corners
@@ -432,5 +492,35 @@ mod tests {
             .elements
             .windows(2)
             .all(|w| w[0].min_dihedral <= w[1].min_dihedral));
+    }
+
+    #[test]
+    fn a_layer_thinner_than_the_floor_allows_is_thin_layer() {
+        // {6 <= |x − c| <= 6.04}: a spherical shell 0.04 voxel thick, spanned by tets with a
+        // corner on each sphere and edges along it about a voxel long (a tenth of a voxel
+        // thick, the pass still reaches 5.5°).
+        let c = 9.3;
+        let g = grid([20, 20, 20], |x, y, z| {
+            ((x - c).powi(2) + (y - c).powi(2) + (z - c).powi(2)).sqrt()
+        });
+        let (mesh, r) = run(&g, 6.0, 6.04, &QualityOptions::default());
+        let below = (0..mesh.tets.len())
+            .filter(|&t| tet_dihedral_range(tet_points(&mesh, t)).0 < 5.0)
+            .count();
+        assert_eq!(r.total(), below);
+        assert!(r.counts.thin_layer > 0, "{:?}", r.counts);
+        assert_eq!(r.counts.unexplained, 0, "{:?}", r.counts);
+        for e in r
+            .elements
+            .iter()
+            .filter(|e| e.reason == ForcedReason::ThinLayer)
+        {
+            let h = e.layer_thickness.unwrap();
+            // The trilinear gradient of |x − c| is a little steeper than 1 between samples.
+            assert!((0.035..0.2).contains(&h), "{e:?}");
+        }
+        // The same shell twenty times thicker lists no thin layer.
+        let (_, r) = run(&g, 6.0, 8.0, &QualityOptions::default());
+        assert_eq!(r.counts.thin_layer, 0, "{:?}", r.counts);
     }
 }

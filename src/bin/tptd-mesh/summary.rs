@@ -169,9 +169,9 @@ fn quality_lines(s: &mut String, r: &Report) {
         let c = &f.counts;
         let _ = writeln!(
             s,
-            "            below {} deg after: {} near a critical value, {} at a sharp box angle, {} \
-             unexplained",
-            f.floor_degrees, c.near_critical, c.box_angle, c.unexplained
+            "            below {} deg after: {} near a critical value, {} in a thin layer, {} at a \
+             sharp box angle, {} unexplained",
+            f.floor_degrees, c.near_critical, c.thin_layer, c.box_angle, c.unexplained
         );
     }
 }
