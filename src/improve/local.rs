@@ -212,6 +212,7 @@ impl LocalMesh {
             .collect();
         let mut lm = LocalMesh::with_vertices(mesh, global, frozen, &ctx.field);
         lm.weight = ctx.obtuse_weight;
+        lm.reserve_tets(&local_tets);
         for t in local_tets {
             lm.add_tet(t);
         }
@@ -247,6 +248,24 @@ impl LocalMesh {
                 vertex_failed: vec![0; n],
             },
         }
+    }
+
+    /// Makes room for `tets` (and the stars of their corners) at once, so that adding them
+    /// reallocates nothing.
+    fn reserve_tets(&mut self, tets: &[[u32; 4]]) {
+        let mut size = vec![0u32; self.star.len()];
+        for t in tets {
+            for &v in t {
+                size[v as usize] += 1;
+            }
+        }
+        for (star, &n) in self.star.iter_mut().zip(&size) {
+            star.reserve_exact(n as usize);
+        }
+        self.tets.reserve(tets.len());
+        self.alive.reserve(tets.len());
+        self.q.reserve(tets.len());
+        self.memo.tet_failed.reserve(tets.len());
     }
 
     /// Adds boundary face `f`.
