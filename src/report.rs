@@ -152,6 +152,8 @@ pub struct Report {
 pub struct QualitySection {
     /// Target smallest and largest dihedral angle (degrees).
     pub target_degrees: [f64; 2],
+    /// `--boundary-collapse-ratio` (`None`: no limit).
+    pub boundary_collapse_ratio: Option<f64>,
     /// Quality of the mesh as extracted.
     pub before: Option<QualitySummary>,
     /// Quality after the pass.

@@ -434,6 +434,26 @@ fn quality_improves_the_demo_and_reports_before_and_after() {
         .sum();
     assert_eq!(Some(listed), after["below"][0].as_u64(), "{q}");
     assert!(out.contains("below 5 deg after:"), "{out}");
+    assert_eq!(q["boundary_collapse_ratio"], Value::Null);
+    // A limit on boundary collapses is used and recorded.
+    let o = run_in(
+        dir.path(),
+        &[
+            "--demo",
+            "-o",
+            "r.msh",
+            "--quality",
+            "--boundary-collapse-ratio",
+            "1.5",
+            "--report",
+            "r.json",
+        ],
+    );
+    assert_ok(&o);
+    let r: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    assert_eq!(r["quality"]["boundary_collapse_ratio"].as_f64(), Some(1.5));
+    assert_eq!(r["betti"], serde_json::json!([2, 0, 0]));
 }
 
 #[test]
@@ -471,6 +491,8 @@ fn quality_rejects_impossible_angles() {
         ["--min-angle", "75"],
         ["--max-angle", "60"],
         ["--quality-time", "0"],
+        ["--boundary-collapse-ratio", "0"],
+        ["--boundary-collapse-ratio", "inf"],
     ] {
         let mut all = vec!["--demo", "-o", "x.vtu", "--quality"];
         all.extend(args);

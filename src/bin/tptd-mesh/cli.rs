@@ -105,6 +105,12 @@ pub(crate) struct Cli {
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub(crate) quality_time: Option<f64>,
 
+    /// With --quality, merge two boundary nodes only along an edge shorter than R times the
+    /// mean edge length at the node removed (default: no limit). A limit of 2–3 keeps thin
+    /// layers such as shells finer, so their elements stay better shaped
+    #[arg(long, value_name = "R", value_parser = parse_ratio)]
+    pub(crate) boundary_collapse_ratio: Option<f64>,
+
     /// Mesh a generated sample (two vessels a third of a voxel apart) with the interval
     /// [0.5, inf) and show what the decomposition preserves
     #[arg(long, conflicts_with = "input")]
@@ -280,6 +286,14 @@ fn parse_angle(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
         _ => Err(format!(
             "expected an angle in degrees between {lo} and {hi}, got '{s}'"
         )),
+    }
+}
+
+/// Parses `--boundary-collapse-ratio`: a positive number.
+fn parse_ratio(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(r) if r > 0.0 && r.is_finite() => Ok(r),
+        _ => Err(format!("expected a positive ratio, got '{s}'")),
     }
 }
 
