@@ -5,10 +5,14 @@
 //!   face or body saddle) in a cell the tet touches has a value `s` near alpha or beta: either
 //!   `|s − level|` is within the tolerance (relative to the data range, as `--critical-tol`),
 //!   or the neck (or gap) the level set makes there is narrower than the tet can span above the
-//!   floor. Near a saddle with Hessian magnitude `k` (index units) the level set at
-//!   `δ = |s − level|` leaves a neck of width `w = 2·sqrt(δ / k)` voxels; a tet whose longest
-//!   edge `L` crosses it has a dihedral angle of about `w / L` there, so with no vertex
-//!   insertion the floor cannot hold when `w < L · floor` (radians).
+//!   floor. The neck's width `w` is measured: along each of the 13 lattice directions through
+//!   the critical point, the distance between the first crossings of the level on either side
+//!   (the smallest; an upper bound of the true width). Where no direction crosses on both
+//!   sides within 2 voxels, the quadratic estimate `w = 2·sqrt(δ / k)` (`δ = |s − level|`, `k`
+//!   the Hessian magnitude) stands in. (At a critical *grid vertex* the field is only piecewise
+//!   smooth and grows linearly away from it, so the estimate there can be several times too
+//!   wide.) A tet whose longest edge `L` crosses the neck has a dihedral angle of about `w / L`
+//!   there, so with no vertex insertion the floor cannot hold when `w < L · floor` (radians).
 //! * `thin_layer`: the domain between the alpha and beta level sets is thinner at the tet than
 //!   `L · floor` (`L` its longest edge). The thickness `h` is the smaller of the shortest
 //!   distance between a corner on alpha and one on beta (a bound: that segment crosses the
@@ -62,7 +66,8 @@ pub struct ForcedElement {
     /// Smallest `|critical value − bound|` over the cells the tet touches, relative to the
     /// data range (`None`: no critical point there).
     pub critical_distance: Option<f64>,
-    /// Narrowest neck `2·sqrt(δ / k)` (voxels) at those critical points.
+    /// Narrowest neck or gap (voxels) the nearer level leaves at those critical points,
+    /// measured across them (see the module documentation).
     pub neck_width: Option<f64>,
     /// Thickness (voxels) of the layer between the alpha and beta level sets at the tet (see
     /// [`ForcedReason::ThinLayer`]; `None` for a one-sided interval).
@@ -107,6 +112,27 @@ impl ForcedReport {
             + self.counts.unexplained
     }
 }
+
+/// How far (voxels) [`Classifier::measured_width`] looks on either side of a critical point.
+const WIDTH_REACH: f64 = 2.0;
+/// Its sampling step (voxels); crossings are then refined by bisection.
+const WIDTH_STEP: f64 = 0.01;
+/// The 13 lattice directions: the axes, the face diagonals and the body diagonals.
+const LATTICE_DIRECTIONS: [[f64; 3]; 13] = [
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+    [1.0, 1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [1.0, 0.0, 1.0],
+    [1.0, 0.0, -1.0],
+    [0.0, 1.0, 1.0],
+    [0.0, 1.0, -1.0],
+    [1.0, 1.0, 1.0],
+    [1.0, 1.0, -1.0],
+    [1.0, -1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
 
 /// Everything the classification of one tet needs.
 struct Classifier<'a> {
@@ -281,13 +307,18 @@ impl Classifier<'_> {
         for k in lo[2]..=hi[2] {
             for j in lo[1]..=hi[1] {
                 for i in lo[0]..=hi[0] {
-                    for (v, hess) in self.cell_critical_points([i, j, k]) {
-                        let d = self.levels.map(|l| (v - l).abs());
-                        let d = d[0].min(d[1]);
+                    for (v, hess, pos) in self.cell_critical_points([i, j, k]) {
+                        let (d, level) = if (v - self.levels[0]).abs() <= (v - self.levels[1]).abs()
+                        {
+                            ((v - self.levels[0]).abs(), self.levels[0])
+                        } else {
+                            ((v - self.levels[1]).abs(), self.levels[1])
+                        };
                         let w = if d == 0.0 {
                             0.0
                         } else {
-                            2.0 * (d / hess).sqrt()
+                            self.measured_width(pos, level)
+                                .unwrap_or(2.0 * (d / hess).sqrt())
                         };
                         dist = Some(dist.map_or(d / self.range, |b| b.min(d / self.range)));
                         neck = Some(neck.map_or(w, |b| b.min(w)));
@@ -298,30 +329,82 @@ impl Classifier<'_> {
         (dist, neck)
     }
 
+    /// The width of the neck (or gap) the level set `level` makes at the critical point at
+    /// index point `c`, measured: along each of the 13 lattice directions through `c`, the
+    /// distance between the first crossings of the level on either side; the smallest. `None`
+    /// when no direction crosses on both sides within [`WIDTH_REACH`] voxels.
+    fn measured_width(&self, c: [f64; 3], level: f64) -> Option<f64> {
+        let side = (self.field.value(c) - level).signum();
+        let mut best: Option<f64> = None;
+        for d in LATTICE_DIRECTIONS {
+            let n = dot(d, d).sqrt();
+            let d = d.map(|x| x / n);
+            let ahead = self.crossing(c, d, level, side);
+            let behind = self.crossing(c, d.map(|x| -x), level, side);
+            if let (Some(a), Some(b)) = (ahead, behind) {
+                best = Some(best.map_or(a + b, |w: f64| w.min(a + b)));
+            }
+        }
+        best
+    }
+
+    /// The distance from `c` along unit direction `d` to where `f − level` first leaves the
+    /// sign `side` (to 1e-6 voxel), within [`WIDTH_REACH`] and the grid box.
+    fn crossing(&self, c: [f64; 3], d: [f64; 3], level: f64, side: f64) -> Option<f64> {
+        let dims = self.field.grid().dims;
+        let at = |t: f64| [0, 1, 2].map(|a| c[a] + t * d[a]);
+        let inside = |p: [f64; 3]| (0..3).all(|a| p[a] >= 0.0 && p[a] <= (dims[a] - 1) as f64);
+        let crossed = |t: f64| (self.field.value(at(t)) - level) * side <= 0.0;
+        let mut t = 0.0;
+        while t < WIDTH_REACH {
+            let next = t + WIDTH_STEP;
+            if !inside(at(next)) {
+                return None;
+            }
+            if crossed(next) {
+                let (mut lo, mut hi) = (t, next);
+                while hi - lo > 1e-6 {
+                    let mid = 0.5 * (lo + hi);
+                    if crossed(mid) {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                return Some(hi);
+            }
+            t = next;
+        }
+        None
+    }
+
     /// Critical points in cell `c` as (value, Hessian magnitude there): its critical (or
     /// plateau) corners, its face saddles and its body saddles.
-    fn cell_critical_points(&self, c: [usize; 3]) -> Vec<(f64, f64)> {
+    fn cell_critical_points(&self, c: [usize; 3]) -> Vec<(f64, f64, [f64; 3])> {
         let grid = self.field.grid();
         let v = grid.cell_values(c[0], c[1], c[2]);
         let k = coefficients(&v);
+        let at = |local: [f64; 3]| [0, 1, 2].map(|a| c[a] as f64 + local[a]);
         let mut out = Vec::new();
         for (corner, &value) in v.iter().enumerate() {
             let o = corner_offset(corner);
             let p = [0, 1, 2].map(|a| c[a] + o[a]);
             if vertex_class(grid, p).is_none_or(|class| class.critical()) {
-                out.push((value, hessian_magnitude(&k, o.map(|x| x as f64))));
+                let local = o.map(|x| x as f64);
+                out.push((value, hessian_magnitude(&k, local), at(local)));
             }
         }
         for f in 0..6 {
             if let Some(s) = face_saddle(&v, f) {
-                out.push((s.value, hessian_magnitude(&k, face_point(f, s.uv))));
+                let local = face_point(f, s.uv);
+                out.push((s.value, hessian_magnitude(&k, local), at(local)));
             }
         }
         let (bs, n) = body_saddles(&v);
         out.extend(
             bs[..n]
                 .iter()
-                .map(|s| (s.value, hessian_magnitude(&k, s.pos))),
+                .map(|s| (s.value, hessian_magnitude(&k, s.pos), at(s.pos))),
         );
         out
     }
@@ -522,5 +605,35 @@ mod tests {
         // The same shell twenty times thicker lists no thin layer.
         let (_, r) = run(&g, 6.0, 8.0, &QualityOptions::default());
         assert_eq!(r.counts.thin_layer, 0, "{:?}", r.counts);
+    }
+
+    #[test]
+    fn the_neck_width_is_measured_across_the_saddle() {
+        // f = (x − 5.5)(y − 5.5): bilinear, so the interpolant is f itself, with a face saddle
+        // of value 0 at x = y = 5.5. The level 0.01 makes a gap between the hyperbola's
+        // branches of 2·sqrt(2 · 0.01) along the diagonal (1, 1).
+        let g = grid([12, 12, 6], |x, y, _| (x - 5.5) * (y - 5.5));
+        let mesh = TetMesh::default();
+        let c = Classifier {
+            mesh: &mesh,
+            field: Field::new(&g),
+            levels: [0.01, f64::INFINITY],
+            range: 1.0,
+            floor: 5f64.to_radians(),
+            tol: 1e-5,
+            labels: Vec::new(),
+        };
+        let w = c.measured_width([5.5, 5.5, 2.5], 0.01).unwrap();
+        assert!((w - 2.0 * 0.02f64.sqrt()).abs() < 1e-5, "{w}");
+        // The quadratic estimate 2·sqrt(δ / k) (k = 1 here) says 0.2; the cell's own saddle
+        // is found and measured.
+        let (dist, neck) = c.nearest_critical(&[
+            [5.2, 5.2, 2.2],
+            [5.8, 5.2, 2.2],
+            [5.2, 5.8, 2.2],
+            [5.2, 5.2, 2.8],
+        ]);
+        assert!((dist.unwrap() - 0.01).abs() < 1e-12);
+        assert!((neck.unwrap() - w).abs() < 1e-9, "{neck:?}");
     }
 }
