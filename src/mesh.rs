@@ -60,6 +60,18 @@ pub struct TetMesh {
 pub(crate) const VOLUME_BLOCK: usize = 1 << 14;
 
 impl TetMesh {
+    /// Per point: bit `1 << label` for each [`BoundaryLabel`] of the boundary triangles around
+    /// it (0 for interior points).
+    pub fn vertex_label_bits(&self) -> Vec<u8> {
+        let mut bits = vec![0u8; self.points.len()];
+        for (tri, &label) in self.boundary.iter().zip(&self.boundary_labels) {
+            for &v in tri {
+                bits[v as usize] |= 1 << (label as u8);
+            }
+        }
+        bits
+    }
+
     /// Signed volume of tet `t` (positive for the mesher's output).
     pub fn tet_volume(&self, t: usize) -> f64 {
         let [a, b, c, d] = self.tets[t].map(|i| self.points[i as usize]);

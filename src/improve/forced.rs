@@ -166,7 +166,7 @@ pub fn classify_forced(
         range: (hi - lo).max(f64::MIN_POSITIVE),
         floor: floor.to_radians(),
         tol: opts.forced_critical_tol,
-        labels: vertex_labels(mesh),
+        labels: mesh.vertex_label_bits(),
     };
     let mut elements: Vec<ForcedElement> = (0..mesh.tets.len())
         .into_par_iter()
@@ -198,15 +198,10 @@ pub fn classify_forced(
     }
 }
 
-/// Per point: bits `1 << label` of the boundary triangles around it.
-fn vertex_labels(mesh: &TetMesh) -> Vec<u8> {
-    let mut bits = vec![0u8; mesh.points.len()];
-    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
-        for &v in tri {
-            bits[v as usize] |= 1 << (label as u8);
-        }
-    }
-    bits
+/// Euclidean distance between `a` and `b`.
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d = sub(a, b);
+    dot(d, d).sqrt()
 }
 
 fn tet_points(mesh: &TetMesh, t: usize) -> [[f64; 3]; 4] {
@@ -248,7 +243,7 @@ impl Classifier<'_> {
         let box_angle = self.box_angle(self.mesh.tets[t], &index);
         let longest = (0..4)
             .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
-            .map(|(i, j)| dot(sub(index[i], index[j]), sub(index[i], index[j])).sqrt())
+            .map(|(i, j)| distance(index[i], index[j]))
             .fold(0.0, f64::max);
         let layer_thickness = self.layer_thickness(self.mesh.tets[t], &index);
         let reason = if critical_distance.is_some_and(|d| d <= self.tol)
@@ -291,8 +286,7 @@ impl Classifier<'_> {
         let on = |i: usize, l: BoundaryLabel| self.labels[tet[i] as usize] & (1 << l as u8) != 0;
         for i in (0..4).filter(|&i| on(i, BoundaryLabel::Alpha)) {
             for j in (0..4).filter(|&j| j != i && on(j, BoundaryLabel::Beta)) {
-                thinnest =
-                    thinnest.min(dot(sub(index[i], index[j]), sub(index[i], index[j])).sqrt());
+                thinnest = thinnest.min(distance(index[i], index[j]));
             }
         }
         Some(thinnest)
@@ -300,7 +294,8 @@ impl Classifier<'_> {
 
     /// Over the critical points in the cells touched by the tet with index-space corners
     /// `index`: the smallest `|value − bound|` relative to the data range, and the narrowest
-    /// neck `2·sqrt(|value − bound| / k)`.
+    /// neck the nearer bound leaves there ([`Classifier::measured_width`], else the quadratic
+    /// estimate `2·sqrt(|value − bound| / k)`).
     fn nearest_critical(&self, index: &[[f64; 3]; 4]) -> (Option<f64>, Option<f64>) {
         let (lo, hi) = tet_cells(index, self.field.grid().cell_dims());
         let (mut dist, mut neck): (Option<f64>, Option<f64>) = (None, None);
@@ -308,11 +303,11 @@ impl Classifier<'_> {
             for j in lo[1]..=hi[1] {
                 for i in lo[0]..=hi[0] {
                     for (v, hess, pos) in self.cell_critical_points([i, j, k]) {
-                        let (d, level) = if (v - self.levels[0]).abs() <= (v - self.levels[1]).abs()
-                        {
-                            ((v - self.levels[0]).abs(), self.levels[0])
+                        let [da, db] = self.levels.map(|l| (v - l).abs());
+                        let (d, level) = if da <= db {
+                            (da, self.levels[0])
                         } else {
-                            ((v - self.levels[1]).abs(), self.levels[1])
+                            (db, self.levels[1])
                         };
                         let w = if d == 0.0 {
                             0.0
@@ -498,10 +493,6 @@ mod tests {
         (mesh, r)
     }
 
-    fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-        (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
-    }
-
     #[test]
     fn a_pinch_at_a_saddle_value_is_near_critical_there() {
         // f = x² + y² − z² around (5, 5, 5): the grid vertex there is a saddle of value 0 =
@@ -522,7 +513,7 @@ mod tests {
         assert_eq!(r.total(), below);
         assert!(r.counts.near_critical > 0, "{:?}", r.counts);
         for e in &r.elements {
-            let near = dist(e.point, [c; 3]) < 2.0;
+            let near = distance(e.point, [c; 3]) < 2.0;
             assert_eq!(e.reason == ForcedReason::NearCritical, near, "{e:?}");
         }
     }

@@ -20,7 +20,7 @@ const REVERT_ROUNDS: usize = 8;
 /// that would not stay positive are reverted until no tet is inverted. Returns, per point,
 /// whether it moved.
 pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> Vec<bool> {
-    let labels = vertex_labels(mesh);
+    let labels = mesh.vertex_label_bits();
     let dims = ctx.field.grid().dims;
     // Per point: where a level vertex off its level would go.
     let target: Vec<Option<[f64; 3]>> = (0..mesh.points.len())
@@ -79,7 +79,7 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> Vec<bool> {
 /// Per point: is it on an `alpha` (`beta`) face but farther than the tolerance from that
 /// level set (pinned vertices included)?
 pub fn off_level_points(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
-    let labels = vertex_labels(mesh);
+    let labels = mesh.vertex_label_bits();
     (0..mesh.points.len())
         .into_par_iter()
         .map(|v| {
@@ -91,17 +91,6 @@ pub fn off_level_points(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
             (labels[v] & 1 != 0 && !on(0)) || (labels[v] & 2 != 0 && !on(1))
         })
         .collect()
-}
-
-/// Per point: bits `1 << label` of the boundary triangles around it.
-fn vertex_labels(mesh: &TetMesh) -> Vec<u8> {
-    let mut bits = vec![0u8; mesh.points.len()];
-    for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
-        for &v in tri {
-            bits[v as usize] |= 1 << (label as u8);
-        }
-    }
-    bits
 }
 
 /// The moved vertices of the tets among `check` that the moves would leave non-positive,
