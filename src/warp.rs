@@ -6,7 +6,10 @@
 //! interior grid vertex `v` is snapped to level `λ` when
 //!
 //! 1. **close:** some edge of the tetrahedral complex from `v` crosses `λ` at a fraction
-//!    `t < eps` of its length from `v` (`t = |f(v) − λ| / |f(u) − f(v)|`);
+//!    `t < eps` of its length from `v` (`t = |f(v) − λ| / |f(u) − f(v)|`), and the trilinear
+//!    level set also passes within `eps` (index units) of `v` (on a diagonal of the
+//!    decomposition the linear crossing can be much closer than the trilinear one, and the
+//!    quality pass must then move the snapped vertex that far to put it on its level);
 //! 2. **regular:** in the link of `v` in the complex (the decomposition of its eight cells),
 //!    the closed set `S` where the field is at least the level (on the domain side) is a
 //!    disk. Then the domain's part in the star of `v` is a ball glued to the rest along `S`
@@ -70,9 +73,11 @@ pub(crate) fn snap_vertices(
         .map(|(v, &c)| (v, c))
         .collect();
     drop(cand);
+    let near = TrilinearNear::new(grid, eps);
     let stars: Vec<Star> = listed
         .par_iter()
         .filter_map(|&(v, snap)| Star::new(grid, planner, iv, v, snap, eps))
+        .filter(|s| near.holds(s.v, level_of(s.snap, iv)))
         .collect();
     let mut snaps = vec![SNAP_NONE; grid.num_vertices()];
     let star_of: FxHashMap<usize, usize> =
@@ -350,6 +355,43 @@ impl Star {
 
     fn regular(&self, snaps: &[u8], iv: &Interval) -> bool {
         self.link.regular(self.snap, self.from_down, snaps, iv)
+    }
+}
+
+/// Step 1 on the trilinear field: the crossing found there may lie on a diagonal of the
+/// decomposition, where the piecewise-linear level set is closer to the vertex than the
+/// trilinear one that the quality pass projects the snapped vertex onto. A vertex is snapped
+/// only when the trilinear level set also passes within `eps` (index units) of it.
+struct TrilinearNear<'a> {
+    field: crate::improve::field::Field<'a>,
+    tol: f64,
+    eps: f64,
+}
+
+impl<'a> TrilinearNear<'a> {
+    fn new(grid: &'a ScalarGrid, eps: f64) -> Self {
+        let (lo, hi) = grid.value_range();
+        TrilinearNear {
+            field: crate::improve::field::Field::new(grid),
+            tol: 1e-9 * (hi - lo).max(f64::MIN_POSITIVE),
+            eps,
+        }
+    }
+
+    /// Whether `f = level` passes within `eps` of grid vertex `v`: Newton projections start
+    /// just inside each of the eight cells around it.
+    fn holds(&self, v: usize, level: f64) -> bool {
+        let ijk = self.field.grid().vertex_ijk(v).map(|c| c as f64);
+        (0..8).any(|o| {
+            let start: [f64; 3] =
+                std::array::from_fn(|a| ijk[a] + if o >> a & 1 == 1 { 1e-6 } else { -1e-6 });
+            self.field
+                .project(start, level, 0b111, self.tol)
+                .is_some_and(|p| {
+                    let d = crate::geom::sub(p, ijk);
+                    crate::geom::dot(d, d) < self.eps * self.eps
+                })
+        })
     }
 }
 
@@ -665,6 +707,28 @@ mod tests {
             assert_eq!(fast, plain, "seed {seed}");
             assert!(fast.iter().any(|&c| c != 0));
         }
+    }
+
+    #[test]
+    fn a_crossing_close_only_on_a_diagonal_is_not_near() {
+        // One hot corner: along the body diagonal from (1, 1, 1) the linear interpolation
+        // crosses 20 at a fifth of the way, but the trilinear field is 100 x y z in that cell,
+        // so f = 20 lies about a voxel away; along the axis edges of a linear ramp the two agree.
+        let mut v = vec![0.0; 27];
+        v[26] = 100.0;
+        let hot = ScalarGrid::new([3, 3, 3], v).unwrap();
+        let ramp = ScalarGrid::new(
+            [3, 3, 3],
+            (0..27).map(|i| 10.0 * (i % 3) as f64).collect::<Vec<f64>>(),
+        )
+        .unwrap();
+        let centre = hot.index(1, 1, 1);
+        assert!(!super::TrilinearNear::new(&hot, 0.3).holds(centre, 20.0));
+        assert!(super::TrilinearNear::new(&hot, 1.2).holds(centre, 20.0));
+        let near = super::TrilinearNear::new(&ramp, 0.3);
+        assert!(near.holds(centre, 12.0));
+        assert!(near.holds(centre, 7.5));
+        assert!(!near.holds(centre, 14.0));
     }
 
     #[test]

@@ -271,6 +271,43 @@ fn random_fields_and_box_cuts_keep_their_invariants() {
     }
 }
 
+/// [`random_smooth`] scaled to `0..=255` and rounded, as 8-bit imaging data is.
+fn quantised_random(n: usize, seed: u64) -> Field {
+    let mut f = random_smooth(n, seed);
+    let (lo, hi) = f
+        .values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    for v in &mut f.values {
+        *v = ((*v - lo) / (hi - lo) * 255.0).round();
+    }
+    f
+}
+
+#[test]
+fn quantised_random_fields_end_on_their_levels() {
+    // Half-integer bounds on 8-bit data: the trilinear level set bends away from the
+    // piecewise-linear one along the decomposition's diagonals, so some level vertices cannot
+    // be projected along the gradient without inverting a tet (before the detour and untangling
+    // steps, these left 1, 3 and 1 vertices off their level).
+    for (seed, a, b) in [(1, 60.5, 200.5), (4, 100.5, 140.5), (6, 127.5, 167.5)] {
+        let f = quantised_random(24, seed);
+        let o = mesh_and_improve(&f, a, b);
+        // Seed 6 gains 2.2 % volume (2.1 % before this change; issue 6 asks for 0.5 %: not
+        // met yet on these coarse 8-bit fields).
+        check_invariants_with(
+            &format!("quantised random {seed} [{a}, {b}]"),
+            &f,
+            a,
+            b,
+            &o,
+            3e-2,
+        );
+    }
+}
+
 #[test]
 fn ties_with_integer_data() {
     let f = quantised(18);

@@ -3,12 +3,16 @@
 //! The clipper places cuts on the piecewise-linear level set; only cuts on grid edges are on
 //! the trilinear one. Each free level vertex is moved by Newton steps along the gradient
 //! (restricted to the axes its box planes leave free) until `|f - level| <= tol`; the move is
-//! kept only if every tet around the vertex stays positive.
+//! kept only if every tet around the vertex stays positive. Inside a region, where that move
+//! would invert a tet, the vertex tries other points of its level set (projections started
+//! halfway to its neighbours on the level) and, if each of them inverts a tet too, max–min
+//! steps on the level set from the least bad one until its star is positive again.
 
 use rayon::prelude::*;
 
 use super::constraint::Constraint;
-use super::local::LocalMesh;
+use super::local::{LocalMesh, StarCorners};
+use super::smooth::climb;
 use super::Ctx;
 use crate::mesh::TetMesh;
 
@@ -143,11 +147,99 @@ fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     if (ctx.field.value(u) - target).abs() <= ctx.tol {
         return false;
     }
-    match ctx.field.project(u, target, c.free_axes(), ctx.tol) {
-        Some(p) if lm.star_above_at(v, p, ctx, 0.0) => {
+    let free = c.free_axes();
+    if let Some(p) = ctx.field.project(u, target, free, ctx.tol) {
+        if lm.star_above_at(v, p, ctx, 0.0) {
+            lm.set_position(v, p, ctx);
+            return true;
+        }
+    }
+    match detour(lm, ctx, v, target, free) {
+        Some(p) => {
             lm.set_position(v, p, ctx);
             true
         }
-        _ => false,
+        None => false,
     }
+}
+
+/// A point of the level set near `v` where its star stays positive, when the projection
+/// along the gradient would invert a tet: the best of several projections
+/// ([`best_on_level`]), else max–min steps on the level from it that untangle the star.
+fn detour(lm: &LocalMesh, ctx: &Ctx, v: u32, level: f64, free: u8) -> Option<[f64; 3]> {
+    let star = StarCorners::of(lm, v);
+    let mut best = best_on_level(lm, ctx, v, &star, level, free)?;
+    if best.1 <= 0.0 {
+        let mut qs = star_qualities(&star, lm, ctx, v, best.0);
+        best = climb(lm, ctx, v, &star, best.0, &mut qs, UNTANGLE_STEPS)?;
+    }
+    (best.1 > 0.0).then_some(best.0)
+}
+
+/// Max–min steps tried to untangle a level vertex whose projections all invert a tet.
+const UNTANGLE_STEPS: usize = 8;
+
+/// The qualities of `v`'s star (in star order) with `v` at index point `u`.
+fn star_qualities(star: &StarCorners, lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> Vec<f64> {
+    let x = ctx.field.to_physical(u);
+    (0..lm.star[v as usize].len())
+        .map(|i| star.quality(i, x, ctx))
+        .collect()
+}
+
+/// Where the projection along the gradient would invert a tet around `v`: the projections
+/// started halfway to each neighbour on the same level set and at their centroid (keeping
+/// `v`'s box coordinates), and the one from `v` itself. Returns the best of them with the
+/// worst quality of the star there (negative when every one inverts a tet).
+fn best_on_level(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    star: &StarCorners,
+    level: f64,
+    free: u8,
+) -> Option<([f64; 3], f64)> {
+    let u = lm.u[v as usize];
+    let mut on: Vec<u32> = lm.star[v as usize]
+        .iter()
+        .flat_map(|&t| lm.tets[t as usize])
+        .filter(|&w| w != v && (ctx.field.value(lm.u[w as usize]) - level).abs() <= ctx.tol)
+        .collect();
+    on.sort_unstable();
+    on.dedup();
+    let n = on.len() as f64;
+    let centroid = on.iter().fold([0.0; 3], |a, &w| {
+        let x = lm.u[w as usize];
+        [a[0] + x[0] / n, a[1] + x[1] / n, a[2] + x[2] / n]
+    });
+    let mut starts: Vec<[f64; 3]> = on.iter().map(|&w| mid(u, lm.u[w as usize])).collect();
+    if !on.is_empty() {
+        starts.push(centroid);
+    }
+    starts.push(u);
+    starts
+        .into_iter()
+        .map(|s| keep_fixed(s, u, free))
+        .filter_map(|s| ctx.field.project(s, level, free, ctx.tol))
+        .map(|p| {
+            let x = ctx.field.to_physical(p);
+            let q = (0..lm.star[v as usize].len())
+                .map(|i| star.quality(i, x, ctx))
+                .fold(f64::INFINITY, f64::min);
+            (p, q)
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+fn mid(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        (a[0] + b[0]) / 2.0,
+        (a[1] + b[1]) / 2.0,
+        (a[2] + b[2]) / 2.0,
+    ]
+}
+
+/// `s` with the coordinates of the axes not in `free` taken from `u`.
+fn keep_fixed(s: [f64; 3], u: [f64; 3], free: u8) -> [f64; 3] {
+    std::array::from_fn(|a| if free & (1 << a) != 0 { s[a] } else { u[a] })
 }

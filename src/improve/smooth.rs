@@ -23,48 +23,69 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     if !lm.is_free(v) || c.pinned || c.freedom() == 0 {
         return false;
     }
-    let mut moved = false;
-    let mut qs = Vec::new();
-    let mut q0 = lm.star[v as usize]
-        .iter()
-        .map(|&t| lm.q[t as usize])
-        .fold(f64::INFINITY, f64::min);
     // The other corners stay where they are while `v` moves.
     let star = StarCorners::of(lm, v);
-    for _ in 0..ITERATIONS {
-        let scale = local_scale(lm, v);
-        let Some(d) = ascent_direction(lm, ctx, v, &star, q0, scale) else {
+    let mut qs: Vec<f64> = lm.star[v as usize]
+        .iter()
+        .map(|&t| lm.q[t as usize])
+        .collect();
+    match climb(lm, ctx, v, &star, lm.u[v as usize], &mut qs, ITERATIONS) {
+        Some((u, _)) => {
+            lm.set_position_with(v, u, ctx, &qs);
+            true
+        }
+        None => false,
+    }
+}
+
+/// Up to `iterations` max–min steps of `v` (whose star is `star`) from index point `u`, where
+/// the star's qualities are `qs` (star order; `v`'s own position in `lm` is not read). Returns
+/// where it ended and its worst quality if it moved, with the qualities there left in `qs`.
+/// The start may invert tets: then the steps untangle.
+pub fn climb(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    star: &StarCorners,
+    mut u: [f64; 3],
+    qs: &mut Vec<f64>,
+    iterations: usize,
+) -> Option<([f64; 3], f64)> {
+    let mut q0 = qs.iter().copied().fold(f64::INFINITY, f64::min);
+    let mut moved = false;
+    let mut next = Vec::with_capacity(qs.len());
+    for _ in 0..iterations {
+        let scale = local_scale(lm, v, u);
+        let Some(d) = ascent_direction(lm, ctx, v, star, (u, qs, q0), scale) else {
             break;
         };
-        match line_search(lm, ctx, v, &star, (d, q0, scale), &mut qs) {
-            Some((u, q)) => {
-                lm.set_position_with(v, u, ctx, &qs);
-                q0 = q;
-                moved = true;
+        match line_search(lm, ctx, v, star, (u, d, q0, scale), &mut next) {
+            Some((p, q)) => {
+                (u, q0, moved) = (p, q, true);
+                std::mem::swap(qs, &mut next);
             }
             None => break,
         }
     }
-    moved
+    moved.then_some((u, q0))
 }
 
 /// A direction (index space, over the free axes, tangent to the level set) along which the
 /// worst tets of the star improve: the normalised sum of their normalised gradients.
-/// `star` is the star of `v`, `scale` [`local_scale`] at `v`.
+/// `star` is the star of `v`, with `v` at `u` and qualities `qs` (worst `q0`); `scale` is
+/// [`local_scale`] there.
 fn ascent_direction(
     lm: &LocalMesh,
     ctx: &Ctx,
     v: u32,
     star: &StarCorners,
-    q0: f64,
+    (u, qs, q0): ([f64; 3], &[f64], f64),
     scale: f64,
 ) -> Option<[f64; 3]> {
-    let u = lm.u[v as usize];
     let free = lm.con[v as usize].free_axes();
     let h = 1e-7 * scale.max(1e-12);
     let mut sum = [0.0; 3];
-    for (i, &t) in lm.star[v as usize].iter().enumerate() {
-        let q = lm.q[t as usize];
+    for (i, &q) in qs.iter().enumerate() {
         if q > q0 + ACTIVE_BAND * q0.abs().max(1e-3) {
             continue;
         }
@@ -102,7 +123,7 @@ fn ascent_direction(
     (n > 0.0 && n.is_finite()).then(|| sum.map(|x| x / n))
 }
 
-/// Backtracking search along `d` from the vertex's position: the first step (longest first)
+/// Backtracking search along `d` from `u`: the first step (longest first)
 /// that raises the star's worst quality above `q0`, with that quality; the star's qualities
 /// there are left in `qs`. The first step is a quarter of `scale` ([`local_scale`]).
 fn line_search(
@@ -110,11 +131,10 @@ fn line_search(
     ctx: &Ctx,
     v: u32,
     star: &StarCorners,
-    (d, q0, scale): ([f64; 3], f64, f64),
+    (u, d, q0, scale): ([f64; 3], [f64; 3], f64, f64),
     qs: &mut Vec<f64>,
 ) -> Option<([f64; 3], f64)> {
     let c = lm.con[v as usize];
-    let u = lm.u[v as usize];
     let dims = ctx.field.grid().dims;
     let mut step = 0.25 * scale;
     let mut hint = 0;
@@ -140,9 +160,8 @@ fn line_search(
     None
 }
 
-/// Mean index-space length of the edges at `v` (each counted once per tet).
-fn local_scale(lm: &LocalMesh, v: u32) -> f64 {
-    let u = lm.u[v as usize];
+/// Mean index-space length of the edges at `v`, placed at `u` (each counted once per tet).
+fn local_scale(lm: &LocalMesh, v: u32, u: [f64; 3]) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
     for &t in &lm.star[v as usize] {
         for w in lm.tets[t as usize] {
