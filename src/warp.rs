@@ -387,10 +387,7 @@ impl<'a> TrilinearNear<'a> {
                 std::array::from_fn(|a| ijk[a] + if o >> a & 1 == 1 { 1e-6 } else { -1e-6 });
             self.field
                 .project(start, level, 0b111, self.tol)
-                .is_some_and(|p| {
-                    let d = crate::geom::sub(p, ijk);
-                    crate::geom::dot(d, d) < self.eps * self.eps
-                })
+                .is_some_and(|p| crate::geom::distance(p, ijk) < self.eps)
         })
     }
 }

@@ -22,6 +22,11 @@ fn run_in(dir: &Path, args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// The JSON document in the file at `path`.
+fn read_json(path: &Path) -> Value {
+    serde_json::from_str(&fs::read_to_string(path).unwrap()).unwrap()
+}
+
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
@@ -153,8 +158,7 @@ fn meshes_npy_to_every_format_with_a_consistent_report() {
             _ => {}
         }
 
-        let r: Value =
-            serde_json::from_str(&fs::read_to_string(dir.path().join(&report)).unwrap()).unwrap();
+        let r: Value = read_json(&dir.path().join(&report));
         assert_eq!(r["input"], vol);
         assert_eq!(r["output"], out);
         assert_eq!(r["method"], "ctd");
@@ -225,8 +229,7 @@ fn report_spells_infinite_bounds_and_skipped_analysis() {
         ],
     );
     assert_ok(&o);
-    let r: Value =
-        serde_json::from_str(&fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    let r: Value = read_json(&dir.path().join("r.json"));
     assert_eq!(r["alpha"], "-inf");
     assert_eq!(r["beta"], 3.05);
     assert_eq!(r["method"], "tptd");
@@ -413,8 +416,7 @@ fn quality_improves_the_demo_and_reports_before_and_after() {
     let out = stdout(&o);
     assert!(out.contains("quality   target [15, 155] deg"), "{out}");
     assert!(out.contains("b0 = 2"), "the vessels stay apart: {out}");
-    let r: Value =
-        serde_json::from_str(&fs::read_to_string(dir.path().join("q.json")).unwrap()).unwrap();
+    let r: Value = read_json(&dir.path().join("q.json"));
     let q = &r["quality"];
     let (before, after) = (&q["before"], &q["after"]);
     let min = |s: &Value| s["min_dihedral"].as_f64().unwrap();
@@ -450,8 +452,7 @@ fn quality_improves_the_demo_and_reports_before_and_after() {
         ],
     );
     assert_ok(&o);
-    let r: Value =
-        serde_json::from_str(&fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    let r: Value = read_json(&dir.path().join("r.json"));
     assert_eq!(r["quality"]["boundary_collapse_ratio"].as_f64(), Some(1.5));
     assert_eq!(r["betti"], serde_json::json!([2, 0, 0]));
 }

@@ -31,6 +31,7 @@ use super::field::Field;
 use super::quality::tet_dihedral_range;
 use super::QualityOptions;
 use crate::critical::find::vertex_class;
+use crate::geom::{distance, dot, norm};
 use crate::grid::{corner_offset, ScalarGrid};
 use crate::mesh::{BoundaryLabel, TetMesh};
 use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle};
@@ -198,18 +199,8 @@ pub fn classify_forced(
     }
 }
 
-/// Euclidean distance between `a` and `b`.
-fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let d = sub(a, b);
-    dot(d, d).sqrt()
-}
-
 fn tet_points(mesh: &TetMesh, t: usize) -> [[f64; 3]; 4] {
     mesh.tets[t].map(|v| mesh.points[v as usize])
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Magnitude `sqrt(Fxy² + Fyz² + Fxz²)` of the Hessian (zero diagonal) of the trilinear
@@ -282,7 +273,7 @@ impl Classifier<'_> {
         }
         let centroid = [0, 1, 2].map(|a| index.iter().map(|u| u[a]).sum::<f64>() / 4.0);
         let (_, g) = self.field.value_gradient(centroid);
-        let mut thinnest = gap / dot(g, g).sqrt();
+        let mut thinnest = gap / norm(g);
         let on = |i: usize, l: BoundaryLabel| self.labels[tet[i] as usize] & (1 << l as u8) != 0;
         for i in (0..4).filter(|&i| on(i, BoundaryLabel::Alpha)) {
             for j in (0..4).filter(|&j| j != i && on(j, BoundaryLabel::Beta)) {
@@ -332,7 +323,7 @@ impl Classifier<'_> {
         let side = (self.field.value(c) - level).signum();
         let mut best: Option<f64> = None;
         for d in LATTICE_DIRECTIONS {
-            let n = dot(d, d).sqrt();
+            let n = norm(d);
             let d = d.map(|x| x / n);
             let ahead = self.crossing(c, d, level, side);
             let behind = self.crossing(c, d.map(|x| -x), level, side);
@@ -453,10 +444,6 @@ impl Classifier<'_> {
         // half-spaces with inward normals n1, n2 meet at the angle π − ∠(n1, n2)
         Some((-dot(nl, nb) / norm).clamp(-1.0, 1.0).acos().to_degrees())
     }
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 #[cfg(test)]

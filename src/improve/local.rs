@@ -498,6 +498,13 @@ impl StarCorners {
         ctx.quality(p)
     }
 
+    /// The qualities of the tets (in star order) with the vertex at physical point `x`.
+    pub fn qualities(&self, x: [f64; 3], ctx: &Ctx) -> Vec<f64> {
+        (0..self.corners.len())
+            .map(|i| self.quality(i, x, ctx))
+            .collect()
+    }
+
     /// Whether every tet would have quality above `floor` with the vertex at physical point
     /// `x`, keeping the qualities (in star order) in `out`. `hint` is a tet to test first
     /// (the one that failed last time: in a line search it usually fails again); it is set

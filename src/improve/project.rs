@@ -148,13 +148,12 @@ fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         return false;
     }
     let free = c.free_axes();
-    if let Some(p) = ctx.field.project(u, target, free, ctx.tol) {
-        if lm.star_above_at(v, p, ctx, 0.0) {
-            lm.set_position(v, p, ctx);
-            return true;
-        }
+    let direct = ctx.field.project(u, target, free, ctx.tol);
+    if let Some(p) = direct.filter(|&p| lm.star_above_at(v, p, ctx, 0.0)) {
+        lm.set_position(v, p, ctx);
+        return true;
     }
-    match detour(lm, ctx, v, target, free) {
+    match detour(lm, ctx, v, target, free, direct) {
         Some(p) => {
             lm.set_position(v, p, ctx);
             true
@@ -164,13 +163,21 @@ fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
 }
 
 /// A point of the level set near `v` where its star stays positive, when the projection
-/// along the gradient would invert a tet: the best of several projections
-/// ([`best_on_level`]), else max–min steps on the level from it that untangle the star.
-fn detour(lm: &LocalMesh, ctx: &Ctx, v: u32, level: f64, free: u8) -> Option<[f64; 3]> {
+/// along the gradient (`direct`, if it converged) would invert a tet: the best of several
+/// projections ([`best_on_level`]), else max–min steps on the level from it that untangle the
+/// star.
+fn detour(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    level: f64,
+    free: u8,
+    direct: Option<[f64; 3]>,
+) -> Option<[f64; 3]> {
     let star = StarCorners::of(lm, v);
-    let mut best = best_on_level(lm, ctx, v, &star, level, free)?;
+    let mut best = best_on_level(lm, ctx, v, &star, (level, free), direct)?;
     if best.1 <= 0.0 {
-        let mut qs = star_qualities(&star, lm, ctx, v, best.0);
+        let mut qs = star.qualities(ctx.field.to_physical(best.0), ctx);
         best = climb(lm, ctx, v, &star, best.0, &mut qs, UNTANGLE_STEPS)?;
     }
     (best.1 > 0.0).then_some(best.0)
@@ -179,25 +186,17 @@ fn detour(lm: &LocalMesh, ctx: &Ctx, v: u32, level: f64, free: u8) -> Option<[f6
 /// Max–min steps tried to untangle a level vertex whose projections all invert a tet.
 const UNTANGLE_STEPS: usize = 8;
 
-/// The qualities of `v`'s star (in star order) with `v` at index point `u`.
-fn star_qualities(star: &StarCorners, lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> Vec<f64> {
-    let x = ctx.field.to_physical(u);
-    (0..lm.star[v as usize].len())
-        .map(|i| star.quality(i, x, ctx))
-        .collect()
-}
-
 /// Where the projection along the gradient would invert a tet around `v`: the projections
 /// started halfway to each neighbour on the same level set and at their centroid (keeping
-/// `v`'s box coordinates), and the one from `v` itself. Returns the best of them with the
-/// worst quality of the star there (negative when every one inverts a tet).
+/// `v`'s box coordinates), and `direct`, the one from `v` itself. Returns the best of them
+/// with the worst quality of the star there (negative when every one inverts a tet).
 fn best_on_level(
     lm: &LocalMesh,
     ctx: &Ctx,
     v: u32,
     star: &StarCorners,
-    level: f64,
-    free: u8,
+    (level, free): (f64, u8),
+    direct: Option<[f64; 3]>,
 ) -> Option<([f64; 3], f64)> {
     let u = lm.u[v as usize];
     let mut on: Vec<u32> = lm.star[v as usize]
@@ -207,26 +206,24 @@ fn best_on_level(
         .collect();
     on.sort_unstable();
     on.dedup();
-    let n = on.len() as f64;
-    let centroid = on.iter().fold([0.0; 3], |a, &w| {
-        let x = lm.u[w as usize];
-        [a[0] + x[0] / n, a[1] + x[1] / n, a[2] + x[2] / n]
-    });
     let mut starts: Vec<[f64; 3]> = on.iter().map(|&w| mid(u, lm.u[w as usize])).collect();
     if !on.is_empty() {
-        starts.push(centroid);
+        let n = on.len() as f64;
+        starts.push(on.iter().fold([0.0; 3], |a, &w| {
+            let x = lm.u[w as usize];
+            [a[0] + x[0] / n, a[1] + x[1] / n, a[2] + x[2] / n]
+        }));
     }
-    starts.push(u);
     starts
         .into_iter()
-        .map(|s| keep_fixed(s, u, free))
-        .filter_map(|s| ctx.field.project(s, level, free, ctx.tol))
+        .filter_map(|s| {
+            ctx.field
+                .project(keep_fixed(s, u, free), level, free, ctx.tol)
+        })
+        .chain(direct)
         .map(|p| {
-            let x = ctx.field.to_physical(p);
-            let q = (0..lm.star[v as usize].len())
-                .map(|i| star.quality(i, x, ctx))
-                .fold(f64::INFINITY, f64::min);
-            (p, q)
+            let q = star.qualities(ctx.field.to_physical(p), ctx);
+            (p, q.into_iter().fold(f64::INFINITY, f64::min))
         })
         .max_by(|a, b| a.1.total_cmp(&b.1))
 }

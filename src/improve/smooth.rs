@@ -8,7 +8,7 @@
 
 use super::local::{LocalMesh, StarCorners};
 use super::Ctx;
-use crate::geom::{dot, sub};
+use crate::geom::{dot, norm, sub};
 
 /// Gradient steps per call.
 const ITERATIONS: usize = 4;
@@ -176,9 +176,4 @@ fn local_scale(lm: &LocalMesh, v: u32, u: [f64; 3]) -> f64 {
     } else {
         sum / n as f64
     }
-}
-
-#[inline]
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }

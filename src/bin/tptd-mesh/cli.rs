@@ -106,8 +106,8 @@ pub(crate) struct Cli {
     pub(crate) quality_time: Option<f64>,
 
     /// With --quality, merge two boundary nodes only along an edge shorter than R times the
-    /// mean edge length at the node removed (default: no limit). A limit of 2–3 keeps thin
-    /// layers such as shells finer, so their elements stay better shaped
+    /// mean edge length at the node removed (default: no limit). A limit of about 3 keeps
+    /// thin layers such as shells finer, so their elements stay better shaped
     #[arg(long, value_name = "R", value_parser = parse_ratio)]
     pub(crate) boundary_collapse_ratio: Option<f64>,
 

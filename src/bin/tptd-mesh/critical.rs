@@ -254,19 +254,16 @@ struct Bound<'a> {
 
 /// Warns when face saddles of the bilinear interpolant lie within `tol` of the bound.
 fn warn_face_saddles(grid: &ScalarGrid, b: &Bound) {
-    let Bound {
-        input,
-        name,
-        value: bound,
-        tol,
-    } = *b;
+    let (bound, tol) = (b.value, b.tol);
     let flat = face_saddles_in(grid, bound - tol, bound + tol);
     if let Some((v, p)) = flat.first() {
         eprintln!(
-            "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} face saddle(s) of \
+            "tptd-mesh: warning: {}: --{} {} is within {tol:.4} of {} face saddle(s) of \
              the bilinear interpolant (e.g. {} at ({:.3}, {:.3}, {:.3}); a checkerboard face \
              with corners k, k+1 has its saddle at k+0.5): they are vertices of the \
              decomposition, so elements there get a vertex on the bound",
+            b.input,
+            b.name,
             fmt_bound(bound),
             flat.len(),
             fmt_bound(*v),
@@ -281,12 +278,7 @@ fn warn_face_saddles(grid: &ScalarGrid, b: &Bound) {
 /// filtration of the bound (`lower`: `{f >= w}`, else `{f <= w}`) within `tol`, naming the
 /// nearest safer values within `reach`.
 fn warn_near_critical(b: &Bound, around: &[CriticalPoint], lower: bool, reach: f64) {
-    let Bound {
-        input,
-        name,
-        value: bound,
-        tol,
-    } = *b;
+    let (bound, tol) = (b.value, b.tol);
     let Some(near) = near_critical(around, bound, lower, tol) else {
         return;
     };
@@ -299,9 +291,11 @@ fn warn_near_critical(b: &Bound, around: &[CriticalPoint], lower: bool, reach: f
             })
     };
     eprintln!(
-        "tptd-mesh: warning: {input}: --{name} {} is within {tol:.4} of {} critical value(s) of \
+        "tptd-mesh: warning: {}: --{} {} is within {tol:.4} of {} critical value(s) of \
          the trilinear field (e.g. {} {} at ({:.3}, {:.3}, {:.3})): the domain pinches there \
          and its elements degenerate; nearest safer values: {} below, {} above",
+        b.input,
+        b.name,
         fmt_bound(bound),
         near.hits.len(),
         first.kind.name(),
