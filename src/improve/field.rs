@@ -124,7 +124,80 @@ impl<'a> Field<'a> {
         let f = self.value(p);
         ((f - level).abs() <= tol).then_some(p)
     }
+
+    /// A point of the level set near `u` where Newton steps ([`Field::project`]) do not
+    /// settle (the gradient jumps across cell faces, or vanishes): walks from `u` downhill towards `level` along the gradient at `u` and along each free
+    /// axis both ways, in steps of [`MARCH_STEP`] up to [`MARCH_REACH`] voxels, bisects the
+    /// first step of each walk that crosses the level (the trilinear field is continuous, so
+    /// that step holds a point of the level) and returns the nearest point found.
+    pub fn march(&self, u: [f64; 3], level: f64, free_axes: u8, tol: f64) -> Option<[f64; 3]> {
+        let (f0, mut g) = self.value_gradient(u);
+        for (a, ga) in g.iter_mut().enumerate() {
+            if free_axes & (1 << a) == 0 {
+                *ga = 0.0;
+            }
+        }
+        let side = (f0 - level).signum();
+        let n = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        let mut dirs: Vec<[f64; 3]> = Vec::with_capacity(7);
+        if n > 0.0 && n.is_finite() {
+            dirs.push(g.map(|x| -side * x / n));
+        }
+        for a in (0..3).filter(|a| free_axes & (1 << a) != 0) {
+            for s in [-1.0, 1.0] {
+                let mut d = [0.0; 3];
+                d[a] = s;
+                dirs.push(d);
+            }
+        }
+        dirs.into_iter()
+            .filter_map(|d| self.walk(u, d, (level, side), tol))
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, p)| p)
+    }
+
+    /// One walk of [`Field::march`] along the unit direction `d`: `(distance, point)` of the
+    /// first crossing of `level`, from the side `side` (the sign of `f(u) - level`).
+    fn walk(
+        &self,
+        u: [f64; 3],
+        d: [f64; 3],
+        (level, side): (f64, f64),
+        tol: f64,
+    ) -> Option<(f64, [f64; 3])> {
+        let at = |t: f64| -> Option<[f64; 3]> {
+            let p: [f64; 3] = std::array::from_fn(|a| u[a] + t * d[a]);
+            let inside = (0..3).all(|a| p[a] >= 0.0 && p[a] <= (self.grid.dims[a] - 1) as f64);
+            inside.then_some(p)
+        };
+        let steps = (MARCH_REACH / MARCH_STEP).round() as usize;
+        let hi = (1..=steps)
+            .map(|i| i as f64 * MARCH_STEP)
+            .find(|&t| at(t).is_none_or(|p| (self.value(p) - level) * side <= 0.0))?;
+        at(hi)?;
+        let (mut a, mut b) = (hi - MARCH_STEP, hi);
+        for _ in 0..BISECTIONS {
+            let m = 0.5 * (a + b);
+            let r = self.value(at(m)?) - level;
+            if r.abs() <= tol {
+                return Some((m, at(m)?));
+            }
+            if r * side > 0.0 {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        None
+    }
 }
+
+/// Step (index units) of [`Field::march`].
+const MARCH_STEP: f64 = 0.05;
+/// How far [`Field::march`] walks (index units).
+const MARCH_REACH: f64 = 1.0;
+/// Bisections of the step across the level in [`Field::march`] (enough for any `f64`).
+const BISECTIONS: usize = 80;
 
 #[cfg(test)]
 mod tests {
@@ -186,5 +259,36 @@ mod tests {
         assert_eq!((q[1], q[2]), (u[1], u[2]));
         // No solution along y from a point whose level is out of reach inside the box.
         assert!(f.project([4.0, 4.0, 4.0], 9.0, 0b010, 1e-9).is_none());
+    }
+
+    /// A plateau `f = 0` for `i <= 1`, then `f = i - 1`.
+    fn plateau_grid() -> ScalarGrid {
+        let v: Vec<f64> = (0..4 * 3 * 3)
+            .map(|n| ((n % 4) as f64 - 1.0).max(0.0))
+            .collect();
+        ScalarGrid::with_geometry([4, 3, 3], [1.0; 3], [0.0; 3], IDENTITY, v).unwrap()
+    }
+
+    const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+    #[test]
+    fn march_finds_the_level_where_newton_has_no_gradient() {
+        let g = plateau_grid();
+        let f = Field::new(&g);
+        let u = [0.5, 1.0, 1.0];
+        assert!(
+            f.project(u, 0.3, 0b111, 1e-12).is_none(),
+            "no gradient on the plateau"
+        );
+        let p = f
+            .march(u, 0.3, 0b111, 1e-12)
+            .expect("the level is 0.8 away along +x");
+        assert!((f.value(p) - 0.3).abs() <= 1e-12);
+        for (a, want) in [1.3, 1.0, 1.0].into_iter().enumerate() {
+            assert!((p[a] - want).abs() < 1e-9, "{p:?}");
+        }
+        // Along the fixed axes only, or farther than the reach, there is nothing to find.
+        assert!(f.march(u, 0.3, 0b110, 1e-12).is_none());
+        assert!(f.march(u, 1.5, 0b111, 1e-12).is_none());
     }
 }

@@ -204,7 +204,7 @@ pub fn improve(
     // Per tet: below the target? Kept up to date through projections and splices, so that
     // each round evaluates only the tets that changed.
     let mut bad = bad_tets(mesh, &ctx);
-    for _ in 0..opts.max_rounds {
+    for round in 0..opts.max_rounds {
         if ctx.out_of_time() {
             report.out_of_time = true;
             break;
@@ -214,7 +214,7 @@ pub fn improve(
         report.projected += moved.iter().filter(|&&m| m).count();
         refresh_bad(mesh, &ctx, &moved, &mut bad);
         lap(&mut report.stage_seconds.project, &mut clock);
-        let work = needs_work(mesh, &ctx, &bad);
+        let work = needs_work(mesh, &ctx, &bad, round > 0);
         lap(&mut report.stage_seconds.mark, &mut clock);
         if !work.iter().any(|&w| w) {
             break;
@@ -222,7 +222,7 @@ pub fn improve(
         report.rounds += 1;
         removed.extend(run_phase(mesh, &ctx, 0, work, &mut bad, &mut report));
         clock = Instant::now();
-        let work = needs_work(mesh, &ctx, &bad);
+        let work = needs_work(mesh, &ctx, &bad, round > 0);
         lap(&mut report.stage_seconds.mark, &mut clock);
         removed.extend(run_phase(mesh, &ctx, 1, work, &mut bad, &mut report));
     }
@@ -311,10 +311,11 @@ fn refresh_bad(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], bad: &mut [bool]) {
 
 /// Per point: is it a corner of a tet below the target (`bad`), or a level vertex off its
 /// level?
-fn needs_work(mesh: &TetMesh, ctx: &Ctx, bad: &[bool]) -> Vec<bool> {
-    let mut work = project::off_level_points(mesh, ctx);
+fn needs_work(mesh: &TetMesh, ctx: &Ctx, bad: &[bool], ring: bool) -> Vec<bool> {
+    let off = project::off_level_points(mesh, ctx);
+    let mut work = off.clone();
     for (t, &b) in mesh.tets.iter().zip(bad) {
-        if b {
+        if b || (ring && t.iter().any(|&v| off[v as usize])) {
             for &v in t {
                 work[v as usize] = true;
             }

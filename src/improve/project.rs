@@ -162,6 +162,75 @@ fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     }
 }
 
+/// Rounds of moving the neighbours of a level vertex out of the way, at most.
+const NEIGHBOUR_ROUNDS: usize = 3;
+
+/// The last resort for a level vertex none of whose level points keeps its star positive:
+/// puts `v` at the best of them ([`best_on_level`]) and moves the free corners of the tets
+/// it inverts by max–min steps (which raise the worst, here inverted, tet of their stars
+/// first). Kept only if every tet around the moved vertices ends positive; else every move
+/// is undone. Returns whether `v` moved.
+pub fn untangle_around(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
+    let c = lm.con[v as usize];
+    let Some(level) = c.level.map(|l| ctx.levels[l as usize]) else {
+        return false;
+    };
+    let free = c.free_axes();
+    let u = lm.u[v as usize];
+    let direct = ctx.field.project(u, level, free, ctx.tol);
+    let direct = direct.or_else(|| ctx.field.march(u, level, free, ctx.tol));
+    let star = StarCorners::of(lm, v);
+    let Some((p, _)) = best_on_level(lm, ctx, v, &star, (level, free), direct) else {
+        return false;
+    };
+    let mut undo = vec![(v, lm.u[v as usize])];
+    lm.set_position(v, p, ctx);
+    for _ in 0..NEIGHBOUR_ROUNDS {
+        let tangled = tangled_corners(lm, v);
+        if tangled.is_empty() {
+            break;
+        }
+        for w in tangled {
+            let c = lm.con[w as usize];
+            if c.pinned || c.freedom() == 0 {
+                continue;
+            }
+            let sw = StarCorners::of(lm, w);
+            let mut qs: Vec<f64> = lm.star[w as usize]
+                .iter()
+                .map(|&t| lm.q[t as usize])
+                .collect();
+            let from = lm.u[w as usize];
+            if let Some((u, _)) = climb(lm, ctx, w, &sw, from, &mut qs, UNTANGLE_STEPS) {
+                undo.push((w, from));
+                lm.set_position_with(w, u, ctx, &qs);
+            }
+        }
+    }
+    let positive = undo
+        .iter()
+        .all(|&(w, _)| lm.star[w as usize].iter().all(|&t| lm.q[t as usize] > 0.0));
+    if !positive {
+        for &(w, u) in undo.iter().rev() {
+            lm.set_position(w, u, ctx);
+        }
+    }
+    positive
+}
+
+/// The free corners other than `v` of the non-positive tets around `v`, sorted.
+fn tangled_corners(lm: &LocalMesh, v: u32) -> Vec<u32> {
+    let mut out: Vec<u32> = lm.star[v as usize]
+        .iter()
+        .filter(|&&t| lm.q[t as usize] <= 0.0)
+        .flat_map(|&t| lm.tets[t as usize])
+        .filter(|&w| w != v && lm.is_free(w))
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 /// A point of the level set near `v` where its star stays positive, when the projection
 /// along the gradient (`direct`, if it converged) would invert a tet: the best of several
 /// projections ([`best_on_level`]), else max–min steps on the level from it that untangle the
@@ -239,4 +308,134 @@ fn mid(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// `s` with the coordinates of the axes not in `free` taken from `u`.
 fn keep_fixed(s: [f64; 3], u: [f64; 3], free: u8) -> [f64; 3] {
     std::array::from_fn(|a| if free & (1 << a) != 0 { s[a] } else { u[a] })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{cross, dot, sub};
+    use crate::improve::{context, local::extract_regions, QualityOptions, DEFAULT_WARP};
+    use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
+
+    /// A wavy torus on a coarse grid.
+    fn wavy_torus() -> (ScalarGrid, f64, f64) {
+        let n = 18;
+        let mut values = Vec::with_capacity(n * n * n);
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let (x, y, z) = (i as f64 - 8.3, j as f64 - 8.6, k as f64 - 8.9);
+                    let ring = ((x * x + y * y).sqrt() - 5.0).hypot(z);
+                    values.push(ring + 0.4 * (1.7 * x).sin() * (1.3 * y + z).cos());
+                }
+            }
+        }
+        (ScalarGrid::new([n, n, n], values).unwrap(), -10.0, 2.2)
+    }
+
+    /// Blocks level vertex `v` (on its level at `p`): moves it inward by a tenth of a voxel,
+    /// then an interior neighbour `w` of a tet `vwab` so that the plane through `w`, `a`, `b`
+    /// passes between the two positions of `v`: the stars stay positive, but `v` back at `p`
+    /// inverts `vwab`. Returns the neighbour moved, or `None` where no such move exists.
+    fn block(lm: &mut LocalMesh, ctx: &Ctx, v: u32, p: [f64; 3]) -> Option<u32> {
+        let level = lm.con[v as usize].level? as usize;
+        let (_, g) = ctx.field.value_gradient(p);
+        let inward = if level == 0 { 0.1 } else { -0.1 } / crate::geom::norm(g);
+        let inside: [f64; 3] = std::array::from_fn(|a| p[a] + inward * g[a]);
+        if !lm.star_above_at(v, inside, ctx, 0.0) {
+            return None;
+        }
+        lm.set_position(v, inside, ctx);
+        let mid: [f64; 3] = std::array::from_fn(|a| 0.5 * (p[a] + inside[a]));
+        for t in lm.star[v as usize].clone() {
+            for w in lm.tets[t as usize] {
+                let c = lm.con[w as usize];
+                if w == v || !lm.is_free(w) || c.level.is_some() || c.box_planes != 0 {
+                    continue;
+                }
+                let from = lm.u[w as usize];
+                let ab: Vec<u32> = lm.tets[t as usize]
+                    .into_iter()
+                    .filter(|&a| a != v && a != w)
+                    .collect();
+                let (ua, ub) = (lm.u[ab[0] as usize], lm.u[ab[1] as usize]);
+                // Across the plane through a, b and the middle of v's two positions.
+                let n = cross(sub(ub, ua), sub(mid, ua));
+                let off = dot(sub(from, ua), n) / dot(n, n);
+                for s in [1.05, 1.2, 1.5, 2.0] {
+                    let to = std::array::from_fn(|i| from[i] - s * off * n[i]);
+                    if ctx.inside_interval(to) && lm.star_above_at(w, to, ctx, 0.0) {
+                        lm.set_position(w, to, ctx);
+                        if !lm.star_above_at(v, p, ctx, 0.0) {
+                            return Some(w);
+                        }
+                        lm.set_position(w, from, ctx);
+                    }
+                }
+            }
+        }
+        lm.set_position(v, p, ctx);
+        None
+    }
+
+    #[test]
+    fn a_blocked_level_vertex_is_untangled_onto_its_level_or_left_as_it_was() {
+        let (grid, alpha, beta) = wavy_torus();
+        let opts = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
+        let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
+        let start = std::time::Instant::now();
+        let ctx = context(&grid, alpha, beta, &QualityOptions::default(), start);
+        let work = vec![true; mesh.points.len()];
+        // Blocked vertices, those no point of their level frees, and of these the untangled.
+        let (mut blocked, mut stuck, mut untangled) = (0, 0, 0);
+        let (mut regions, _) = extract_regions(&mesh, &work, &ctx, 0);
+        regions.extend(extract_regions(&mesh, &work, &ctx, 1).0);
+        for lm in &mut regions {
+            project_levels(lm, &ctx);
+            for v in 0..lm.u.len() as u32 {
+                let c = lm.con[v as usize];
+                let Some(l) = c.level else { continue };
+                let p = lm.u[v as usize];
+                let on = (ctx.field.value(p) - ctx.levels[l as usize]).abs() <= ctx.tol;
+                if !lm.is_free(v) || c.pinned || c.freedom() != 2 || !on {
+                    continue;
+                }
+                let Some(w) = block(lm, &ctx, v, p) else {
+                    continue;
+                };
+                blocked += 1;
+                let before = (lm.u[v as usize], lm.u[w as usize]);
+                let level = ctx.levels[l as usize];
+                let direct = ctx.field.project(before.0, level, c.free_axes(), ctx.tol);
+                let star = StarCorners::of(lm, v);
+                let free = c.free_axes();
+                let best = best_on_level(lm, &ctx, v, &star, (level, free), direct);
+                let is_stuck = best.is_none_or(|b| b.1 <= 0.0);
+                stuck += usize::from(is_stuck);
+                if untangle_around(lm, &ctx, v) {
+                    untangled += usize::from(is_stuck);
+                    let f = ctx.field.value(lm.u[v as usize]);
+                    assert!(
+                        (f - ctx.levels[l as usize]).abs() <= ctx.tol,
+                        "{v} off its level"
+                    );
+                } else {
+                    assert_eq!(
+                        before,
+                        (lm.u[v as usize], lm.u[w as usize]),
+                        "{v} not undone"
+                    );
+                }
+                let alive = (0..lm.tets.len()).filter(|&t| lm.alive[t]);
+                for t in alive {
+                    let q = ctx.quality(lm.corners(lm.tets[t]));
+                    assert!(q > 0.0 && q == lm.q[t], "tet {t} after untangling {v}: {q}");
+                }
+            }
+        }
+        assert!(
+            blocked >= 30 && stuck >= 5 && untangled > stuck / 2,
+            "{untangled} of {stuck} stuck of {blocked} blocked"
+        );
+    }
 }

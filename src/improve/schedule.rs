@@ -4,17 +4,34 @@
 use super::collapse::{apply_collapse, best_collapse, evaluate_merge, star_floor};
 use super::flip::{try_flip23, try_flip32};
 use super::local::LocalMesh;
-use super::project::project_levels;
+use super::project::{project_levels, untangle_around};
 use super::smooth::smooth_vertex;
 use super::{Ctx, ImproveReport};
 
 /// Passes over the region at most.
 const SWEEPS: usize = 6;
 
+/// Sweeps after level vertices were untangled onto their level sets at the end.
+const SWEEPS_AFTER_UNTANGLING: usize = 2;
+
 /// Improves the region `lm` in place.
 pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     report.projected += project_levels(lm, ctx);
-    for _ in 0..SWEEPS {
+    sweeps(lm, ctx, report, SWEEPS);
+    report.projected += project_levels(lm, ctx);
+    let (merged, untangled) = settle_off_level(lm, ctx);
+    report.merged_off_level += merged;
+    report.projected += untangled;
+    if untangled > 0 {
+        // Untangling leaves poor tets around the vertex; the next round may not come.
+        sweeps(lm, ctx, report, SWEEPS_AFTER_UNTANGLING);
+    }
+}
+
+/// Up to `n` sweeps of collapses, flips, smoothing and projection over the region's bad
+/// tets, until one changes nothing.
+fn sweeps(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport, n: usize) {
+    for _ in 0..n {
         if ctx.out_of_time() {
             report.out_of_time = true;
             break;
@@ -32,16 +49,15 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
             break;
         }
     }
-    report.projected += project_levels(lm, ctx);
-    report.merged_off_level += merge_off_level(lm, ctx);
 }
 
 /// Level vertices that could not be moved onto their level (a tet around them would invert)
 /// are merged into a neighbour on the same surfaces, when the link condition allows and every
-/// remaining tet stays positive, so that every boundary node ends on its level set. Returns
-/// how many were merged.
-fn merge_off_level(lm: &mut LocalMesh, ctx: &Ctx) -> usize {
-    let mut n = 0;
+/// remaining tet stays positive; failing that, put on their level with their neighbours moved
+/// out of the way ([`untangle_around`]). So every boundary node ends on its level set where
+/// the region allows. Returns how many were merged and how many untangled.
+fn settle_off_level(lm: &mut LocalMesh, ctx: &Ctx) -> (usize, usize) {
+    let (mut merged, mut untangled) = (0, 0);
     for v in 0..lm.u.len() as u32 {
         if !off_level(lm, ctx, v) {
             continue;
@@ -59,10 +75,12 @@ fn merge_off_level(lm: &mut LocalMesh, ctx: &Ctx) -> usize {
             .max_by(|x, y| x.0.total_cmp(&y.0).then(y.1.cmp(&x.1)));
         if let Some((_, b)) = best {
             apply_collapse(lm, v, b);
-            n += 1;
+            merged += 1;
+        } else if untangle_around(lm, ctx, v) {
+            untangled += 1;
         }
     }
-    n
+    (merged, untangled)
 }
 
 /// Whether `v` is a free level vertex away from its level.
