@@ -186,7 +186,8 @@ pub fn untangle_around(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     let mut undo = vec![(v, lm.u[v as usize])];
     lm.set_position(v, p, ctx);
     for _ in 0..NEIGHBOUR_ROUNDS {
-        let tangled = tangled_corners(lm, v);
+        let moved: Vec<u32> = undo.iter().map(|&(w, _)| w).collect();
+        let tangled = tangled_corners(lm, &moved);
         if tangled.is_empty() {
             break;
         }
@@ -218,13 +219,15 @@ pub fn untangle_around(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     positive
 }
 
-/// The free corners other than `v` of the non-positive tets around `v`, sorted.
-fn tangled_corners(lm: &LocalMesh, v: u32) -> Vec<u32> {
-    let mut out: Vec<u32> = lm.star[v as usize]
+/// The free corners other than `moved[0]` (the level vertex) of the non-positive tets
+/// around the `moved` vertices, sorted.
+fn tangled_corners(lm: &LocalMesh, moved: &[u32]) -> Vec<u32> {
+    let mut out: Vec<u32> = moved
         .iter()
+        .flat_map(|&m| &lm.star[m as usize])
         .filter(|&&t| lm.q[t as usize] <= 0.0)
         .flat_map(|&t| lm.tets[t as usize])
-        .filter(|&w| w != v && lm.is_free(w))
+        .filter(|&w| w != moved[0] && lm.is_free(w))
         .collect();
     out.sort_unstable();
     out.dedup();
