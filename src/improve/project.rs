@@ -6,7 +6,9 @@
 //! kept only if every tet around the vertex stays positive. Inside a region, where that move
 //! would invert a tet, the vertex tries other points of its level set (projections started
 //! halfway to its neighbours on the level) and, if each of them inverts a tet too, max–min
-//! steps on the level set from the least bad one until its star is positive again.
+//! steps on the level set from the least bad one until its star is positive again. The last
+//! resort, after the sweeps ([`untangle_around`]): the vertex goes onto its level and the
+//! free corners of the tets it inverts are moved out of the way, or nothing changes.
 
 use rayon::prelude::*;
 
