@@ -126,10 +126,11 @@ impl<'a> Field<'a> {
     }
 
     /// A point of the level set near `u` where Newton steps ([`Field::project`]) do not
-    /// settle (the gradient jumps across cell faces, or vanishes): walks from `u` downhill towards `level` along the gradient at `u` and along each free
-    /// axis both ways, in steps of `MARCH_STEP` (0.05) up to `MARCH_REACH` (1) voxel, bisects the
-    /// first step of each walk that crosses the level (the trilinear field is continuous, so
-    /// that step holds a point of the level) and returns the nearest point found.
+    /// settle (the gradient jumps across cell faces, or vanishes): walks from `u` towards
+    /// `level` along the gradient at `u` and along each free axis both ways, in steps of
+    /// `MARCH_STEP` (0.05) up to `MARCH_REACH` (1) voxel, bisects the first step of each walk
+    /// that crosses the level (the trilinear field is continuous, so that step holds a point
+    /// of the level) and returns the nearest point found.
     pub fn march(&self, u: [f64; 3], level: f64, free_axes: u8, tol: f64) -> Option<[f64; 3]> {
         let (f0, mut g) = self.value_gradient(u);
         for (a, ga) in g.iter_mut().enumerate() {
