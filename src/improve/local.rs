@@ -59,18 +59,29 @@ pub struct LocalMesh {
 }
 
 /// When the neighbourhoods changed and when operations on them last failed, on one clock.
-/// An operation on a tet reads only the stars of its corners, and every change to a tet
-/// stamps its corners; so an attempt on a tet that failed after its corners' last stamps
-/// would fail again, and is skipped (the same result, without the work).
+/// An operation on a tet reads only the stars of its corners and the tets that share a face
+/// with it, and every change to a tet stamps its corners (a tet sharing a face with `t` has
+/// three of `t`'s corners, so changing it or moving its fourth corner stamps them too); so an
+/// attempt on a tet that failed after its corners' last stamps would fail again, and is
+/// skipped (the same result, without the work).
 #[derive(Default)]
 struct Memo {
     clock: u64,
     /// Per vertex: the last change to a tet around it.
     stamp: Vec<u64>,
-    /// Per tet: when an operation on it last failed (0: never).
-    tet_failed: Vec<u64>,
+    /// Per tet and [`TetOp`]: when that operation on it last failed (0: never).
+    tet_failed: Vec<[u64; 2]>,
     /// Per vertex: when smoothing it last failed (0: never).
     vertex_failed: Vec<u64>,
+}
+
+/// The operations on a tet whose failures are memoised separately.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TetOp {
+    /// Collapsing one of its edges.
+    Collapse = 0,
+    /// A 2-3 flip of one of its faces or a 3-2 flip of one of its edges.
+    Flip = 1,
 }
 
 /// Sorted copy of a triangle, the key of [`LocalMesh::faces`].
@@ -304,18 +315,18 @@ impl LocalMesh {
         }
     }
 
-    /// Whether an operation on tet `t` failed after the last change around its corners.
-    pub fn settled_tet(&self, t: u32) -> bool {
-        let failed = self.memo.tet_failed[t as usize];
+    /// Whether operation `op` on tet `t` failed after the last change around its corners.
+    pub fn settled_tet(&self, t: u32, op: TetOp) -> bool {
+        let failed = self.memo.tet_failed[t as usize][op as usize];
         failed != 0
             && self.tets[t as usize]
                 .iter()
                 .all(|&v| self.memo.stamp[v as usize] <= failed)
     }
 
-    /// Records that an operation on tet `t` changed nothing.
-    pub fn tet_failed(&mut self, t: u32) {
-        self.memo.tet_failed[t as usize] = self.memo.clock;
+    /// Records that operation `op` on tet `t` changed nothing.
+    pub fn tet_failed(&mut self, t: u32, op: TetOp) {
+        self.memo.tet_failed[t as usize][op as usize] = self.memo.clock;
     }
 
     /// Whether smoothing `v` failed after the last change around it.
@@ -359,7 +370,7 @@ impl LocalMesh {
         self.tets.push(t);
         self.alive.push(true);
         self.q.push(biased_min_sine(self.corners(t), self.weight));
-        self.memo.tet_failed.push(0);
+        self.memo.tet_failed.push([0; 2]);
         for v in t {
             self.star[v as usize].push(id);
         }

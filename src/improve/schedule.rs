@@ -3,7 +3,7 @@
 
 use super::collapse::{apply_collapse, best_collapse, evaluate_merge, star_floor};
 use super::flip::{try_flip23, try_flip32};
-use super::local::LocalMesh;
+use super::local::{LocalMesh, TetOp};
 use super::project::{project_levels, untangle_around};
 use super::smooth::smooth_vertex;
 use super::{Ctx, ImproveReport};
@@ -105,14 +105,13 @@ fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
     bad.into_iter().map(|(_, t)| t).collect()
 }
 
-/// Calls `op` on every alive bad tet (worst first) until the time budget runs out; returns
-/// how many calls changed something. With `memo`, skips the tets on which `op` failed since
-/// the last change around them (only for operations that read nothing beyond the stars of
-/// the tet's corners; flips do, through the apex across a face, so they are not memoised).
+/// Calls `op` (of kind `kind`) on every alive bad tet (worst first) until the time budget
+/// runs out; returns how many calls changed something. Skips the tets on which `kind` failed
+/// since the last change around them ([`LocalMesh::settled_tet`]).
 fn for_each_bad_tet(
     lm: &mut LocalMesh,
     ctx: &Ctx,
-    memo: bool,
+    kind: TetOp,
     mut op: impl FnMut(&mut LocalMesh, u32) -> bool,
 ) -> usize {
     let mut n = 0;
@@ -120,13 +119,13 @@ fn for_each_bad_tet(
         if i % 64 == 63 && ctx.out_of_time() {
             break;
         }
-        if !lm.alive[t as usize] || (memo && lm.settled_tet(t)) {
+        if !lm.alive[t as usize] || lm.settled_tet(t, kind) {
             continue;
         }
         if op(lm, t) {
             n += 1;
-        } else if memo {
-            lm.tet_failed(t);
+        } else {
+            lm.tet_failed(t, kind);
         }
     }
     n
@@ -134,7 +133,9 @@ fn for_each_bad_tet(
 
 /// Collapses the shortest edges of bad tets where that helps.
 fn collapse_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
-    let n = for_each_bad_tet(lm, ctx, true, |lm, t| collapse_shortest(lm, ctx, t));
+    let n = for_each_bad_tet(lm, ctx, TetOp::Collapse, |lm, t| {
+        collapse_shortest(lm, ctx, t)
+    });
     report.collapses += n;
     n
 }
@@ -163,7 +164,7 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
 
 /// 2-3 flips of the faces and 3-2 flips of the edges of bad tets.
 fn flip_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
-    let n = for_each_bad_tet(lm, ctx, false, |lm, t| flip_tet(lm, ctx, t));
+    let n = for_each_bad_tet(lm, ctx, TetOp::Flip, |lm, t| flip_tet(lm, ctx, t));
     report.flips += n;
     n
 }
