@@ -314,7 +314,7 @@ fn refresh_bad(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], bad: &mut [bool]) {
 }
 
 /// Per point: is it a corner of a tet below the target (`bad`), or a level vertex off its
-/// level?
+/// level (with `ring`, or a corner of a tet around one, so that its neighbours can move)?
 fn needs_work(mesh: &TetMesh, ctx: &Ctx, bad: &[bool], ring: bool) -> Vec<bool> {
     let off = project::off_level_points(mesh, ctx);
     let mut work = off.clone();
