@@ -171,14 +171,19 @@ fn check_invariants_with(
     );
 }
 
-/// Nodes of alpha/beta triangles lie on the trilinear level set within 1e-6 of the data range.
-fn check_on_level(name: &str, field: &Field, alpha: f64, beta: f64, mesh: &TetMesh) {
-    let (lo, hi) = field
+/// The smallest and largest sample of `field`.
+fn value_range(field: &Field) -> (f64, f64) {
+    field
         .values
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
-        });
+        })
+}
+
+/// Nodes of alpha/beta triangles lie on the trilinear level set within 1e-6 of the data range.
+fn check_on_level(name: &str, field: &Field, alpha: f64, beta: f64, mesh: &TetMesh) {
+    let (lo, hi) = value_range(field);
     let tol = 1e-6 * (hi - lo);
     for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
         let level = match label {
@@ -274,12 +279,7 @@ fn random_fields_and_box_cuts_keep_their_invariants() {
 /// [`random_smooth`] scaled to `0..=255` and rounded, as 8-bit imaging data is.
 fn quantised_random(n: usize, seed: u64) -> Field {
     let mut f = random_smooth(n, seed);
-    let (lo, hi) = f
-        .values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-            (l.min(v), h.max(v))
-        });
+    let (lo, hi) = value_range(&f);
     for v in &mut f.values {
         *v = ((*v - lo) / (hi - lo) * 255.0).round();
     }

@@ -321,8 +321,9 @@ fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::improve::fixtures::wavy_torus;
     use crate::improve::{context, local::extract_regions, QualityOptions, DEFAULT_WARP};
-    use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
+    use crate::{mesh_interval, MeshOptions, Method};
 
     /// The link of `v`, as sorted lists of its vertices, edges and triangles (from the tets of
     /// its star; the virtual boundary vertex is handled separately).
@@ -392,23 +393,6 @@ mod tests {
             .iter()
             .any(|t| t.iter().all(outside) && lb.tris.binary_search(t).is_ok());
         edge_ok && !tri_clash && boundary_link_condition(lm, a, b)
-    }
-
-    /// A torus with a wavy surface on a coarse grid: many boundary vertices, short edges and
-    /// both outcomes of the link condition.
-    fn wavy_torus() -> (ScalarGrid, f64, f64) {
-        let n = 18;
-        let mut values = Vec::with_capacity(n * n * n);
-        for k in 0..n {
-            for j in 0..n {
-                for i in 0..n {
-                    let (x, y, z) = (i as f64 - 8.3, j as f64 - 8.6, k as f64 - 8.9);
-                    let ring = ((x * x + y * y).sqrt() - 5.0).hypot(z);
-                    values.push(ring + 0.4 * (1.7 * x).sin() * (1.3 * y + z).cos());
-                }
-            }
-        }
-        (ScalarGrid::new([n, n, n], values).unwrap(), -10.0, 2.2)
     }
 
     #[test]

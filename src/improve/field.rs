@@ -1,6 +1,7 @@
 //! The trilinear field of a grid, evaluated anywhere in index space, and Newton projection of
 //! a point onto one of its level sets along a subset of the axes.
 
+use crate::geom::norm;
 use crate::grid::ScalarGrid;
 use crate::trilinear;
 
@@ -90,21 +91,28 @@ impl<'a> Field<'a> {
         (value, [gx, gy, gz])
     }
 
+    /// Value and index-space gradient at `u`, the gradient restricted to the axes whose bit is
+    /// set in `free_axes` (the others zeroed).
+    pub fn value_gradient_on(&self, u: [f64; 3], free_axes: u8) -> (f64, [f64; 3]) {
+        let (f, mut g) = self.value_gradient(u);
+        for (a, ga) in g.iter_mut().enumerate() {
+            if free_axes & (1 << a) == 0 {
+                *ga = 0.0;
+            }
+        }
+        (f, g)
+    }
+
     /// Moves `u` onto the level set `f = level` by Newton steps along the gradient restricted
     /// to the axes whose bit is set in `free_axes`, staying inside the grid box. Returns the
     /// projected point when `|f - level| <= tol` was reached, `None` otherwise.
     pub fn project(&self, u: [f64; 3], level: f64, free_axes: u8, tol: f64) -> Option<[f64; 3]> {
         let mut p = u;
         for _ in 0..NEWTON_STEPS {
-            let (f, mut g) = self.value_gradient(p);
+            let (f, g) = self.value_gradient_on(p, free_axes);
             let r = f - level;
             if r.abs() <= tol {
                 return Some(p);
-            }
-            for (a, ga) in g.iter_mut().enumerate() {
-                if free_axes & (1 << a) == 0 {
-                    *ga = 0.0;
-                }
             }
             let g2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
             if g2 == 0.0 || !g2.is_finite() {
@@ -132,14 +140,9 @@ impl<'a> Field<'a> {
     /// that crosses the level (the trilinear field is continuous, so that step holds a point
     /// of the level) and returns the nearest point found.
     pub fn march(&self, u: [f64; 3], level: f64, free_axes: u8, tol: f64) -> Option<[f64; 3]> {
-        let (f0, mut g) = self.value_gradient(u);
-        for (a, ga) in g.iter_mut().enumerate() {
-            if free_axes & (1 << a) == 0 {
-                *ga = 0.0;
-            }
-        }
+        let (f0, g) = self.value_gradient_on(u, free_axes);
         let side = (f0 - level).signum();
-        let n = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        let n = norm(g);
         let mut dirs: Vec<[f64; 3]> = Vec::with_capacity(7);
         if n > 0.0 && n.is_finite() {
             dirs.push(g.map(|x| -side * x / n));
@@ -166,28 +169,53 @@ impl<'a> Field<'a> {
         (level, side): (f64, f64),
         tol: f64,
     ) -> Option<(f64, [f64; 3])> {
-        let at = |t: f64| -> Option<[f64; 3]> {
-            let p: [f64; 3] = std::array::from_fn(|a| u[a] + t * d[a]);
-            let inside = (0..3).all(|a| p[a] >= 0.0 && p[a] <= (self.grid.dims[a] - 1) as f64);
-            inside.then_some(p)
-        };
-        let steps = (MARCH_REACH / MARCH_STEP).round() as usize;
-        let hi = (1..=steps)
-            .map(|i| i as f64 * MARCH_STEP)
-            .find(|&t| at(t).is_none_or(|p| (self.value(p) - level) * side <= 0.0))?;
-        at(hi)?;
-        let (mut a, mut b) = (hi - MARCH_STEP, hi);
+        let at = |t: f64| -> [f64; 3] { std::array::from_fn(|a| u[a] + t * d[a]) };
+        let crossed = |t: f64| (self.value(at(t)) - level) * side <= 0.0;
+        let (mut a, mut b) = self.first_step_across(u, d, (MARCH_STEP, MARCH_REACH), crossed)?;
         for _ in 0..BISECTIONS {
             let m = 0.5 * (a + b);
-            let r = self.value(at(m)?) - level;
+            let r = self.value(at(m)) - level;
             if r.abs() <= tol {
-                return Some((m, at(m)?));
+                return Some((m, at(m)));
             }
             if r * side > 0.0 {
                 a = m;
             } else {
                 b = m;
             }
+        }
+        None
+    }
+}
+
+impl Field<'_> {
+    /// Walks from `c` along unit direction `d` in steps of `step` up to `reach` (index units)
+    /// and returns the first step `(t - step, t)` with `crossed(t)`; `None` when the walk leaves
+    /// the grid box or reaches `reach` first. Callers bisect the step.
+    pub fn first_step_across(
+        &self,
+        c: [f64; 3],
+        d: [f64; 3],
+        (step, reach): (f64, f64),
+        crossed: impl Fn(f64) -> bool,
+    ) -> Option<(f64, f64)> {
+        let dims = self.grid.dims;
+        let inside = |t: f64| {
+            (0..3).all(|a| {
+                let x = c[a] + t * d[a];
+                x >= 0.0 && x <= (dims[a] - 1) as f64
+            })
+        };
+        let mut t = 0.0;
+        while t < reach {
+            let next = t + step;
+            if !inside(next) {
+                return None;
+            }
+            if crossed(next) {
+                return Some((t, next));
+            }
+            t = next;
         }
         None
     }

@@ -337,31 +337,20 @@ impl Classifier<'_> {
     /// The distance from `c` along unit direction `d` to where `f − level` first leaves the
     /// sign `side` (to 1e-6 voxel), within [`WIDTH_REACH`] and the grid box.
     fn crossing(&self, c: [f64; 3], d: [f64; 3], level: f64, side: f64) -> Option<f64> {
-        let dims = self.field.grid().dims;
         let at = |t: f64| [0, 1, 2].map(|a| c[a] + t * d[a]);
-        let inside = |p: [f64; 3]| (0..3).all(|a| p[a] >= 0.0 && p[a] <= (dims[a] - 1) as f64);
         let crossed = |t: f64| (self.field.value(at(t)) - level) * side <= 0.0;
-        let mut t = 0.0;
-        while t < WIDTH_REACH {
-            let next = t + WIDTH_STEP;
-            if !inside(at(next)) {
-                return None;
+        let (mut lo, mut hi) =
+            self.field
+                .first_step_across(c, d, (WIDTH_STEP, WIDTH_REACH), crossed)?;
+        while hi - lo > 1e-6 {
+            let mid = 0.5 * (lo + hi);
+            if crossed(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
             }
-            if crossed(next) {
-                let (mut lo, mut hi) = (t, next);
-                while hi - lo > 1e-6 {
-                    let mid = 0.5 * (lo + hi);
-                    if crossed(mid) {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
-                return Some(hi);
-            }
-            t = next;
         }
-        None
+        Some(hi)
     }
 
     /// Critical points in cell `c` as (value, Hessian magnitude there): its critical (or

@@ -11,6 +11,8 @@
 pub(crate) mod collapse;
 pub(crate) mod constraint;
 pub mod field;
+#[cfg(test)]
+mod fixtures;
 pub(crate) mod flip;
 pub mod forced;
 pub(crate) mod local;

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use super::constraint::Constraint;
 use super::local::{LocalMesh, StarCorners};
-use super::smooth::climb;
+use super::smooth::{climb, move_vertex};
 use super::Ctx;
 use crate::mesh::TetMesh;
 
@@ -194,19 +194,8 @@ pub fn untangle_around(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
             break;
         }
         for w in tangled {
-            let c = lm.con[w as usize];
-            if c.pinned || c.freedom() == 0 {
-                continue;
-            }
-            let sw = StarCorners::of(lm, w);
-            let mut qs: Vec<f64> = lm.star[w as usize]
-                .iter()
-                .map(|&t| lm.q[t as usize])
-                .collect();
-            let from = lm.u[w as usize];
-            if let Some((u, _)) = climb(lm, ctx, w, &sw, from, &mut qs, UNTANGLE_STEPS) {
+            if let Some(from) = move_vertex(lm, ctx, w, UNTANGLE_STEPS) {
                 undo.push((w, from));
-                lm.set_position_with(w, u, ctx, &qs);
             }
         }
     }
@@ -319,24 +308,9 @@ fn keep_fixed(s: [f64; 3], u: [f64; 3], free: u8) -> [f64; 3] {
 mod tests {
     use super::*;
     use crate::geom::{cross, dot, sub};
+    use crate::improve::fixtures::wavy_torus;
     use crate::improve::{context, local::extract_regions, QualityOptions, DEFAULT_WARP};
-    use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
-
-    /// A wavy torus on a coarse grid.
-    fn wavy_torus() -> (ScalarGrid, f64, f64) {
-        let n = 18;
-        let mut values = Vec::with_capacity(n * n * n);
-        for k in 0..n {
-            for j in 0..n {
-                for i in 0..n {
-                    let (x, y, z) = (i as f64 - 8.3, j as f64 - 8.6, k as f64 - 8.9);
-                    let ring = ((x * x + y * y).sqrt() - 5.0).hypot(z);
-                    values.push(ring + 0.4 * (1.7 * x).sin() * (1.3 * y + z).cos());
-                }
-            }
-        }
-        (ScalarGrid::new([n, n, n], values).unwrap(), -10.0, 2.2)
-    }
+    use crate::{mesh_interval, MeshOptions, Method};
 
     /// Blocks level vertex `v` (on its level at `p`): moves it inward by a tenth of a voxel,
     /// then an interior neighbour `w` of a tet `vwab` so that the plane through `w`, `a`, `b`

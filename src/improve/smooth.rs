@@ -19,9 +19,15 @@ const ACTIVE_BAND: f64 = 0.02;
 
 /// Tries to raise the smallest quality around `v`. Returns whether `v` moved.
 pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
+    move_vertex(lm, ctx, v, ITERATIONS).is_some()
+}
+
+/// Up to `iterations` max–min steps of `v` from where it is (which raise the worst tet of its
+/// star, an inverted one first), if it may move. Returns its old position if it moved.
+pub fn move_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32, iterations: usize) -> Option<[f64; 3]> {
     let c = lm.con[v as usize];
     if !lm.is_free(v) || c.pinned || c.freedom() == 0 {
-        return false;
+        return None;
     }
     // The other corners stay where they are while `v` moves.
     let star = StarCorners::of(lm, v);
@@ -29,13 +35,10 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         .iter()
         .map(|&t| lm.q[t as usize])
         .collect();
-    match climb(lm, ctx, v, &star, lm.u[v as usize], &mut qs, ITERATIONS) {
-        Some((u, _)) => {
-            lm.set_position_with(v, u, ctx, &qs);
-            true
-        }
-        None => false,
-    }
+    let from = lm.u[v as usize];
+    let (u, _) = climb(lm, ctx, v, &star, from, &mut qs, iterations)?;
+    lm.set_position_with(v, u, ctx, &qs);
+    Some(from)
 }
 
 /// Up to `iterations` max–min steps of `v` (whose star is `star`) from index point `u`, where
@@ -105,12 +108,7 @@ fn ascent_direction(
         }
     }
     if lm.con[v as usize].level.is_some() {
-        let (_, mut grad) = ctx.field.value_gradient(u);
-        for a in 0..3 {
-            if free & (1 << a) == 0 {
-                grad[a] = 0.0;
-            }
-        }
+        let (_, grad) = ctx.field.value_gradient_on(u, free);
         let g2 = dot(grad, grad);
         if g2 > 0.0 {
             let s = dot(sum, grad) / g2;
