@@ -169,34 +169,43 @@ pub fn classify_forced(
         tol: opts.forced_critical_tol,
         labels: mesh.vertex_label_bits(),
     };
-    let mut elements: Vec<ForcedElement> = (0..mesh.tets.len())
+    // The reasons of all, cheaply; the details only for the listed ones.
+    let mut below: Vec<(f64, f64, usize, ForcedReason)> = (0..mesh.tets.len())
         .into_par_iter()
         .filter_map(|t| {
             let (lo, hi) = tet_dihedral_range(tet_points(mesh, t));
-            (lo < floor).then(|| c.classify(t, lo, hi))
+            (lo < floor).then(|| (lo, hi, t, c.reason(t)))
         })
         .collect();
     let mut counts = ForcedCounts::default();
-    for e in &elements {
-        *match e.reason {
+    for &(_, _, _, reason) in &below {
+        *match reason {
             ForcedReason::NearCritical => &mut counts.near_critical,
             ForcedReason::ThinLayer => &mut counts.thin_layer,
             ForcedReason::BoxAngle => &mut counts.box_angle,
             ForcedReason::Unexplained => &mut counts.unexplained,
         } += 1;
     }
-    elements.sort_by(|a, b| {
-        a.min_dihedral
-            .total_cmp(&b.min_dihedral)
-            .then(a.tet.cmp(&b.tet))
-    });
-    elements.truncate(opts.forced_list_cap);
+    below.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
+    below.truncate(opts.forced_list_cap);
+    let elements = below
+        .into_par_iter()
+        .map(|(lo, hi, t, reason)| c.details(t, lo, hi, reason))
+        .collect();
     ForcedReport {
         floor_degrees: floor,
         critical_tolerance: opts.forced_critical_tol,
         counts,
         elements,
     }
+}
+
+/// The longest edge of a tet with corners `p`.
+fn longest_edge(p: &[[f64; 3]; 4]) -> f64 {
+    (0..4)
+        .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+        .map(|(i, j)| distance(p[i], p[j]))
+        .fold(0.0, f64::max)
 }
 
 fn tet_points(mesh: &TetMesh, t: usize) -> [[f64; 3]; 4] {
@@ -226,28 +235,43 @@ fn tet_cells(index: &[[f64; 3]; 4], cd: [usize; 3]) -> ([usize; 3], [usize; 3]) 
 }
 
 impl Classifier<'_> {
-    fn classify(&self, t: usize, lo: f64, hi: f64) -> ForcedElement {
+    /// Why tet `t` is below the floor (the same as [`Classifier::details`] finds, without
+    /// measuring necks that cannot explain it).
+    fn reason(&self, t: usize) -> ForcedReason {
+        let index = tet_points(self.mesh, t).map(|q| self.field.to_index(q));
+        let limit = longest_edge(&index) * self.floor;
+        let near_critical = self.near_critical(&index, limit);
+        let layer_thickness = || self.layer_thickness(self.mesh.tets[t], &index);
+        let box_angle = || self.box_angle(self.mesh.tets[t], &index);
+        self.decide(near_critical, limit, layer_thickness, box_angle)
+    }
+
+    /// The reason, given whether a critical point explains the tet, its floor-scaled longest
+    /// edge `limit`, and (computed only if needed) its layer thickness and box angle.
+    fn decide(
+        &self,
+        near_critical: bool,
+        limit: f64,
+        layer_thickness: impl FnOnce() -> Option<f64>,
+        box_angle: impl FnOnce() -> Option<f64>,
+    ) -> ForcedReason {
+        if near_critical {
+            ForcedReason::NearCritical
+        } else if layer_thickness().is_some_and(|h| h < limit) {
+            ForcedReason::ThinLayer
+        } else if box_angle().is_some_and(|a| a.to_radians() < self.floor) {
+            ForcedReason::BoxAngle
+        } else {
+            ForcedReason::Unexplained
+        }
+    }
+
+    /// Tet `t` (angles `lo`, `hi`, reason `reason`) with every measure the report gives.
+    fn details(&self, t: usize, lo: f64, hi: f64, reason: ForcedReason) -> ForcedElement {
         let p = tet_points(self.mesh, t);
         let centroid = [0, 1, 2].map(|a| p.iter().map(|q| q[a]).sum::<f64>() / 4.0);
         let index = p.map(|q| self.field.to_index(q));
         let (critical_distance, neck_width) = self.nearest_critical(&index);
-        let box_angle = self.box_angle(self.mesh.tets[t], &index);
-        let longest = (0..4)
-            .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
-            .map(|(i, j)| distance(index[i], index[j]))
-            .fold(0.0, f64::max);
-        let layer_thickness = self.layer_thickness(self.mesh.tets[t], &index);
-        let reason = if critical_distance.is_some_and(|d| d <= self.tol)
-            || neck_width.is_some_and(|w| w < longest * self.floor)
-        {
-            ForcedReason::NearCritical
-        } else if layer_thickness.is_some_and(|h| h < longest * self.floor) {
-            ForcedReason::ThinLayer
-        } else if box_angle.is_some_and(|a| a.to_radians() < self.floor) {
-            ForcedReason::BoxAngle
-        } else {
-            ForcedReason::Unexplained
-        };
         ForcedElement {
             tet: t,
             min_dihedral: lo,
@@ -256,8 +280,8 @@ impl Classifier<'_> {
             point: centroid,
             critical_distance,
             neck_width,
-            layer_thickness,
-            box_angle,
+            layer_thickness: self.layer_thickness(self.mesh.tets[t], &index),
+            box_angle: self.box_angle(self.mesh.tets[t], &index),
         }
     }
 
@@ -283,36 +307,106 @@ impl Classifier<'_> {
         Some(thinnest)
     }
 
+    /// The critical points in the cells touched by the tet with index-space corners `index`,
+    /// as (`|value − bound|` to the nearer bound, that bound, Hessian magnitude, position).
+    fn tet_critical_points(
+        &self,
+        index: &[[f64; 3]; 4],
+    ) -> impl Iterator<Item = (f64, f64, f64, [f64; 3])> + '_ {
+        let (lo, hi) = tet_cells(index, self.field.grid().cell_dims());
+        (lo[2]..=hi[2])
+            .flat_map(move |k| {
+                (lo[1]..=hi[1]).flat_map(move |j| (lo[0]..=hi[0]).map(move |i| [i, j, k]))
+            })
+            .flat_map(|c| self.cell_critical_points(c))
+            .map(|(v, hess, pos)| {
+                let [da, db] = self.levels.map(|l| (v - l).abs());
+                if da <= db {
+                    (da, self.levels[0], hess, pos)
+                } else {
+                    (db, self.levels[1], hess, pos)
+                }
+            })
+    }
+
     /// Over the critical points in the cells touched by the tet with index-space corners
     /// `index`: the smallest `|value − bound|` relative to the data range, and the narrowest
     /// neck the nearer bound leaves there ([`Classifier::measured_width`], else the quadratic
     /// estimate `2·sqrt(|value − bound| / k)`).
     fn nearest_critical(&self, index: &[[f64; 3]; 4]) -> (Option<f64>, Option<f64>) {
-        let (lo, hi) = tet_cells(index, self.field.grid().cell_dims());
         let (mut dist, mut neck): (Option<f64>, Option<f64>) = (None, None);
-        for k in lo[2]..=hi[2] {
-            for j in lo[1]..=hi[1] {
-                for i in lo[0]..=hi[0] {
-                    for (v, hess, pos) in self.cell_critical_points([i, j, k]) {
-                        let [da, db] = self.levels.map(|l| (v - l).abs());
-                        let (d, level) = if da <= db {
-                            (da, self.levels[0])
-                        } else {
-                            (db, self.levels[1])
-                        };
-                        let w = if d == 0.0 {
-                            0.0
-                        } else {
-                            self.measured_width(pos, level)
-                                .unwrap_or(2.0 * (d / hess).sqrt())
-                        };
-                        dist = Some(dist.map_or(d / self.range, |b| b.min(d / self.range)));
-                        neck = Some(neck.map_or(w, |b| b.min(w)));
-                    }
+        for (d, level, hess, pos) in self.tet_critical_points(index) {
+            let w = if d == 0.0 {
+                0.0
+            } else {
+                self.measured_width(pos, level)
+                    .unwrap_or(2.0 * (d / hess).sqrt())
+            };
+            dist = Some(dist.map_or(d / self.range, |b| b.min(d / self.range)));
+            neck = Some(neck.map_or(w, |b| b.min(w)));
+        }
+        (dist, neck)
+    }
+
+    /// Whether [`Classifier::nearest_critical`] would find a critical value within the
+    /// tolerance or a neck narrower than `limit`, measuring necks only as far as `limit` needs:
+    /// a measured width below `limit` has both its crossings within `limit`, and the full
+    /// reach is walked only where the quadratic estimate would be below `limit`.
+    fn near_critical(&self, index: &[[f64; 3]; 4], limit: f64) -> bool {
+        self.tet_critical_points(index)
+            .any(|(d, level, hess, pos)| {
+                if d / self.range <= self.tol || d == 0.0 {
+                    return d / self.range <= self.tol || limit > 0.0;
+                }
+                self.neck_below(pos, level, limit)
+                    || 2.0 * (d / hess).sqrt() < limit && self.measured_width(pos, level).is_none()
+            })
+    }
+
+    /// Whether [`Classifier::measured_width`] at `c` is below `limit`: some direction crosses
+    /// the level at `a` ahead and `b` behind with `a + b < limit`. Walks `limit` ahead and
+    /// only `limit − a` behind (so the crossings found are those of the full walk), and not at
+    /// all where the field cannot reach the level within `limit` ([`Classifier::slope_bound`]).
+    fn neck_below(&self, c: [f64; 3], level: f64, limit: f64) -> bool {
+        let f = self.field.value(c);
+        if (f - level).abs() >= self.slope_bound(c, limit) * limit {
+            return false;
+        }
+        let side = (f - level).signum();
+        LATTICE_DIRECTIONS.iter().any(|d| {
+            let n = norm(*d);
+            let d = d.map(|x| x / n);
+            self.crossing(c, d, level, side, limit).is_some_and(|a| {
+                self.crossing(c, d.map(|x| -x), level, side, limit - a)
+                    .is_some_and(|b| a + b < limit)
+            })
+        })
+    }
+
+    /// A bound on `|∇f|` (index space) within `reach` of `c`: √3 times the spread of the grid
+    /// values around (`∂f/∂x` in a cell interpolates its x-edge differences). Infinite for a
+    /// reach above a voxel.
+    fn slope_bound(&self, c: [f64; 3], reach: f64) -> f64 {
+        if reach > 1.0 {
+            return f64::INFINITY;
+        }
+        let grid = self.field.grid();
+        let span = |a: usize| {
+            let base = c[a].floor() as isize;
+            let top = grid.dims[a] as isize - 1;
+            (base - 1).clamp(0, top) as usize..=(base + 2).clamp(0, top) as usize
+        };
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for k in span(2) {
+            for j in span(1) {
+                for i in span(0) {
+                    let v = grid.value(i, j, k);
+                    lo = lo.min(v);
+                    hi = hi.max(v);
                 }
             }
         }
-        (dist, neck)
+        3f64.sqrt() * (hi - lo)
     }
 
     /// The width of the neck (or gap) the level set `level` makes at the critical point at
@@ -320,28 +414,36 @@ impl Classifier<'_> {
     /// distance between the first crossings of the level on either side; the smallest. `None`
     /// when no direction crosses on both sides within [`WIDTH_REACH`] voxels.
     fn measured_width(&self, c: [f64; 3], level: f64) -> Option<f64> {
+        self.width_within(c, level, WIDTH_REACH)
+    }
+
+    /// [`Classifier::measured_width`] over the directions that cross on both sides within
+    /// `reach` voxels.
+    fn width_within(&self, c: [f64; 3], level: f64, reach: f64) -> Option<f64> {
         let side = (self.field.value(c) - level).signum();
         let mut best: Option<f64> = None;
         for d in LATTICE_DIRECTIONS {
             let n = norm(d);
             let d = d.map(|x| x / n);
-            let ahead = self.crossing(c, d, level, side);
-            let behind = self.crossing(c, d.map(|x| -x), level, side);
-            if let (Some(a), Some(b)) = (ahead, behind) {
-                best = Some(best.map_or(a + b, |w: f64| w.min(a + b)));
+            let Some(ahead) = self.crossing(c, d, level, side, reach) else {
+                continue;
+            };
+            if let Some(behind) = self.crossing(c, d.map(|x| -x), level, side, reach) {
+                best = Some(best.map_or(ahead + behind, |w: f64| w.min(ahead + behind)));
             }
         }
         best
     }
 
     /// The distance from `c` along unit direction `d` to where `f − level` first leaves the
-    /// sign `side` (to 1e-6 voxel), within [`WIDTH_REACH`] and the grid box.
-    fn crossing(&self, c: [f64; 3], d: [f64; 3], level: f64, side: f64) -> Option<f64> {
+    /// sign `side` (to 1e-6 voxel), within `reach` (sampled in [`WIDTH_STEP`]s) and the grid
+    /// box.
+    fn crossing(&self, c: [f64; 3], d: [f64; 3], level: f64, side: f64, reach: f64) -> Option<f64> {
         let at = |t: f64| [0, 1, 2].map(|a| c[a] + t * d[a]);
         let crossed = |t: f64| (self.field.value(at(t)) - level) * side <= 0.0;
-        let (mut lo, mut hi) =
-            self.field
-                .first_step_across(c, d, (WIDTH_STEP, WIDTH_REACH), crossed)?;
+        let (mut lo, mut hi) = self
+            .field
+            .first_step_across(c, d, (WIDTH_STEP, reach), crossed)?;
         while hi - lo > 1e-6 {
             let mid = 0.5 * (lo + hi);
             if crossed(mid) {
@@ -576,6 +678,56 @@ mod tests {
         // The same shell twenty times thicker lists no thin layer.
         let (_, r) = run(&g, 6.0, 8.0, &QualityOptions::default());
         assert_eq!(r.counts.thin_layer, 0, "{:?}", r.counts);
+    }
+
+    #[test]
+    fn the_quick_reasons_are_those_of_the_full_measures() {
+        // 8-bit-like noise at a half-integer bound: critical values everywhere, some within
+        // the tolerance of the bound, many necks. No pass, so thousands of tets are below a
+        // 15° floor; each reason must equal the one the full measures give.
+        let g = grid([9, 8, 8], |x, y, z| {
+            if z == 3.0 && (4.0..=5.0).contains(&x) && (4.0..=5.0).contains(&y) {
+                // A checkerboard face: its saddle value is 3.5, the bound.
+                return if x == y { 3.0 } else { 4.0 };
+            }
+            let s = (x + 9.0 * (y + 8.0 * z)) as u64 + 12345;
+            let s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s.wrapping_mul(2862933555777941757) >> 33) % 8) as f64
+        });
+        let mo = MeshOptions::new(3.5, 5.5, Method::Ctd);
+        let mesh = mesh_interval(&g, &mo).unwrap().mesh;
+        let opts = QualityOptions {
+            forced_floor: 15.0,
+            forced_list_cap: usize::MAX,
+            ..QualityOptions::default()
+        };
+        let r = classify_forced(&mesh, &g, 3.5, 5.5, &opts);
+        let c = Classifier {
+            mesh: &mesh,
+            field: Field::new(&g),
+            levels: [3.5, 5.5],
+            range: 7.0,
+            floor: 15f64.to_radians(),
+            tol: opts.forced_critical_tol,
+            labels: mesh.vertex_label_bits(),
+        };
+        let (mut by_tol, mut by_neck) = (0, 0);
+        for e in &r.elements {
+            let index = tet_points(&mesh, e.tet).map(|q| c.field.to_index(q));
+            let limit = longest_edge(&index) * c.floor;
+            let tol = e.critical_distance.is_some_and(|d| d <= c.tol);
+            let neck = e.neck_width.is_some_and(|w| w < limit);
+            let full = c.decide(tol || neck, limit, || e.layer_thickness, || e.box_angle);
+            assert_eq!(e.reason, full, "{e:?}");
+            by_tol += tol as usize;
+            by_neck += (neck && !tol) as usize;
+        }
+        assert_eq!(r.elements.len(), r.total());
+        assert!(r.total() > 300, "{:?} {by_tol} {by_neck}", r.counts);
+        assert!(by_tol > 0 && by_neck > 0, "{by_tol} {by_neck}");
+        assert!(r.counts.unexplained > 0, "{:?}", r.counts);
     }
 
     #[test]
