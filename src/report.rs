@@ -152,7 +152,7 @@ pub struct Report {
 pub struct QualitySection {
     /// Target smallest and largest dihedral angle (degrees).
     pub target_degrees: [f64; 2],
-    /// `--boundary-collapse-ratio` (`None`: no limit).
+    /// The `--boundary-collapse-ratio` used (`None`: no limit, `inf`).
     pub boundary_collapse_ratio: Option<f64>,
     /// Quality of the mesh as extracted.
     pub before: Option<QualitySummary>,

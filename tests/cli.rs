@@ -436,8 +436,8 @@ fn quality_improves_the_demo_and_reports_before_and_after() {
         .sum();
     assert_eq!(Some(listed), after["below"][0].as_u64(), "{q}");
     assert!(out.contains("below 5 deg after:"), "{out}");
-    assert_eq!(q["boundary_collapse_ratio"], Value::Null);
-    // A limit on boundary collapses is used and recorded.
+    assert_eq!(q["boundary_collapse_ratio"].as_f64(), Some(3.0));
+    // Another limit on boundary collapses, or none, is used and recorded.
     let o = run_in(
         dir.path(),
         &[
@@ -454,6 +454,15 @@ fn quality_improves_the_demo_and_reports_before_and_after() {
     assert_ok(&o);
     let r: Value = read_json(&dir.path().join("r.json"));
     assert_eq!(r["quality"]["boundary_collapse_ratio"].as_f64(), Some(1.5));
+    assert_eq!(r["betti"], serde_json::json!([2, 0, 0]));
+    let args = ["--demo", "-o", "r.msh", "--quality", "--report", "r.json"];
+    let o = run_in(
+        dir.path(),
+        &[&args[..], &["--boundary-collapse-ratio", "inf"]].concat(),
+    );
+    assert_ok(&o);
+    let r: Value = read_json(&dir.path().join("r.json"));
+    assert_eq!(r["quality"]["boundary_collapse_ratio"], Value::Null);
     assert_eq!(r["betti"], serde_json::json!([2, 0, 0]));
 }
 
@@ -493,7 +502,7 @@ fn quality_rejects_impossible_angles() {
         ["--max-angle", "60"],
         ["--quality-time", "0"],
         ["--boundary-collapse-ratio", "0"],
-        ["--boundary-collapse-ratio", "inf"],
+        ["--boundary-collapse-ratio", "nan"],
     ] {
         let mut all = vec!["--demo", "-o", "x.vtu", "--quality"];
         all.extend(args);

@@ -248,7 +248,11 @@ fn a_boundary_collapse_limit_keeps_the_invariants_and_raises_the_shell() {
     // Unlimited, collapses leave long boundary edges across the 1.2-voxel layer; limited to
     // twice the mean edge at the removed node they do not (measured: 14.82° -> 15.01°).
     let f = sphere(26, 8.3);
-    let free = mesh_and_improve(&f, -0.6, 0.6);
+    let unlimited = QualityOptions {
+        boundary_collapse_ratio: f64::INFINITY,
+        ..QualityOptions::default()
+    };
+    let free = mesh_and_improve_with(&f, -0.6, 0.6, &unlimited);
     let opts = QualityOptions {
         boundary_collapse_ratio: 2.0,
         ..QualityOptions::default()

@@ -135,7 +135,8 @@ impl<'a> Field<'a> {
 
     /// A point of the level set near `u` where Newton steps ([`Field::project`]) do not
     /// settle (the gradient jumps across cell faces, or vanishes): walks from `u` towards
-    /// `level` along the gradient at `u` and along each free axis both ways, in steps of
+    /// `level` along the gradient at `u` and along each lattice direction (axes, face and
+    /// body diagonals, both ways) that keeps the fixed axes, in steps of
     /// `MARCH_STEP` (0.05) up to `MARCH_REACH` (1) voxel, bisects the first step of each walk
     /// that crosses the level (the trilinear field is continuous, so that step holds a point
     /// of the level) and returns the nearest point found.
@@ -143,15 +144,18 @@ impl<'a> Field<'a> {
         let (f0, g) = self.value_gradient_on(u, free_axes);
         let side = (f0 - level).signum();
         let n = norm(g);
-        let mut dirs: Vec<[f64; 3]> = Vec::with_capacity(7);
+        let mut dirs: Vec<[f64; 3]> = Vec::with_capacity(27);
         if n > 0.0 && n.is_finite() {
             dirs.push(g.map(|x| -side * x / n));
         }
-        for a in (0..3).filter(|a| free_axes & (1 << a) != 0) {
-            for s in [-1.0, 1.0] {
-                let mut d = [0.0; 3];
-                d[a] = s;
-                dirs.push(d);
+        // The 26 lattice directions that keep the fixed axes: the gradient at `u` can point
+        // out of its cell towards a rise, while the level lies across a diagonal.
+        for code in 0..27usize {
+            let d = [code % 3, code / 3 % 3, code / 9].map(|k| k as f64 - 1.0);
+            let keeps = (0..3).all(|a| d[a] == 0.0 || free_axes & (1 << a) != 0);
+            if code != 13 && keeps {
+                let n = norm(d);
+                dirs.push(d.map(|x| x / n));
             }
         }
         dirs.into_iter()
@@ -319,5 +323,45 @@ mod tests {
         // Along the fixed axes only, or farther than the reach, there is nothing to find.
         assert!(f.march(u, 0.3, 0b110, 1e-12).is_none());
         assert!(f.march(u, 1.5, 0b111, 1e-12).is_none());
+    }
+
+    #[test]
+    fn march_finds_the_level_across_a_diagonal_when_the_gradient_leads_to_a_rise() {
+        // MNI152 T1 voxels [44, 48) × [101, 105) × [127, 131): the level vertex of the
+        // interval [101.5, 151.5] at u (f = 104.85) that the pass could not settle. Newton
+        // fails, the gradient at u points out of its cell towards a rise, and no axis reaches
+        // 101.5 within a voxel; two diagonals do.
+        let v = [
+            163, 142, 121, 106, 144, 121, 106, 110, 121, 105, 108, 138, 102, 105, 134, 171, 139,
+            123, 108, 104, 116, 103, 102, 125, 99, 98, 122, 161, 95, 115, 158, 184, 111, 103, 98,
+            112, 98, 96, 109, 147, 93, 103, 139, 178, 98, 127, 171, 187, 99, 94, 98, 124, 95, 96,
+            119, 161, 95, 110, 150, 184, 100, 134, 176, 189,
+        ];
+        let v: Vec<f64> = v.iter().map(|&x| x as f64).collect();
+        let g = ScalarGrid::with_geometry([4; 3], [1.0; 3], [0.0; 3], IDENTITY, v).unwrap();
+        let f = Field::new(&g);
+        let u = [
+            1.739_130_434_782_61,
+            1.152_173_913_043_47,
+            1.108_695_652_173_9,
+        ];
+        let (level, tol) = (101.5, 1e-9);
+        assert!((f.value(u) - 104.85).abs() < 0.01);
+        assert!(f.project(u, level, 0b111, tol).is_none());
+        let side = (f.value(u) - level).signum();
+        for a in 0..3 {
+            for s in [-1.0, 1.0] {
+                let mut d = [0.0; 3];
+                d[a] = s;
+                assert!(f.walk(u, d, (level, side), tol).is_none(), "axis {a} {s}");
+            }
+        }
+        let p = f.march(u, level, 0b111, tol).expect("a diagonal crosses");
+        assert!((f.value(p) - level).abs() <= tol);
+        assert!(crate::geom::distance(p, u) <= 1.0, "{p:?}");
+        // With x fixed, the diagonals that move x are not walked.
+        assert!(f
+            .march(u, level, 0b110, tol)
+            .is_none_or(|q| (q[0] - u[0]).abs() < 1e-12));
     }
 }

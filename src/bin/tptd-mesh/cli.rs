@@ -106,10 +106,11 @@ pub(crate) struct Cli {
     pub(crate) quality_time: Option<f64>,
 
     /// With --quality, merge two boundary nodes only along an edge shorter than R times the
-    /// mean edge length at the node removed (default: no limit). A limit of about 3 keeps
-    /// thin layers such as shells finer, so their elements stay better shaped
-    #[arg(long, value_name = "R", value_parser = parse_ratio)]
-    pub(crate) boundary_collapse_ratio: Option<f64>,
+    /// mean edge length at the node removed, or `inf` for no limit. The limit keeps thin
+    /// layers such as shells finer, so their elements stay better shaped; without it convex
+    /// boundaries get coarser
+    #[arg(long, value_name = "R", default_value = "3", value_parser = parse_ratio)]
+    pub(crate) boundary_collapse_ratio: f64,
 
     /// Mesh a generated sample (two vessels a third of a voxel apart) with the interval
     /// [0.5, inf) and show what the decomposition preserves
@@ -289,11 +290,11 @@ fn parse_angle(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
     }
 }
 
-/// Parses `--boundary-collapse-ratio`: a positive number.
+/// Parses `--boundary-collapse-ratio`: a positive number, or `inf` (no limit).
 fn parse_ratio(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(r) if r > 0.0 && r.is_finite() => Ok(r),
-        _ => Err(format!("expected a positive ratio, got '{s}'")),
+        Ok(r) if r > 0.0 && !r.is_nan() => Ok(r),
+        _ => Err(format!("expected a positive ratio or inf, got '{s}'")),
     }
 }
 

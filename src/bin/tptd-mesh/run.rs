@@ -501,7 +501,7 @@ fn improve_mesh(
         min_angle: cli.min_angle,
         max_angle: cli.max_angle,
         time_budget: cli.quality_time.map(Duration::from_secs_f64),
-        boundary_collapse_ratio: cli.boundary_collapse_ratio.unwrap_or(f64::INFINITY),
+        boundary_collapse_ratio: cli.boundary_collapse_ratio,
         ..QualityOptions::default()
     };
     let t = Instant::now();
@@ -510,7 +510,7 @@ fn improve_mesh(
         improve_with_progress(&mut out.mesh, grid, job, &opts, cli.quiet, classify);
     let section = QualitySection {
         target_degrees: [opts.min_angle, opts.max_angle],
-        boundary_collapse_ratio: cli.boundary_collapse_ratio,
+        boundary_collapse_ratio: Some(opts.boundary_collapse_ratio).filter(|r| r.is_finite()),
         before,
         after: None,
         pass,
