@@ -107,6 +107,10 @@ pub(crate) fn improve_with_progress(
         .and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
     let work = |mesh: &mut TetMesh| {
         let r = improve(mesh, grid, alpha, beta, opts);
+        pb.set_message(format!(
+            "giving a reason for each element below {}°",
+            opts.forced_floor
+        ));
         let f = classify.then(|| classify_forced(mesh, grid, alpha, beta, opts));
         (r, f)
     };
