@@ -355,8 +355,12 @@ impl Classifier<'_> {
     fn near_critical(&self, index: &[[f64; 3]; 4], limit: f64) -> bool {
         self.tet_critical_points(index)
             .any(|(d, level, hess, pos)| {
-                if d / self.range <= self.tol || d == 0.0 {
-                    return d / self.range <= self.tol || limit > 0.0;
+                if d / self.range <= self.tol {
+                    return true;
+                }
+                if d == 0.0 {
+                    // The level passes through the critical point: a neck of width 0.
+                    return limit > 0.0;
                 }
                 self.neck_below(pos, level, limit)
                     || 2.0 * (d / hess).sqrt() < limit && self.measured_width(pos, level).is_none()
