@@ -77,7 +77,8 @@ fn collapse_quality(
     if lm.con[a as usize].level.is_some() && !short_edge(lm, a, b, ratio) {
         return None;
     }
-    if off_its_level(lm, ctx, b) && lm.star[a as usize].len() + lm.star[b as usize].len() > HUB_TETS
+    // The star sizes first: the level test evaluates the field.
+    if lm.star[a as usize].len() + lm.star[b as usize].len() > HUB_TETS && lm.off_its_level(b, ctx)
     {
         // A vertex with many tets around it can hardly be moved onto its level later.
         return None;
@@ -99,13 +100,6 @@ fn collapse_quality(
 /// `--boundary-collapse-ratio 3`, such a vertex with 66 tets stayed 0.7 voxel off its level).
 /// A smaller limit (40) or none left more tets below 5° on the noisy 256³ field.
 const HUB_TETS: usize = 56;
-
-/// Whether `v` is a level vertex away from its level set (not yet projected).
-fn off_its_level(lm: &LocalMesh, ctx: &Ctx, v: u32) -> bool {
-    lm.con[v as usize].level.is_some_and(|l| {
-        (ctx.field.value(lm.u[v as usize]) - ctx.levels[l as usize]).abs() > ctx.tol
-    })
-}
 
 /// Whether edge `ab` is short against the other edges at `a`: boundary collapses are kept to
 /// such edges, since merging two boundary vertices further apart shrinks a convex boundary
@@ -350,9 +344,7 @@ fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::improve::fixtures::wavy_torus;
-    use crate::improve::{context, local::extract_regions, QualityOptions, DEFAULT_WARP};
-    use crate::{mesh_interval, MeshOptions, Method};
+    use crate::improve::fixtures::{wavy_torus, wavy_torus_regions};
 
     /// The link of `v`, as sorted lists of its vertices, edges and triangles (from the tets of
     /// its star; the virtual boundary vertex is handled separately).
@@ -426,13 +418,8 @@ mod tests {
 
     #[test]
     fn link_condition_matches_the_set_definition() {
-        let (grid, alpha, beta) = wavy_torus();
-        let opts = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
-        let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
-        let start = std::time::Instant::now();
-        let ctx = context(&grid, alpha, beta, &QualityOptions::default(), start);
-        let work = vec![true; mesh.points.len()];
-        let (mut regions, _) = extract_regions(&mesh, &work, &ctx, 0);
+        let grid = wavy_torus();
+        let (_, mut regions) = wavy_torus_regions(&grid, &[0]);
         let (mut legal, mut illegal, mut applied) = (0, 0, 0);
         for lm in &mut regions {
             for t in 0..lm.tets.len() {
@@ -470,17 +457,12 @@ mod tests {
         // Before projection the level vertices of the warped mesh sit at linear cut points,
         // off the trilinear level set (except the snapped grid vertices). Collapse neighbours
         // into such vertices while it is allowed, until their stars reach the limit.
-        let (grid, alpha, beta) = wavy_torus();
-        let opts = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
-        let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
-        let start = std::time::Instant::now();
-        let ctx = context(&grid, alpha, beta, &QualityOptions::default(), start);
-        let work = vec![true; mesh.points.len()];
-        let (mut regions, _) = extract_regions(&mesh, &work, &ctx, 0);
+        let grid = wavy_torus();
+        let (ctx, mut regions) = wavy_torus_regions(&grid, &[0]);
         let (mut applied, mut refused) = (0, 0);
         for lm in &mut regions {
             for b in 0..lm.u.len() as u32 {
-                if !lm.is_free(b) || !off_its_level(lm, &ctx, b) || refused >= 20 {
+                if !lm.is_free(b) || !lm.off_its_level(b, &ctx) || refused >= 20 {
                     continue;
                 }
                 while let Some(a) = positive_merge_into(lm, &ctx, b) {

@@ -1,10 +1,17 @@
 //! Test domains shared by the unit tests of the quality pass.
 
-use crate::ScalarGrid;
+use std::time::Instant;
 
-/// A torus with a wavy surface on a coarse grid, with its interval: many boundary vertices,
-/// short edges and both outcomes of the link condition.
-pub fn wavy_torus() -> (ScalarGrid, f64, f64) {
+use super::local::{extract_regions, LocalMesh};
+use super::{context, Ctx, QualityOptions, DEFAULT_WARP};
+use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
+
+/// The interval of [`wavy_torus`].
+const WAVY_TORUS_INTERVAL: (f64, f64) = (-10.0, 2.2);
+
+/// A torus with a wavy surface on a coarse grid (its interval: [`WAVY_TORUS_INTERVAL`]): many
+/// boundary vertices, short edges and both outcomes of the link condition.
+pub fn wavy_torus() -> ScalarGrid {
     let n = 18;
     let mut values = Vec::with_capacity(n * n * n);
     for k in 0..n {
@@ -16,5 +23,26 @@ pub fn wavy_torus() -> (ScalarGrid, f64, f64) {
             }
         }
     }
-    (ScalarGrid::new([n, n, n], values).unwrap(), -10.0, 2.2)
+    ScalarGrid::new([n, n, n], values).unwrap()
+}
+
+/// The wavy torus meshed with warping (no pass), its context with the default options, and
+/// the regions of every vertex in the slabs of each phase in `phases`.
+pub fn wavy_torus_regions<'a>(grid: &'a ScalarGrid, phases: &[u32]) -> (Ctx<'a>, Vec<LocalMesh>) {
+    let (alpha, beta) = WAVY_TORUS_INTERVAL;
+    let opts = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
+    let mesh = mesh_interval(grid, &opts).unwrap().mesh;
+    let ctx = context(
+        grid,
+        alpha,
+        beta,
+        &QualityOptions::default(),
+        Instant::now(),
+    );
+    let work = vec![true; mesh.points.len()];
+    let regions = phases
+        .iter()
+        .flat_map(|&p| extract_regions(&mesh, &work, &ctx, p).0)
+        .collect();
+    (ctx, regions)
 }

@@ -200,6 +200,14 @@ pub fn classify_forced(
     }
 }
 
+/// [`LATTICE_DIRECTIONS`] as unit vectors.
+fn unit_lattice_directions() -> impl Iterator<Item = [f64; 3]> {
+    LATTICE_DIRECTIONS.into_iter().map(|d| {
+        let n = norm(d);
+        d.map(|x| x / n)
+    })
+}
+
 /// The longest edge of a tet with corners `p`.
 fn longest_edge(p: &[[f64; 3]; 4]) -> f64 {
     (0..4)
@@ -377,9 +385,7 @@ impl Classifier<'_> {
             return false;
         }
         let side = (f - level).signum();
-        LATTICE_DIRECTIONS.iter().any(|d| {
-            let n = norm(*d);
-            let d = d.map(|x| x / n);
+        unit_lattice_directions().any(|d| {
             self.crossing(c, d, level, side, limit).is_some_and(|a| {
                 self.crossing(c, d.map(|x| -x), level, side, limit - a)
                     .is_some_and(|b| a + b < limit)
@@ -418,25 +424,14 @@ impl Classifier<'_> {
     /// distance between the first crossings of the level on either side; the smallest. `None`
     /// when no direction crosses on both sides within [`WIDTH_REACH`] voxels.
     fn measured_width(&self, c: [f64; 3], level: f64) -> Option<f64> {
-        self.width_within(c, level, WIDTH_REACH)
-    }
-
-    /// [`Classifier::measured_width`] over the directions that cross on both sides within
-    /// `reach` voxels.
-    fn width_within(&self, c: [f64; 3], level: f64, reach: f64) -> Option<f64> {
         let side = (self.field.value(c) - level).signum();
-        let mut best: Option<f64> = None;
-        for d in LATTICE_DIRECTIONS {
-            let n = norm(d);
-            let d = d.map(|x| x / n);
-            let Some(ahead) = self.crossing(c, d, level, side, reach) else {
-                continue;
-            };
-            if let Some(behind) = self.crossing(c, d.map(|x| -x), level, side, reach) {
-                best = Some(best.map_or(ahead + behind, |w: f64| w.min(ahead + behind)));
-            }
-        }
-        best
+        unit_lattice_directions()
+            .filter_map(|d| {
+                let ahead = self.crossing(c, d, level, side, WIDTH_REACH)?;
+                let behind = self.crossing(c, d.map(|x| -x), level, side, WIDTH_REACH)?;
+                Some(ahead + behind)
+            })
+            .reduce(f64::min)
     }
 
     /// The distance from `c` along unit direction `d` to where `f − level` first leaves the

@@ -469,6 +469,13 @@ impl LocalMesh {
     pub fn is_free(&self, v: u32) -> bool {
         !self.frozen[v as usize] && !self.removed[v as usize]
     }
+
+    /// Whether `v` is a level vertex farther than the tolerance from its level set.
+    pub fn off_its_level(&self, v: u32, ctx: &Ctx) -> bool {
+        self.con[v as usize].level.is_some_and(|l| {
+            (ctx.field.value(self.u[v as usize]) - ctx.levels[l as usize]).abs() > ctx.tol
+        })
+    }
 }
 
 /// The tets around one vertex with the positions of their other corners: what a search

@@ -308,9 +308,7 @@ fn keep_fixed(s: [f64; 3], u: [f64; 3], free: u8) -> [f64; 3] {
 mod tests {
     use super::*;
     use crate::geom::{cross, dot, sub};
-    use crate::improve::fixtures::wavy_torus;
-    use crate::improve::{context, local::extract_regions, QualityOptions, DEFAULT_WARP};
-    use crate::{mesh_interval, MeshOptions, Method};
+    use crate::improve::fixtures::{wavy_torus, wavy_torus_regions};
 
     /// Blocks level vertex `v` (on its level at `p`): moves it inward by a tenth of a voxel,
     /// then an interior neighbour `w` of a tet `vwab` so that the plane through `w`, `a`, `b`
@@ -359,16 +357,10 @@ mod tests {
 
     #[test]
     fn a_blocked_level_vertex_is_untangled_onto_its_level_or_left_as_it_was() {
-        let (grid, alpha, beta) = wavy_torus();
-        let opts = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
-        let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
-        let start = std::time::Instant::now();
-        let ctx = context(&grid, alpha, beta, &QualityOptions::default(), start);
-        let work = vec![true; mesh.points.len()];
+        let grid = wavy_torus();
+        let (ctx, mut regions) = wavy_torus_regions(&grid, &[0, 1]);
         // Blocked vertices, those no point of their level frees, and of these the untangled.
         let (mut blocked, mut stuck, mut untangled) = (0, 0, 0);
-        let (mut regions, _) = extract_regions(&mesh, &work, &ctx, 0);
-        regions.extend(extract_regions(&mesh, &work, &ctx, 1).0);
         for lm in &mut regions {
             project_levels(lm, &ctx);
             for v in 0..lm.u.len() as u32 {

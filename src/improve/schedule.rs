@@ -85,13 +85,7 @@ fn settle_off_level(lm: &mut LocalMesh, ctx: &Ctx) -> (usize, usize) {
 
 /// Whether `v` is a free level vertex away from its level.
 fn off_level(lm: &LocalMesh, ctx: &Ctx, v: u32) -> bool {
-    let c = lm.con[v as usize];
-    match c.level {
-        Some(l) if lm.is_free(v) && !c.pinned => {
-            (ctx.field.value(lm.u[v as usize]) - ctx.levels[l as usize]).abs() > ctx.tol
-        }
-        _ => false,
-    }
+    lm.is_free(v) && !lm.con[v as usize].pinned && lm.off_its_level(v, ctx)
 }
 
 /// Alive tets below the target, worst first (ties by id).
