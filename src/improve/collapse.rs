@@ -127,6 +127,10 @@ fn short_edge(lm: &LocalMesh, a: u32, b: u32, ratio: f64) -> bool {
 
 /// Merges `a` into `b` (legality and gain checked by [`best_collapse`]).
 pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
+    // Only a level vertex's star changes the domain: the tets left still fill an interior
+    // vertex's star.
+    let level = lm.con[a as usize].level.is_some();
+    let mut added = if level { -lm.star_volume(a) } else { 0.0 };
     let shared = shared_tets(lm, a, b);
     let faces = boundary_faces_at(lm, a);
     for f in &faces {
@@ -151,7 +155,11 @@ pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
         }
         lm.star[b as usize].push(t);
         lm.update_quality(t);
+        if level {
+            added += lm.volume_of(t);
+        }
     }
+    lm.drift[b as usize] += std::mem::take(&mut lm.drift[a as usize]) + added;
     lm.removed[a as usize] = true;
 }
 

@@ -56,6 +56,12 @@ pub struct LocalMesh {
     face_count: Vec<u32>,
     /// Memo of failed attempts (see [`LocalMesh::settled_tet`]).
     memo: Memo,
+    /// Volume of the region's tets when it was copied out.
+    pub volume: f64,
+    /// Per vertex: the signed volume that the collapses into it and its moves have added
+    /// (physical units; projections onto the level sets are corrections and do not count).
+    /// The pass gives it back at the end where it can ([`super::restore`]).
+    pub drift: Vec<f64>,
 }
 
 /// When the neighbourhoods changed and when operations on them last failed, on one clock.
@@ -231,6 +237,7 @@ impl LocalMesh {
             lm.insert_face(f);
         }
         lm.classify(&ctx.field, ctx.levels);
+        lm.volume = (0..lm.tets.len() as u32).map(|t| lm.volume_of(t)).sum();
         lm
     }
 
@@ -252,6 +259,8 @@ impl LocalMesh {
             weight: 1.0,
             faces: FxHashMap::default(),
             face_count: vec![0; n],
+            volume: 0.0,
+            drift: vec![0.0; n],
             memo: Memo {
                 clock: 1,
                 stamp: vec![1; n],
@@ -464,6 +473,20 @@ impl LocalMesh {
         self.q[t] = biased_min_sine(self.corners(self.tets[t]), self.weight);
     }
 
+    /// Signed volume of tet `t`.
+    pub fn volume_of(&self, t: u32) -> f64 {
+        let p = self.corners(self.tets[t as usize]);
+        crate::geom::signed_volume(p[0], p[1], p[2], p[3])
+    }
+
+    /// Summed signed volume of the tets around `v`.
+    pub fn star_volume(&self, v: u32) -> f64 {
+        self.star[v as usize]
+            .iter()
+            .map(|&t| self.volume_of(t))
+            .sum()
+    }
+
     /// Whether `v` may be moved or merged.
     #[inline]
     pub fn is_free(&self, v: u32) -> bool {
@@ -506,6 +529,17 @@ impl StarCorners {
                 })
                 .collect(),
         }
+    }
+
+    /// Summed signed volume of the tets with the vertex at physical point `x` (affine in `x`).
+    pub fn volume(&self, x: [f64; 3]) -> f64 {
+        let mut sum = 0.0;
+        for (c, &s) in self.corners.iter().zip(&self.slot) {
+            let mut p = *c;
+            p[s] = x;
+            sum += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
+        }
+        sum
     }
 
     /// Quality of the `i`-th tet with the vertex at physical point `x`.

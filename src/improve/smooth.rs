@@ -37,6 +37,10 @@ pub fn move_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32, iterations: usize) -> 
         .collect();
     let from = lm.u[v as usize];
     let (u, _) = climb(lm, ctx, v, &star, from, &mut qs, iterations)?;
+    if c.level.is_some() {
+        let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
+        lm.drift[v as usize] += star.volume(x1) - star.volume(x0);
+    }
     lm.set_position_with(v, u, ctx, &qs);
     Some(from)
 }
@@ -159,7 +163,7 @@ fn line_search(
 }
 
 /// Mean index-space length of the edges at `v`, placed at `u` (each counted once per tet).
-fn local_scale(lm: &LocalMesh, v: u32, u: [f64; 3]) -> f64 {
+pub(crate) fn local_scale(lm: &LocalMesh, v: u32, u: [f64; 3]) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
     for &t in &lm.star[v as usize] {
         for w in lm.tets[t as usize] {
