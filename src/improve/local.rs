@@ -631,6 +631,50 @@ pub fn splice(
     removed
 }
 
+/// Writes back regions in which vertices only moved (no tet or face was added or removed):
+/// the positions and values of their free vertices, and `bad` for their tets, in place, so
+/// the mesh keeps its tet order.
+pub fn write_positions(
+    mesh: &mut TetMesh,
+    regions: &[LocalMesh],
+    bookkeeping: &Regions,
+    ctx: &Ctx,
+    bad: &mut [bool],
+) {
+    // Regions without tets were dropped: the others keep their order.
+    let of_tet = &bookkeeping.of_tet;
+    let n = of_tet
+        .iter()
+        .filter(|&&r| r != NONE)
+        .map(|&r| r as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut position = vec![NONE; n];
+    for &r in of_tet.iter().filter(|&&r| r != NONE) {
+        position[r as usize] = 0;
+    }
+    for (k, p) in position.iter_mut().filter(|p| **p == 0).enumerate() {
+        *p = k as u32;
+    }
+    // The k-th tet of a region is its k-th tet in mesh order (as copied out).
+    let mut next = vec![0usize; regions.len()];
+    for (t, &r) in of_tet.iter().enumerate() {
+        if r != NONE {
+            let i = position[r as usize] as usize;
+            bad[t] = regions[i].q[next[i]] < ctx.target;
+            next[i] += 1;
+        }
+    }
+    for lm in regions {
+        for (l, &gid) in lm.global.iter().enumerate() {
+            if !lm.frozen[l] && !lm.removed[l] {
+                mesh.points[gid as usize] = lm.x[l];
+                mesh.values[gid as usize] = lm.value[l];
+            }
+        }
+    }
+}
+
 /// Keeps the items whose region in `of` is `NONE`, in order.
 fn retain_outside<T>(items: &mut Vec<T>, of: &[u32]) {
     let mut i = 0;

@@ -376,7 +376,7 @@ fn restore_stage(
     mesh: &mut TetMesh,
     ctx: &Ctx,
     drift: &[f64],
-    bad: &mut Vec<bool>,
+    bad: &mut [bool],
     report: &mut ImproveReport,
 ) {
     let mut clock = Instant::now();
@@ -394,7 +394,7 @@ fn restore_stage(
             })
             .sum();
         report.restored += moves;
-        local::splice(mesh, regions, bookkeeping, ctx, bad);
+        local::write_positions(mesh, &regions, &bookkeeping, ctx, bad);
     }
     lap(&mut report.stage_seconds.restore, &mut clock);
 }
