@@ -103,6 +103,20 @@ impl<'a> Field<'a> {
         (f, g)
     }
 
+    /// `d` without its component along the gradient at `u` (over `free_axes`): the part of
+    /// `d` tangent to the level set through `u` (`d` itself where the gradient vanishes).
+    pub fn tangent(&self, u: [f64; 3], free_axes: u8, mut d: [f64; 3]) -> [f64; 3] {
+        let (_, n) = self.value_gradient_on(u, free_axes);
+        let n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+        if n2 > 0.0 {
+            let s = (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / n2;
+            for a in 0..3 {
+                d[a] -= s * n[a];
+            }
+        }
+        d
+    }
+
     /// Moves `u` onto the level set `f = level` by Newton steps along the gradient restricted
     /// to the axes whose bit is set in `free_axes`, staying inside the grid box. Returns the
     /// projected point when `|f - level| <= tol` was reached, `None` otherwise.

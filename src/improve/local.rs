@@ -130,7 +130,8 @@ fn slabs(mesh: &TetMesh, work: &[bool], field: &Field) -> Vec<u32> {
 }
 
 /// Splits the stars of the work vertices in slabs of parity `phase` into regions, one per
-/// slab. Returns the regions (in slab order) and the global bookkeeping.
+/// slab (empty for a slab without work). Returns the regions (region `r` at index `r`) and the
+/// global bookkeeping.
 pub fn extract_regions(
     mesh: &TetMesh,
     work: &[bool],
@@ -182,7 +183,6 @@ pub fn extract_regions(
         .into_par_iter()
         .zip(faces_of)
         .map(|(tets, faces)| LocalMesh::from_tets(mesh, &tets, &faces, &free_in, ctx))
-        .filter(|lm| !lm.tets.is_empty())
         .collect();
     (regions, Regions { of_tet, free_in })
 }
@@ -641,26 +641,11 @@ pub fn write_positions(
     ctx: &Ctx,
     bad: &mut [bool],
 ) {
-    // Regions without tets were dropped: the others keep their order.
-    let of_tet = &bookkeeping.of_tet;
-    let n = of_tet
-        .iter()
-        .filter(|&&r| r != NONE)
-        .map(|&r| r as usize + 1)
-        .max()
-        .unwrap_or(0);
-    let mut position = vec![NONE; n];
-    for &r in of_tet.iter().filter(|&&r| r != NONE) {
-        position[r as usize] = 0;
-    }
-    for (k, p) in position.iter_mut().filter(|p| **p == 0).enumerate() {
-        *p = k as u32;
-    }
-    // The k-th tet of a region is its k-th tet in mesh order (as copied out).
+    // Region `r` is `regions[r]`, and its k-th tet is its k-th tet in mesh order.
     let mut next = vec![0usize; regions.len()];
-    for (t, &r) in of_tet.iter().enumerate() {
+    for (t, &r) in bookkeeping.of_tet.iter().enumerate() {
         if r != NONE {
-            let i = position[r as usize] as usize;
+            let i = r as usize;
             bad[t] = regions[i].q[next[i]] < ctx.target;
             next[i] += 1;
         }

@@ -8,7 +8,7 @@
 
 use super::local::{LocalMesh, StarCorners};
 use super::Ctx;
-use crate::geom::{dot, norm, sub};
+use crate::geom::{norm, sub};
 
 /// Gradient steps per call.
 const ITERATIONS: usize = 4;
@@ -112,14 +112,7 @@ fn ascent_direction(
         }
     }
     if lm.con[v as usize].level.is_some() {
-        let (_, grad) = ctx.field.value_gradient_on(u, free);
-        let g2 = dot(grad, grad);
-        if g2 > 0.0 {
-            let s = dot(sum, grad) / g2;
-            for a in 0..3 {
-                sum[a] -= s * grad[a];
-            }
-        }
+        sum = ctx.field.tangent(u, free, sum);
     }
     let n = norm(sum);
     (n > 0.0 && n.is_finite()).then(|| sum.map(|x| x / n))
