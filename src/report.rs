@@ -154,6 +154,8 @@ pub struct QualitySection {
     pub target_degrees: [f64; 2],
     /// The `--boundary-collapse-ratio` used (`None`: no limit, `inf`).
     pub boundary_collapse_ratio: Option<f64>,
+    /// The `--split-sag` used (`None`: never, `inf`).
+    pub split_sag: Option<f64>,
     /// Quality of the mesh as extracted.
     pub before: Option<QualitySummary>,
     /// Quality after the pass.

@@ -25,7 +25,8 @@ pub struct BoundaryFace {
 
 /// The working region with local vertex numbers.
 pub struct LocalMesh {
-    /// Global id of each local vertex (sorted ascending).
+    /// Global id of each local vertex (sorted ascending), then [`NEW_POINT`] for each vertex
+    /// added in the region (given an id when it is spliced back).
     pub global: Vec<u32>,
     /// Index-space position of each vertex.
     pub u: Vec<[f64; 3]>,
@@ -99,6 +100,9 @@ pub fn face_key(mut t: [u32; 3]) -> [u32; 3] {
 
 /// No region.
 const NONE: u32 = u32::MAX;
+
+/// The global id of a vertex added in a region, until it is spliced back.
+pub const NEW_POINT: u32 = u32::MAX;
 
 /// Thickness (in voxels, along the grid's longest axis) of the slabs that split the work into
 /// independent regions. Regions of slabs of the same parity are at least a slab apart, so they
@@ -371,6 +375,25 @@ impl LocalMesh {
             }
             self.con[v] = c;
         }
+    }
+
+    /// Adds a free vertex at index point `u` carrying `value`, with constraint `con`, and
+    /// returns its id; it has no tets yet.
+    pub fn add_vertex(&mut self, u: [f64; 3], value: f64, con: Constraint, ctx: &Ctx) -> u32 {
+        let id = self.global.len() as u32;
+        self.global.push(NEW_POINT);
+        self.u.push(u);
+        self.x.push(ctx.field.to_physical(u));
+        self.value.push(value);
+        self.con.push(con);
+        self.frozen.push(false);
+        self.removed.push(false);
+        self.star.push(Vec::new());
+        self.face_count.push(0);
+        self.drift.push(0.0);
+        self.memo.stamp.push(self.memo.clock);
+        self.memo.vertex_failed.push(0);
+        id
     }
 
     /// Appends tet `t` (local ids) and returns its id.
@@ -689,8 +712,16 @@ impl LocalMesh {
         labels: &mut Vec<BoundaryLabel>,
         removed: &mut Vec<u32>,
     ) {
-        let g = |v: u32| self.global[v as usize];
-        for (l, &gid) in self.global.iter().enumerate() {
+        let mut global = self.global;
+        for (l, gid) in global.iter_mut().enumerate() {
+            if *gid == NEW_POINT {
+                *gid = mesh.points.len() as u32;
+                mesh.points.push(self.x[l]);
+                mesh.values.push(self.value[l]);
+            }
+        }
+        let g = |v: u32| global[v as usize];
+        for (l, &gid) in global.iter().enumerate() {
             if self.removed[l] {
                 removed.push(gid);
             } else if !self.frozen[l] {

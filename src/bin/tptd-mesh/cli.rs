@@ -112,6 +112,13 @@ pub(crate) struct Cli {
     #[arg(long, value_name = "R", default_value = "3", value_parser = parse_ratio)]
     pub(crate) boundary_collapse_ratio: f64,
 
+    /// With --quality, split a boundary edge whose chord sags from the level set by more than
+    /// S times its length, putting the new node on the level set (where no element gets worse
+    /// than the target), or `inf` for never. Nodes on a curved level set inscribe the surface
+    /// in it: thin tubes lose volume without the splits
+    #[arg(long, value_name = "S", default_value = "0.03", value_parser = parse_ratio)]
+    pub(crate) split_sag: f64,
+
     /// Mesh a generated sample (two vessels a third of a voxel apart) with the interval
     /// [0.5, inf) and show what the decomposition preserves
     #[arg(long, conflicts_with = "input")]
@@ -290,7 +297,8 @@ fn parse_angle(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
     }
 }
 
-/// Parses `--boundary-collapse-ratio`: a positive number, or `inf` (no limit).
+/// Parses `--boundary-collapse-ratio` and `--split-sag`: a positive number, or `inf` (no
+/// limit, never).
 fn parse_ratio(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(r) if r > 0.0 && !r.is_nan() => Ok(r),

@@ -502,6 +502,7 @@ fn improve_mesh(
         max_angle: cli.max_angle,
         time_budget: cli.quality_time.map(Duration::from_secs_f64),
         boundary_collapse_ratio: cli.boundary_collapse_ratio,
+        split_sag: cli.split_sag,
         ..QualityOptions::default()
     };
     let t = Instant::now();
@@ -511,6 +512,7 @@ fn improve_mesh(
     let section = QualitySection {
         target_degrees: [opts.min_angle, opts.max_angle],
         boundary_collapse_ratio: Some(opts.boundary_collapse_ratio).filter(|r| r.is_finite()),
+        split_sag: Some(opts.split_sag).filter(|s| s.is_finite()),
         before,
         after: None,
         pass,
