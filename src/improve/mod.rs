@@ -65,14 +65,15 @@ pub struct QualityOptions {
     pub boundary_collapse_ratio: f64,
     /// Give back the volume that a region's collapses and moves added or took, by moving its
     /// level vertices along their level sets where no tet falls below the target
-    /// ([`restore`]). Without it, the small analytic domains of `tests/quality.rs` shrink or
-    /// grow by up to 0.6 % (README, *Element quality*).
+    /// (`improve/restore.rs`). Without it, the small analytic domains of `tests/quality.rs`
+    /// shrink or grow by up to 0.6 % (README, *Element quality*).
     pub restore_volume: bool,
     /// A boundary edge on a level set whose chord sags from the level set by more than this
     /// fraction of its length is split at the end, with the new node on the level set, where
-    /// no tet gets worse than the target ([`split`]; `f64::INFINITY`: never). Nodes on a
-    /// curved level set inscribe the surface in it, so thin tubes lose volume: the 32³
-    /// genus-3 solid of the benchmark (tubes 1.9 voxels in radius) lost 1.08 % without it.
+    /// no tet gets worse than the target (`improve/split.rs`; `f64::INFINITY`: never). Nodes
+    /// on a curved level set inscribe the surface in it, so thin tubes lose volume: the 32³
+    /// genus-3 solid of the benchmark (tubes 1.9 voxels in radius) lost 1.08 % without it,
+    /// and loses 0.32 % with it.
     pub split_sag: f64,
     /// Tets whose smallest dihedral angle stays below this (degrees) after the pass are listed
     /// with a reason ([`forced::classify_forced`]).
