@@ -5,8 +5,9 @@
 //! work: each round marks the vertices of tets below the target quality and the level
 //! vertices off the trilinear level set, copies their stars out (`local`), improves them
 //! there (projection, edge collapse, flips, smoothing; one operation per file) and splices the
-//! result back. Everything runs in a fixed order, so the output does not depend on the number
-//! of threads.
+//! result back. A last stage splits the boundary edges whose chord sags from a curved level
+//! set (`split`) and gives back the volume the operations moved (`restore`). Everything runs
+//! in a fixed order, so the output does not depend on the number of threads.
 
 pub(crate) mod collapse;
 pub(crate) mod constraint;
