@@ -117,10 +117,15 @@ pub struct Regions {
     free_in: Vec<u32>,
 }
 
+/// The grid's longest axis (the first of equals), along which the work is cut into slabs.
+pub fn longest_axis(field: &Field) -> usize {
+    let dims = field.grid().dims;
+    (0..3).max_by_key(|&a| (dims[a], 3 - a)).unwrap_or(0)
+}
+
 /// The slab of each work vertex along the grid's longest axis (`NONE` for the others).
 fn slabs(mesh: &TetMesh, work: &[bool], field: &Field) -> Vec<u32> {
-    let dims = field.grid().dims;
-    let axis = (0..3).max_by_key(|&a| (dims[a], 3 - a)).unwrap_or(0);
+    let axis = longest_axis(field);
     (0..mesh.points.len())
         .into_par_iter()
         .map(|v| {

@@ -24,8 +24,7 @@ const REACH: f64 = 0.5;
 /// out there) and negative outside.
 pub fn sag(ctx: &Ctx, ua: [f64; 3], ub: [f64; 3], l: usize) -> f64 {
     let len = norm(sub(ub, ua));
-    let mid = [0, 1, 2].map(|a| 0.5 * (ua[a] + ub[a]));
-    let (f, g) = ctx.field.value_gradient(mid);
+    let (f, g) = ctx.field.value_gradient(midpoint(ua, ub));
     let g = norm(g);
     if len <= 0.0 || g <= 0.0 || !g.is_finite() {
         return 0.0;
@@ -33,6 +32,11 @@ pub fn sag(ctx: &Ctx, ua: [f64; 3], ub: [f64; 3], l: usize) -> f64 {
     // The domain lies above alpha and below beta.
     let inward = if l == 0 { 1.0 } else { -1.0 };
     inward * (f - ctx.levels[l]) / g / len
+}
+
+/// The midpoint of `a` and `b`.
+fn midpoint(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|i| 0.5 * (a[i] + b[i]))
 }
 
 /// Per point: an end of a boundary edge that may be split ([`candidates`] decides): one on
@@ -62,12 +66,20 @@ pub fn sagging_points(mesh: &TetMesh, ctx: &Ctx, min_sag: f64) -> Vec<bool> {
     let bend = bends(mesh.points.len(), &edges, min_sag);
     let sagging: Vec<([u32; 2], f64)> = edges
         .into_iter()
-        .filter(|&(e, s)| s.abs() > min_sag && e.iter().all(|&v| bend[v as usize] != BOTH_WAYS))
+        .filter(|&(e, s)| one_way(&bend, e, s, min_sag))
         .collect();
-    let side = dominant_side(mesh, ctx, &sagging);
+    let axis = super::local::longest_axis(&ctx.field);
+    let slab: Vec<usize> = sagging
+        .iter()
+        .map(|&(e, _)| {
+            let u = ctx.field.to_index(mesh.points[e[0] as usize])[axis];
+            (u / SLAB).floor().max(0.0) as usize
+        })
+        .collect();
+    let side = dominant_side(mesh, &sagging, &slab);
     let mut work = vec![false; mesh.points.len()];
-    for (e, s) in sagging {
-        if s * side[slab_of(mesh, ctx, e[0]).min(side.len() - 1)] > 0.0 {
+    for ((e, s), k) in sagging.into_iter().zip(slab) {
+        if s * side[k] > 0.0 {
             for v in e {
                 work[v as usize] = true;
             }
@@ -76,34 +88,21 @@ pub fn sagging_points(mesh: &TetMesh, ctx: &Ctx, min_sag: f64) -> Vec<bool> {
     work
 }
 
-/// Thickness of the slabs of [`dominant_side`] (voxels).
+/// Thickness of the slabs of [`dominant_side`] (voxels, along the grid's longest axis).
 const SLAB: f64 = 16.0;
 
-/// The slab of point `v` along the grid's longest axis.
-fn slab_of(mesh: &TetMesh, ctx: &Ctx, v: u32) -> usize {
-    let dims = ctx.field.grid().dims;
-    let axis = (0..3).max_by_key(|&a| (dims[a], 3 - a)).unwrap_or(0);
-    let u = ctx.field.to_index(mesh.points[v as usize])[axis];
-    (u / SLAB).floor().max(0.0) as usize
-}
-
-/// Per slab ([`slab_of`]): +1 where the sagging edges bulge out (chords inside) by more than
-/// twice what they bulge in, weighted by the volume their chords miss (sag times the cube of
-/// length), -1 the other way round, 0 where neither side dominates.
-fn dominant_side(mesh: &TetMesh, ctx: &Ctx, sagging: &[([u32; 2], f64)]) -> Vec<f64> {
-    let dims = ctx.field.grid().dims;
-    let n = dims
-        .iter()
-        .max()
-        .map_or(1, |&d| (d as f64 / SLAB).ceil() as usize + 1);
+/// Per slab (`slab`: that of each sagging edge): +1 where the sagging edges bulge out (chords
+/// inside) by more than twice what they bulge in, weighted by the volume their chords miss
+/// (sag times the cube of length), -1 the other way round, 0 where neither side dominates.
+fn dominant_side(mesh: &TetMesh, sagging: &[([u32; 2], f64)], slab: &[usize]) -> Vec<f64> {
+    let n = slab.iter().max().map_or(0, |&k| k + 1);
     let mut weight = vec![[0.0f64; 2]; n];
-    for &(e, s) in sagging {
+    for (&(e, s), &k) in sagging.iter().zip(slab) {
         let [a, b] = e.map(|v| mesh.points[v as usize]);
         let len = norm(sub(b, a));
-        let k = slab_of(mesh, ctx, e[0]).min(n - 1);
         weight[k][usize::from(s < 0.0)] += s.abs() * len * len * len;
     }
-    let mut side: Vec<f64> = weight
+    weight
         .iter()
         .map(|&[out, inn]| {
             if out > 2.0 * inn {
@@ -114,9 +113,13 @@ fn dominant_side(mesh: &TetMesh, ctx: &Ctx, sagging: &[([u32; 2], f64)]) -> Vec<
                 0.0
             }
         })
-        .collect();
-    side.resize(n, 0.0);
-    side
+        .collect()
+}
+
+/// Whether edge `e` with sag `s` is split-worthy: it sags by more than `min_sag`, and the
+/// boundary at both its ends bends one way ([`bends`]).
+fn one_way(bend: &[u8], e: [u32; 2], s: f64, min_sag: f64) -> bool {
+    s.abs() > min_sag && e.iter().all(|&v| bend[v as usize] != BOTH_WAYS)
 }
 
 /// [`bends`] of a vertex with edges sagging both ways.
@@ -173,7 +176,7 @@ pub fn split_sagging_edges(lm: &mut LocalMesh, ctx: &Ctx, min_sag: f64) -> usize
         let Some(s) = plan(lm, ctx, first.a, first.b) else {
             continue;
         };
-        if s.fits && (owed - s.gain).abs() < owed.abs() {
+        if (owed - s.gain).abs() < owed.abs() && s.fits(lm, ctx) {
             owed -= s.gain;
             apply(lm, ctx, s);
             n += 1;
@@ -207,9 +210,7 @@ fn candidates(lm: &LocalMesh, ctx: &Ctx, min_sag: f64) -> Vec<Candidate> {
     let bend = bends(lm.u.len(), &sags, min_sag);
     let mut out: Vec<Candidate> = sags
         .into_iter()
-        .filter(|&([a, b], s)| {
-            s.abs() > min_sag && bend[a as usize] != BOTH_WAYS && bend[b as usize] != BOTH_WAYS
-        })
+        .filter(|&(e, s)| one_way(&bend, e, s, min_sag))
         .filter(|&([a, b], _)| splittable(lm, a, b))
         .map(|([a, b], s)| Candidate { a, b, sag: s.abs() })
         .collect();
@@ -230,18 +231,43 @@ fn splittable(lm: &LocalMesh, a: u32, b: u32) -> bool {
         && !lm.removed[b as usize]
 }
 
-/// A split of edge `ab`: the new node's index-space position on the level set, the tets and
-/// boundary faces around the edge, the volume it adds, and whether every new tet is above its
-/// floor.
+/// A split of edge `ab`: the new node (index-space and physical position on the level set,
+/// its level's value and constraint), the tets and boundary faces around the edge, and the
+/// volume it adds.
 struct Split {
     a: u32,
     b: u32,
     p: [f64; 3],
+    x: [f64; 3],
+    value: f64,
     con: Constraint,
     around: Vec<u32>,
     faces: Vec<BoundaryFace>,
     gain: f64,
-    fits: bool,
+}
+
+impl Split {
+    /// The corners of the two halves of tet `t` (around the edge), the new node at `x`.
+    fn halves_at(&self, lm: &LocalMesh, t: u32) -> [[[f64; 3]; 4]; 2] {
+        halves(lm.tets[t as usize], self.a, self.b, NEW)
+            .map(|h| h.map(|v| if v == NEW { self.x } else { lm.x[v as usize] }))
+    }
+
+    /// Whether every new tet is at or above the target quality, or at or above the worst tet
+    /// around the edge where that is below the target.
+    fn fits(&self, lm: &LocalMesh, ctx: &Ctx) -> bool {
+        let floor = self
+            .around
+            .iter()
+            .map(|&t| lm.q[t as usize])
+            .fold(ctx.target, f64::min)
+            .max(0.0);
+        self.around.iter().all(|&t| {
+            self.halves_at(lm, t)
+                .iter()
+                .all(|&c| ctx.quality(c) >= floor)
+        })
+    }
 }
 
 /// The split of edge `ab` at its midpoint projected onto the level set, if the two boundary
@@ -262,43 +288,35 @@ fn plan(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<Split> {
         return None;
     }
     let (ua, ub) = (lm.u[a as usize], lm.u[b as usize]);
-    let mid = [0, 1, 2].map(|i| 0.5 * (ua[i] + ub[i]));
-    let p = ctx
-        .field
-        .project(mid, ctx.levels[level as usize], 0b111, ctx.tol)?;
+    let mid = midpoint(ua, ub);
+    let value = ctx.levels[level as usize];
+    let p = ctx.field.project(mid, value, 0b111, ctx.tol)?;
     if norm(sub(p, mid)) > REACH * norm(sub(ub, ua)) {
         return None;
-    }
-    let x = ctx.field.to_physical(p);
-    let floor = around
-        .iter()
-        .map(|&t| lm.q[t as usize])
-        .fold(ctx.target, f64::min)
-        .max(0.0);
-    let (mut gain, mut fits) = (0.0, true);
-    for &t in &around {
-        let tet = lm.tets[t as usize];
-        gain -= lm.volume_of(t);
-        for h in halves(tet, a, b, NEW) {
-            let c = h.map(|v| if v == NEW { x } else { lm.x[v as usize] });
-            gain += signed_volume(c[0], c[1], c[2], c[3]);
-            fits &= ctx.quality(c) >= floor;
-        }
     }
     let con = Constraint {
         level: Some(level),
         ..Constraint::default()
     };
-    Some(Split {
+    let x = ctx.field.to_physical(p);
+    let mut split = Split {
         a,
         b,
         p,
+        x,
+        value,
         con,
         around,
         faces,
-        gain,
-        fits,
-    })
+        gain: 0.0,
+    };
+    for &t in &split.around {
+        split.gain -= lm.volume_of(t);
+        for c in split.halves_at(lm, t) {
+            split.gain += signed_volume(c[0], c[1], c[2], c[3]);
+        }
+    }
+    Some(split)
 }
 
 /// Stands for the new node in [`halves`] before it has an id.
@@ -313,8 +331,7 @@ fn halves(tet: [u32; 4], a: u32, b: u32, m: u32) -> [[u32; 4]; 2] {
 
 /// Makes split `s`.
 fn apply(lm: &mut LocalMesh, ctx: &Ctx, s: Split) {
-    let level = ctx.levels[s.con.level.map_or(0, |l| l as usize)];
-    let m = lm.add_vertex(s.p, level, s.con, ctx);
+    let m = lm.add_vertex(s.p, s.value, s.con, ctx);
     for t in s.around {
         let tet = lm.tets[t as usize];
         lm.kill_tet(t);
