@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use super::local::{extract_regions, LocalMesh};
-use super::{context, Ctx, QualityOptions, DEFAULT_WARP};
+use super::{context, tet_qualities, Ctx, QualityOptions, DEFAULT_WARP};
 use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
 
 /// The interval of [`wavy_torus`].
@@ -40,9 +40,10 @@ pub fn wavy_torus_regions<'a>(grid: &'a ScalarGrid, phases: &[u32]) -> (Ctx<'a>,
         Instant::now(),
     );
     let work = vec![true; mesh.points.len()];
+    let quality = tet_qualities(&mesh, &ctx);
     let regions = phases
         .iter()
-        .flat_map(|&p| extract_regions(&mesh, &work, &ctx, p).0)
+        .flat_map(|&p| extract_regions(&mesh, &work, &quality, &ctx, p).0)
         .collect();
     (ctx, regions)
 }

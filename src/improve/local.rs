@@ -5,6 +5,8 @@
 //! incomplete, so it neither moves nor is merged; every vertex that needs work has its whole
 //! star in the region and is free.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
@@ -139,11 +141,12 @@ fn slabs(mesh: &TetMesh, work: &[bool], field: &Field) -> Vec<u32> {
 }
 
 /// Splits the stars of the work vertices in slabs of parity `phase` into regions, one per
-/// slab (empty for a slab without work). Returns the regions (region `r` at index `r`) and the
-/// global bookkeeping.
+/// slab (empty for a slab without work); `quality` is each tet's [`Ctx::quality`]. Returns
+/// the regions (region `r` at index `r`) and the global bookkeeping.
 pub fn extract_regions(
     mesh: &TetMesh,
     work: &[bool],
+    quality: &[f64],
     ctx: &Ctx,
     phase: u32,
 ) -> (Vec<LocalMesh>, Regions) {
@@ -188,10 +191,20 @@ pub fn extract_regions(
         .map(|(&o, &s)| if s { NONE } else { o })
         .collect();
     let faces_of = faces_by_region(mesh, &free_in, n_regions as usize);
+    let local_id: Vec<AtomicU32> = (0..mesh.points.len())
+        .into_par_iter()
+        .map(|_| AtomicU32::new(NONE))
+        .collect();
+    let copy = Source {
+        mesh,
+        quality,
+        free_in: &free_in,
+        local_id: &local_id,
+    };
     let regions = tets_of
         .into_par_iter()
         .zip(faces_of)
-        .map(|(tets, faces)| LocalMesh::from_tets(mesh, &tets, &faces, &free_in, ctx))
+        .map(|(tets, faces)| LocalMesh::from_tets(&copy, &tets, &faces, ctx))
         .collect();
     (regions, Regions { of_tet, free_in })
 }
@@ -212,15 +225,38 @@ fn faces_by_region(mesh: &TetMesh, free_in: &[u32], n_regions: usize) -> Vec<Vec
     faces_of
 }
 
+/// What the regions of one phase are copied from.
+struct Source<'a> {
+    mesh: &'a TetMesh,
+    /// Per tet: its quality.
+    quality: &'a [f64],
+    /// Per point: the region whose free vertex it is (`NONE` if frozen or outside).
+    free_in: &'a [u32],
+    /// Per point: its local id in the region that uses it. Regions of one phase share no
+    /// point, so each region fills in its own; a lookup is checked against the region's list
+    /// all the same.
+    local_id: &'a [AtomicU32],
+}
+
 impl LocalMesh {
     /// The region made of the mesh tets `tets` and the boundary faces `faces` (indices into
-    /// `mesh.boundary`: those with a free vertex of this region); `free_in` tells which points
-    /// are free (those with a region: all their tets are in it).
-    fn from_tets(mesh: &TetMesh, tets: &[u32], faces: &[u32], free_in: &[u32], ctx: &Ctx) -> Self {
+    /// `mesh.boundary`: those with a free vertex of this region).
+    fn from_tets(copy: &Source, tets: &[u32], faces: &[u32], ctx: &Ctx) -> Self {
+        let mesh = copy.mesh;
         let mut global: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
         global.sort_unstable();
         global.dedup();
-        let local = |g: u32| global.binary_search(&g).map_or(NONE, |i| i as u32);
+        for (i, &g) in global.iter().enumerate() {
+            copy.local_id[g as usize].store(i as u32, Ordering::Relaxed);
+        }
+        let local = |g: u32| {
+            let i = copy.local_id[g as usize].load(Ordering::Relaxed);
+            if global.get(i as usize) == Some(&g) {
+                i
+            } else {
+                global.binary_search(&g).map_or(NONE, |i| i as u32)
+            }
+        };
         let local_tets: Vec<[u32; 4]> = tets
             .iter()
             .map(|&t| mesh.tets[t as usize].map(local))
@@ -234,13 +270,13 @@ impl LocalMesh {
             .collect();
         let frozen: Vec<bool> = global
             .iter()
-            .map(|&g| free_in[g as usize] == NONE)
+            .map(|&g| copy.free_in[g as usize] == NONE)
             .collect();
         let mut lm = LocalMesh::with_vertices(mesh, global, frozen, &ctx.field);
         lm.weight = ctx.obtuse_weight;
         lm.reserve_tets(&local_tets);
-        for t in local_tets {
-            lm.add_tet(t);
+        for (t, &g) in local_tets.into_iter().zip(tets) {
+            lm.push_tet(t, copy.quality[g as usize]);
         }
         for f in faces {
             lm.insert_face(f);
@@ -403,10 +439,15 @@ impl LocalMesh {
 
     /// Appends tet `t` (local ids) and returns its id.
     pub fn add_tet(&mut self, t: [u32; 4]) -> u32 {
+        self.push_tet(t, biased_min_sine(self.corners(t), self.weight))
+    }
+
+    /// Appends tet `t` (local ids) whose quality is `q` and returns its id.
+    fn push_tet(&mut self, t: [u32; 4], q: f64) -> u32 {
         let id = self.tets.len() as u32;
         self.tets.push(t);
         self.alive.push(true);
-        self.q.push(biased_min_sine(self.corners(t), self.weight));
+        self.q.push(q);
         self.memo.tet_failed.push([0; 2]);
         for v in t {
             self.star[v as usize].push(id);
@@ -618,19 +659,18 @@ impl StarCorners {
 /// Writes the regions back into `mesh`: moved points, the regions' tets (after the tets
 /// outside them, which keep their order; regions in order) and boundary faces; merged points
 /// are dropped and the points renumbered in order.
-/// `bad` (per tet: below the target quality) follows the tets.
+/// `quality` (per tet) follows the tets.
 /// Returns the points merged away: no tet or face uses them any more, and the caller drops
 /// them ([`drop_points`]) once, at the end of the pass.
 pub fn splice(
     mesh: &mut TetMesh,
     regions: Vec<LocalMesh>,
     bookkeeping: Regions,
-    ctx: &Ctx,
-    bad: &mut Vec<bool>,
+    quality: &mut Vec<f64>,
 ) -> Vec<u32> {
     // Compacted in place: the tets (and their flags) outside every region keep their order.
     retain_outside(&mut mesh.tets, &bookkeeping.of_tet);
-    retain_outside(bad, &bookkeeping.of_tet);
+    retain_outside(quality, &bookkeeping.of_tet);
     let keep: Vec<bool> = mesh
         .boundary
         .iter()
@@ -645,11 +685,11 @@ pub fn splice(
     );
     let mut removed = Vec::new();
     for lm in regions {
-        bad.extend(
+        quality.extend(
             lm.q.iter()
                 .zip(&lm.alive)
                 .filter(|(_, &a)| a)
-                .map(|(&q, _)| q < ctx.target),
+                .map(|(&q, _)| q),
         );
         lm.write_back(mesh, &mut tets, &mut boundary, &mut labels, &mut removed);
     }
@@ -660,21 +700,20 @@ pub fn splice(
 }
 
 /// Writes back regions in which vertices only moved (no tet or face was added or removed):
-/// the positions and values of their free vertices, and `bad` for their tets, in place, so
+/// the positions and values of their free vertices, and `quality` of their tets, in place, so
 /// the mesh keeps its tet order.
 pub fn write_positions(
     mesh: &mut TetMesh,
     regions: &[LocalMesh],
     bookkeeping: &Regions,
-    ctx: &Ctx,
-    bad: &mut [bool],
+    quality: &mut [f64],
 ) {
     // Region `r` is `regions[r]`, and its k-th tet is its k-th tet in mesh order.
     let mut next = vec![0usize; regions.len()];
     for (t, &r) in bookkeeping.of_tet.iter().enumerate() {
         if r != NONE {
             let i = r as usize;
-            bad[t] = regions[i].q[next[i]] < ctx.target;
+            quality[t] = regions[i].q[next[i]];
             next[i] += 1;
         }
     }

@@ -236,9 +236,9 @@ pub fn improve(
     // Points merged away stay (unused) until the end: renumbering once keeps every
     // round's work proportional to what it touches, and keeps the relative order of ids.
     let mut removed: Vec<u32> = Vec::new();
-    // Per tet: below the target? Kept up to date through projections and splices, so that
-    // each round evaluates only the tets that changed.
-    let mut bad = bad_tets(mesh, &ctx);
+    // Per tet: its quality. Kept up to date through projections and splices, so that each
+    // round evaluates only the tets that changed, and the regions copy it out.
+    let mut quality = tet_qualities(mesh, &ctx);
     // Per point: the volume the operations merged into it or moving it added.
     let mut drift = vec![0.0; mesh.points.len()];
     for round in 0..opts.max_rounds {
@@ -247,7 +247,7 @@ pub fn improve(
             break;
         }
         let state = Progress {
-            bad: &mut bad,
+            quality: &mut quality,
             drift: &mut drift,
             removed: &mut removed,
             report: &mut report,
@@ -257,7 +257,7 @@ pub fn improve(
         }
     }
     if (opts.restore_volume || opts.split_sag.is_finite()) && !report.out_of_time {
-        finish_stage(mesh, &ctx, opts, &drift, &mut bad, &mut report);
+        finish_stage(mesh, &ctx, opts, &drift, &mut quality, &mut report);
     }
     removed.sort_unstable();
     local::drop_points(mesh, &removed);
@@ -271,8 +271,8 @@ pub fn improve(
 
 /// What the rounds carry from one to the next.
 struct Progress<'a> {
-    /// Per tet: below the target?
-    bad: &'a mut Vec<bool>,
+    /// Per tet: its quality.
+    quality: &'a mut Vec<f64>,
     /// Per point: the volume the operations merged into it or moving it added.
     drift: &'a mut Vec<f64>,
     /// Points merged away.
@@ -289,12 +289,12 @@ fn run_round(mesh: &mut TetMesh, ctx: &Ctx, round: usize, p: Progress) -> bool {
     if round == 0 {
         let moved = project::project_mesh(mesh, ctx);
         p.report.projected += moved.iter().filter(|&&m| m).count();
-        refresh_bad(mesh, ctx, &moved, p.bad);
+        refresh_quality(mesh, ctx, &moved, p.quality);
     }
     lap(&mut p.report.stage_seconds.project, &mut clock);
     for phase in 0..2 {
         clock = Instant::now();
-        let work = needs_work(mesh, ctx, p.bad, round > 0);
+        let work = needs_work(mesh, ctx, p.quality, round > 0);
         lap(&mut p.report.stage_seconds.mark, &mut clock);
         if phase == 0 {
             if !work.iter().any(|&w| w) {
@@ -302,10 +302,10 @@ fn run_round(mesh: &mut TetMesh, ctx: &Ctx, round: usize, p: Progress) -> bool {
             }
             p.report.rounds += 1;
         }
-        let regions = improve_phase(mesh, ctx, phase, &work, p.report);
+        let regions = improve_phase(mesh, ctx, phase, &work, p.quality, p.report);
         collect_drift(&regions, p.drift);
         p.removed
-            .extend(splice_phase(mesh, ctx, regions, p.bad, p.report));
+            .extend(splice_phase(mesh, regions, p.quality, p.report));
     }
     true
 }
@@ -340,10 +340,11 @@ fn improve_phase(
     ctx: &Ctx,
     phase: u32,
     work: &[bool],
+    quality: &[f64],
     report: &mut ImproveReport,
 ) -> (Vec<LocalMesh>, local::Regions) {
     let mut clock = Instant::now();
-    let (mut regions, bookkeeping) = local::extract_regions(mesh, work, ctx, phase);
+    let (mut regions, bookkeeping) = local::extract_regions(mesh, work, quality, ctx, phase);
     lap(&mut report.stage_seconds.extract, &mut clock);
     let counts: Vec<ImproveReport> = regions
         .par_iter_mut()
@@ -366,13 +367,12 @@ fn improve_phase(
 /// Writes improved regions back; returns the points merged away.
 fn splice_phase(
     mesh: &mut TetMesh,
-    ctx: &Ctx,
     (regions, bookkeeping): (Vec<LocalMesh>, local::Regions),
-    bad: &mut Vec<bool>,
+    quality: &mut Vec<f64>,
     report: &mut ImproveReport,
 ) -> Vec<u32> {
     let mut clock = Instant::now();
-    let removed = local::splice(mesh, regions, bookkeeping, ctx, bad);
+    let removed = local::splice(mesh, regions, bookkeeping, quality);
     lap(&mut report.stage_seconds.splice, &mut clock);
     removed
 }
@@ -399,7 +399,7 @@ fn finish_stage(
     ctx: &Ctx,
     opts: &QualityOptions,
     drift: &[f64],
-    bad: &mut Vec<bool>,
+    quality: &mut Vec<f64>,
     report: &mut ImproveReport,
 ) {
     let mut clock = Instant::now();
@@ -417,7 +417,7 @@ fn finish_stage(
     for phase in 0..2 {
         // The points the first phase added need nothing.
         work.resize(mesh.points.len(), false);
-        let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, ctx, phase);
+        let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, quality, ctx, phase);
         let (splits, moves) = regions
             .par_iter_mut()
             .map(|lm| finish_region(lm, ctx, opts, drift))
@@ -425,9 +425,9 @@ fn finish_stage(
         report.splits += splits;
         report.restored += moves;
         if splits > 0 {
-            local::splice(mesh, regions, bookkeeping, ctx, bad);
+            local::splice(mesh, regions, bookkeeping, quality);
         } else {
-            local::write_positions(mesh, &regions, &bookkeeping, ctx, bad);
+            local::write_positions(mesh, &regions, &bookkeeping, quality);
         }
     }
     lap(&mut report.stage_seconds.finish, &mut clock);
@@ -456,30 +456,30 @@ fn finish_region(
     (splits, restore::restore_volume(lm, ctx, &mut owed))
 }
 
-/// Per tet: is its quality below the target?
-fn bad_tets(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
+/// The quality ([`Ctx::quality`]) of each tet.
+fn tet_qualities(mesh: &TetMesh, ctx: &Ctx) -> Vec<f64> {
     mesh.tets
         .par_iter()
-        .map(|t| ctx.quality(t.map(|v| mesh.points[v as usize])) < ctx.target)
+        .map(|t| ctx.quality(t.map(|v| mesh.points[v as usize])))
         .collect()
 }
 
-/// Re-evaluates `bad` for the tets with a corner in `moved`.
-fn refresh_bad(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], bad: &mut [bool]) {
-    mesh.tets.par_iter().zip(bad).for_each(|(t, b)| {
+/// Re-evaluates `quality` for the tets with a corner in `moved`.
+fn refresh_quality(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], quality: &mut [f64]) {
+    mesh.tets.par_iter().zip(quality).for_each(|(t, q)| {
         if t.iter().any(|&v| moved[v as usize]) {
-            *b = ctx.quality(t.map(|v| mesh.points[v as usize])) < ctx.target;
+            *q = ctx.quality(t.map(|v| mesh.points[v as usize]));
         }
     });
 }
 
-/// Per point: is it a corner of a tet below the target (`bad`), or a level vertex off its
-/// level (with `ring`, or a corner of a tet around one, so that its neighbours can move)?
-fn needs_work(mesh: &TetMesh, ctx: &Ctx, bad: &[bool], ring: bool) -> Vec<bool> {
+/// Per point: is it a corner of a tet below the target (by `quality`), or a level vertex off
+/// its level (with `ring`, or a corner of a tet around one, so that its neighbours can move)?
+fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<bool> {
     let off = project::off_level_points(mesh, ctx);
     let mut work = off.clone();
-    for (t, &b) in mesh.tets.iter().zip(bad) {
-        if b || (ring && t.iter().any(|&v| off[v as usize])) {
+    for (t, &q) in mesh.tets.iter().zip(quality) {
+        if q < ctx.target || (ring && t.iter().any(|&v| off[v as usize])) {
             for &v in t {
                 work[v as usize] = true;
             }
