@@ -678,25 +678,40 @@ pub fn splice(
         .collect();
     retain_flagged(&mut mesh.boundary, &keep);
     retain_flagged(&mut mesh.boundary_labels, &keep);
-    let (mut tets, mut boundary, mut labels) = (
-        std::mem::take(&mut mesh.tets),
-        std::mem::take(&mut mesh.boundary),
-        std::mem::take(&mut mesh.boundary_labels),
-    );
+    // New points get ids after the existing ones, region by region.
+    let mut next = mesh.points.len() as u32;
+    let firsts: Vec<u32> = regions
+        .iter()
+        .map(|lm| {
+            let first = next;
+            next += lm.global.iter().filter(|&&g| g == NEW_POINT).count() as u32;
+            first
+        })
+        .collect();
+    let parts: Vec<Spliced> = regions
+        .into_par_iter()
+        .zip(firsts)
+        .map(|(lm, first)| lm.into_spliced(first))
+        .collect();
     let mut removed = Vec::new();
-    for lm in regions {
-        quality.extend(
-            lm.q.iter()
-                .zip(&lm.alive)
-                .filter(|(_, &a)| a)
-                .map(|(&q, _)| q),
-        );
-        lm.write_back(mesh, &mut tets, &mut boundary, &mut labels, &mut removed);
+    for part in parts {
+        part.write(mesh, quality, &mut removed);
     }
-    mesh.tets = tets;
-    mesh.boundary = boundary;
-    mesh.boundary_labels = labels;
     removed
+}
+
+/// A region in global ids, ready to be appended to the mesh.
+struct Spliced {
+    /// Its alive tets and their qualities.
+    tets: Vec<[u32; 4]>,
+    quality: Vec<f64>,
+    /// Its boundary faces (sorted by [`face_key`]) and their labels.
+    faces: Vec<[u32; 3]>,
+    labels: Vec<BoundaryLabel>,
+    /// Its free points that stay (moved or not) and the points it added: id, position, value.
+    points: Vec<(u32, [f64; 3], f64)>,
+    /// Its points merged away.
+    removed: Vec<u32>,
 }
 
 /// Writes back regions in which vertices only moved (no tet or face was added or removed):
@@ -746,44 +761,69 @@ fn retain_flagged<T>(items: &mut Vec<T>, keep: &[bool]) {
 }
 
 impl LocalMesh {
-    /// Appends this region's tets and faces (in global ids), writes its moved points into
-    /// `mesh` and lists its merged points in `removed`.
-    fn write_back(
-        self,
-        mesh: &mut TetMesh,
-        tets: &mut Vec<[u32; 4]>,
-        boundary: &mut Vec<[u32; 3]>,
-        labels: &mut Vec<BoundaryLabel>,
-        removed: &mut Vec<u32>,
-    ) {
+    /// This region in global ids; its added points get ids from `first` on, in order.
+    fn into_spliced(self, first: u32) -> Spliced {
         let mut global = self.global;
-        for (l, gid) in global.iter_mut().enumerate() {
-            if *gid == NEW_POINT {
-                *gid = mesh.points.len() as u32;
-                mesh.points.push(self.x[l]);
-                mesh.values.push(self.value[l]);
-            }
+        // Added points come after the copied ones.
+        let added = global
+            .iter()
+            .position(|&g| g == NEW_POINT)
+            .unwrap_or(global.len());
+        for (gid, id) in global[added..].iter_mut().zip(first..) {
+            *gid = id;
         }
         let g = |v: u32| global[v as usize];
+        let mut out = Spliced {
+            tets: Vec::with_capacity(self.tets.len()),
+            quality: Vec::with_capacity(self.tets.len()),
+            faces: Vec::with_capacity(self.faces.len()),
+            labels: Vec::with_capacity(self.faces.len()),
+            points: Vec::new(),
+            removed: Vec::new(),
+        };
         for (l, &gid) in global.iter().enumerate() {
+            // An added point takes its id even if merged away again.
+            if l >= added || (!self.removed[l] && !self.frozen[l]) {
+                out.points.push((gid, self.x[l], self.value[l]));
+            }
             if self.removed[l] {
-                removed.push(gid);
-            } else if !self.frozen[l] {
-                mesh.points[gid as usize] = self.x[l];
-                mesh.values[gid as usize] = self.value[l];
+                out.removed.push(gid);
             }
         }
-        for (t, &a) in self.tets.iter().zip(&self.alive) {
+        for ((t, &a), &q) in self.tets.iter().zip(&self.alive).zip(&self.q) {
             if a {
-                tets.push(t.map(g));
+                out.tets.push(t.map(g));
+                out.quality.push(q);
             }
         }
         let mut faces: Vec<&BoundaryFace> = self.faces.values().collect();
         faces.sort_unstable_by_key(|f| face_key(f.tri));
         for f in faces {
-            boundary.push(f.tri.map(g));
-            labels.push(f.label);
+            out.faces.push(f.tri.map(g));
+            out.labels.push(f.label);
         }
+        out
+    }
+}
+
+impl Spliced {
+    /// Appends this region's tets, qualities and faces to the mesh, writes its points (added
+    /// ones are appended: they come in id order) and lists its merged points in `removed`.
+    fn write(self, mesh: &mut TetMesh, quality: &mut Vec<f64>, removed: &mut Vec<u32>) {
+        for (gid, x, value) in self.points {
+            if gid as usize == mesh.points.len() {
+                mesh.points.push(x);
+                mesh.values.push(value);
+            } else {
+                mesh.points[gid as usize] = x;
+                mesh.values[gid as usize] = value;
+            }
+        }
+        mesh.tets.extend_from_slice(&self.tets);
+        quality.extend_from_slice(&self.quality);
+        mesh.boundary.extend_from_slice(&self.faces);
+        mesh.boundary_labels.extend_from_slice(&self.labels);
+        removed.extend_from_slice(&self.removed);
     }
 }
 
