@@ -5,8 +5,6 @@
 //! incomplete, so it neither moves nor is merged; every vertex that needs work has its whole
 //! star in the region and is free.
 
-use std::sync::atomic::{AtomicU32, Ordering};
-
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
@@ -172,6 +170,8 @@ pub fn extract_regions(
         vec![NONE; mesh.points.len()],
         vec![false; mesh.points.len()],
     );
+    // Whether a point has tets in two regions (a tet as long as a slab is thick).
+    let mut overlap = false;
     for (t, (&r, tet)) in of_tet.iter().zip(&mesh.tets).enumerate() {
         if r != NONE {
             tets_of[r as usize].push(t as u32);
@@ -180,6 +180,7 @@ pub fn extract_regions(
             let o = &mut owner[v as usize];
             if r == NONE || (*o != NONE && *o != r) {
                 shared[v as usize] = true;
+                overlap |= r != NONE;
             } else {
                 *o = r;
             }
@@ -191,22 +192,44 @@ pub fn extract_regions(
         .map(|(&o, &s)| if s { NONE } else { o })
         .collect();
     let faces_of = faces_by_region(mesh, &free_in, n_regions as usize);
-    let local_id: Vec<AtomicU32> = (0..mesh.points.len())
-        .into_par_iter()
-        .map(|_| AtomicU32::new(NONE))
-        .collect();
+    let (points_of, local_id) = if overlap {
+        (vec![Vec::new(); n_regions as usize], None)
+    } else {
+        let (p, l) = points_by_region(&owner, n_regions as usize);
+        (p, Some(l))
+    };
     let copy = Source {
         mesh,
         quality,
         free_in: &free_in,
-        local_id: &local_id,
+        local_id: local_id.as_deref(),
     };
     let regions = tets_of
         .into_par_iter()
         .zip(faces_of)
-        .map(|(tets, faces)| LocalMesh::from_tets(&copy, &tets, &faces, ctx))
+        .zip(points_of)
+        .map(|((tets, faces), points)| LocalMesh::from_tets(&copy, &tets, &faces, points, ctx))
         .collect();
     (regions, Regions { of_tet, free_in })
+}
+
+/// The points of each region in ascending order (`owner`: the region of each point, which
+/// is one at most), and each point's place in its region's list.
+fn points_by_region(owner: &[u32], n_regions: usize) -> (Vec<Vec<u32>>, Vec<u32>) {
+    let mut points_of: Vec<Vec<u32>> = vec![Vec::new(); n_regions];
+    let local_id = owner
+        .iter()
+        .enumerate()
+        .map(|(v, &r)| {
+            if r == NONE {
+                return NONE;
+            }
+            let list = &mut points_of[r as usize];
+            list.push(v as u32);
+            list.len() as u32 - 1
+        })
+        .collect();
+    (points_of, local_id)
 }
 
 /// Indices of the boundary faces of each region, in mesh order: a face with a free vertex
@@ -232,30 +255,31 @@ struct Source<'a> {
     quality: &'a [f64],
     /// Per point: the region whose free vertex it is (`NONE` if frozen or outside).
     free_in: &'a [u32],
-    /// Per point: its local id in the region that uses it. Regions of one phase share no
-    /// point, so each region fills in its own; a lookup is checked against the region's list
-    /// all the same.
-    local_id: &'a [AtomicU32],
+    /// Per point: its local id in the one region that uses it ([`points_by_region`]); `None`
+    /// when a point is in two regions (the regions then sort their own).
+    local_id: Option<&'a [u32]>,
 }
 
 impl LocalMesh {
     /// The region made of the mesh tets `tets` and the boundary faces `faces` (indices into
-    /// `mesh.boundary`: those with a free vertex of this region).
-    fn from_tets(copy: &Source, tets: &[u32], faces: &[u32], ctx: &Ctx) -> Self {
+    /// `mesh.boundary`: those with a free vertex of this region), whose points are `global`
+    /// (ascending; empty if [`Source::local_id`] is `None`: then they are found here).
+    fn from_tets(
+        copy: &Source,
+        tets: &[u32],
+        faces: &[u32],
+        mut global: Vec<u32>,
+        ctx: &Ctx,
+    ) -> Self {
         let mesh = copy.mesh;
-        let mut global: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
-        global.sort_unstable();
-        global.dedup();
-        for (i, &g) in global.iter().enumerate() {
-            copy.local_id[g as usize].store(i as u32, Ordering::Relaxed);
+        if copy.local_id.is_none() {
+            global = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
+            global.sort_unstable();
+            global.dedup();
         }
-        let local = |g: u32| {
-            let i = copy.local_id[g as usize].load(Ordering::Relaxed);
-            if global.get(i as usize) == Some(&g) {
-                i
-            } else {
-                global.binary_search(&g).map_or(NONE, |i| i as u32)
-            }
+        let local = |g: u32| match copy.local_id {
+            Some(ids) => ids[g as usize],
+            None => global.binary_search(&g).map_or(NONE, |i| i as u32),
         };
         let local_tets: Vec<[u32; 4]> = tets
             .iter()
