@@ -71,15 +71,14 @@ pub fn try_flip32(lm: &mut LocalMesh, ctx: &Ctx, t: u32, p: u32, q: u32) -> bool
 /// Replaces the tets `old` by `new` when every new tet is positive and the worst of them is
 /// better than the worst old one.
 fn replace_if_better(lm: &mut LocalMesh, ctx: &Ctx, old: &[u32], new: &[[u32; 4]]) -> bool {
+    // The old tets' qualities are kept up to date in `lm.q`; the first new tet that is not
+    // better decides.
     let q_old = old
         .iter()
-        .map(|&t| ctx.quality(lm.corners(lm.tets[t as usize])))
+        .map(|&t| lm.q[t as usize])
         .fold(f64::INFINITY, f64::min);
-    let q_new = new
-        .iter()
-        .map(|&t| ctx.quality(lm.corners(t)))
-        .fold(f64::INFINITY, f64::min);
-    if !(q_new > 0.0 && q_new > q_old) {
+    let floor = q_old.max(0.0);
+    if !new.iter().all(|&t| ctx.quality(lm.corners(t)) > floor) {
         return false;
     }
     for &t in old {
