@@ -145,10 +145,15 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
         }
     }
     edges.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
-    let floors = tet.map(|v| star_floor(lm, v));
-    let floor = |v: u32| floors[tet.iter().position(|&w| w == v).unwrap_or(0)];
+    // Each corner's floor is found when an edge at it is first tried.
+    let mut floors = [None; 4];
+    let mut floor = |v: u32| {
+        let i = tet.iter().position(|&w| w == v).unwrap_or(0);
+        *floors[i].get_or_insert_with(|| star_floor(lm, v))
+    };
     for (_, a, b) in edges {
-        if let Some((_, from, to)) = best_collapse(lm, ctx, a, b, [floor(a), floor(b)]) {
+        let f = [floor(a), floor(b)];
+        if let Some((_, from, to)) = best_collapse(lm, ctx, a, b, f) {
             apply_collapse(lm, from, to);
             return true;
         }
