@@ -192,7 +192,7 @@ pub fn extract_regions(
         .map(|(&o, &s)| if s { NONE } else { o })
         .collect();
     let faces_of = faces_by_region(mesh, &free_in, n_regions as usize);
-    let (points_of, local_id) = if overlap {
+    let (points_of, local_id) = if overlap || sort_points() {
         (vec![Vec::new(); n_regions as usize], None)
     } else {
         let (p, l) = points_by_region(&owner, n_regions as usize);
@@ -211,6 +211,20 @@ pub fn extract_regions(
         .map(|((tets, faces), points)| LocalMesh::from_tets(&copy, &tets, &faces, points, ctx))
         .collect();
     (regions, Regions { of_tet, free_in })
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Tests: make [`extract_regions`] take the path of overlapping regions.
+    static SORT_POINTS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether a test asked for the path of overlapping regions.
+fn sort_points() -> bool {
+    #[cfg(test)]
+    return SORT_POINTS.with(|c| c.get());
+    #[cfg(not(test))]
+    false
 }
 
 /// The points of each region in ascending order (`owner`: the region of each point, which
@@ -877,4 +891,64 @@ pub fn drop_points(mesh: &mut TetMesh, removed: &[u32]) {
     mesh.boundary
         .par_iter_mut()
         .for_each(|t| *t = t.map(|v| new_id[v as usize]));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::improve::fixtures::wavy_torus;
+    use crate::improve::{context, tet_qualities, QualityOptions, DEFAULT_WARP};
+    use crate::{mesh_interval, MeshOptions, Method};
+
+    fn faces_sorted(lm: &LocalMesh) -> Vec<([u32; 3], BoundaryLabel)> {
+        let mut f: Vec<_> = lm.faces.values().map(|f| (f.tri, f.label)).collect();
+        f.sort_unstable_by_key(|x| face_key(x.0));
+        f
+    }
+
+    /// The regions found from the points' owners (one ascending scan) equal those whose
+    /// points are sorted per region (the path taken when regions overlap).
+    #[test]
+    fn owner_scan_and_sorting_give_the_same_regions() {
+        let grid = wavy_torus();
+        let mesh = mesh_interval(
+            &grid,
+            &MeshOptions::new(-10.0, 2.2, Method::Ctd).warp(DEFAULT_WARP),
+        )
+        .unwrap()
+        .mesh;
+        let ctx = context(
+            &grid,
+            -10.0,
+            2.2,
+            &QualityOptions::default(),
+            std::time::Instant::now(),
+        );
+        let quality = tet_qualities(&mesh, &ctx);
+        // Every third point needs work: regions with frozen points and holes.
+        let work: Vec<bool> = (0..mesh.points.len()).map(|v| v % 3 == 0).collect();
+        for phase in 0..2 {
+            let (fast, _) = extract_regions(&mesh, &work, &quality, &ctx, phase);
+            SORT_POINTS.with(|c| c.set(true));
+            let (sorted, _) = extract_regions(&mesh, &work, &quality, &ctx, phase);
+            SORT_POINTS.with(|c| c.set(false));
+            assert_eq!(fast.len(), sorted.len());
+            assert!(fast.iter().map(|lm| lm.tets.len()).sum::<usize>() > 100);
+            for (a, b) in fast.iter().zip(&sorted) {
+                assert_eq!(a.global, b.global);
+                assert_eq!(a.tets, b.tets);
+                assert_eq!(a.q, b.q);
+                assert_eq!(a.frozen, b.frozen);
+                assert_eq!(faces_sorted(a), faces_sorted(b));
+                // Local ids name the same points as the mesh's tets.
+                for t in &a.tets {
+                    let x = t.map(|v| a.x[v as usize]);
+                    assert!(mesh
+                        .tets
+                        .iter()
+                        .any(|m| m.map(|v| mesh.points[v as usize]) == x));
+                }
+            }
+        }
+    }
 }
