@@ -74,6 +74,15 @@ fn collapse_quality(
     if !star.iter().any(around_edge) {
         return None;
     }
+    // The quality first: most attempts fail there, at the first tet.
+    let mut new = f64::INFINITY;
+    let xb = lm.x[b as usize];
+    for &t in star.iter().filter(|t| !around_edge(t)) {
+        new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
+        if new <= floor {
+            return None;
+        }
+    }
     if lm.con[a as usize].level.is_some() && !short_edge(lm, a, b, ratio) {
         return None;
     }
@@ -82,14 +91,6 @@ fn collapse_quality(
     {
         // A vertex with many tets around it can hardly be moved onto its level later.
         return None;
-    }
-    let mut new = f64::INFINITY;
-    let xb = lm.x[b as usize];
-    for &t in star.iter().filter(|t| !around_edge(t)) {
-        new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
-        if new <= floor {
-            return None;
-        }
     }
     Some(new)
 }
