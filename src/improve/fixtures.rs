@@ -4,6 +4,7 @@ use std::time::Instant;
 
 use super::local::{extract_regions, LocalMesh};
 use super::{context, tet_qualities, Ctx, QualityOptions, DEFAULT_WARP};
+use crate::mesh::TetMesh;
 use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
 
 /// The interval of [`wavy_torus`].
@@ -26,9 +27,8 @@ pub fn wavy_torus() -> ScalarGrid {
     ScalarGrid::new([n, n, n], values).unwrap()
 }
 
-/// The wavy torus meshed with warping (no pass), its context with the default options, and
-/// the regions of every vertex in the slabs of each phase in `phases`.
-pub fn wavy_torus_regions<'a>(grid: &'a ScalarGrid, phases: &[u32]) -> (Ctx<'a>, Vec<LocalMesh>) {
+/// The wavy torus meshed with warping (no pass) and its context with the default options.
+pub fn wavy_torus_mesh(grid: &ScalarGrid) -> (TetMesh, Ctx<'_>) {
     let (alpha, beta) = WAVY_TORUS_INTERVAL;
     let opts = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
     let mesh = mesh_interval(grid, &opts).unwrap().mesh;
@@ -39,6 +39,13 @@ pub fn wavy_torus_regions<'a>(grid: &'a ScalarGrid, phases: &[u32]) -> (Ctx<'a>,
         &QualityOptions::default(),
         Instant::now(),
     );
+    (mesh, ctx)
+}
+
+/// [`wavy_torus_mesh`]'s context and the regions of every vertex in the slabs of each phase
+/// in `phases`.
+pub fn wavy_torus_regions<'a>(grid: &'a ScalarGrid, phases: &[u32]) -> (Ctx<'a>, Vec<LocalMesh>) {
+    let (mesh, ctx) = wavy_torus_mesh(grid);
     let work = vec![true; mesh.points.len()];
     let quality = tet_qualities(&mesh, &ctx);
     let regions = phases

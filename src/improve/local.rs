@@ -148,6 +148,19 @@ pub fn extract_regions(
     ctx: &Ctx,
     phase: u32,
 ) -> (Vec<LocalMesh>, Regions) {
+    extract(mesh, work, quality, ctx, phase, false)
+}
+
+/// [`extract_regions`]; with `sort`, each region sorts its own points, as when regions
+/// overlap (tests compare both ways).
+fn extract(
+    mesh: &TetMesh,
+    work: &[bool],
+    quality: &[f64],
+    ctx: &Ctx,
+    phase: u32,
+    sort: bool,
+) -> (Vec<LocalMesh>, Regions) {
     let slab = slabs(mesh, work, &ctx.field);
     let of_tet: Vec<u32> = mesh
         .tets
@@ -192,11 +205,11 @@ pub fn extract_regions(
         .map(|(&o, &s)| if s { NONE } else { o })
         .collect();
     let faces_of = faces_by_region(mesh, &free_in, n_regions as usize);
-    let (points_of, local_id) = if overlap || sort_points() {
-        (vec![Vec::new(); n_regions as usize], None)
+    let (points_of, local_id) = if overlap || sort {
+        (vec![None; n_regions as usize], None)
     } else {
         let (p, l) = points_by_region(&owner, n_regions as usize);
-        (p, Some(l))
+        (p.into_iter().map(Some).collect(), Some(l))
     };
     let copy = Source {
         mesh,
@@ -211,20 +224,6 @@ pub fn extract_regions(
         .map(|((tets, faces), points)| LocalMesh::from_tets(&copy, &tets, &faces, points, ctx))
         .collect();
     (regions, Regions { of_tet, free_in })
-}
-
-#[cfg(test)]
-thread_local! {
-    /// Tests: make [`extract_regions`] take the path of overlapping regions.
-    static SORT_POINTS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
-
-/// Whether a test asked for the path of overlapping regions.
-fn sort_points() -> bool {
-    #[cfg(test)]
-    return SORT_POINTS.with(|c| c.get());
-    #[cfg(not(test))]
-    false
 }
 
 /// The points of each region in ascending order (`owner`: the region of each point, which
@@ -270,27 +269,28 @@ struct Source<'a> {
     /// Per point: the region whose free vertex it is (`NONE` if frozen or outside).
     free_in: &'a [u32],
     /// Per point: its local id in the one region that uses it ([`points_by_region`]); `None`
-    /// when a point is in two regions (the regions then sort their own).
+    /// when the regions sort their own points.
     local_id: Option<&'a [u32]>,
 }
 
 impl LocalMesh {
     /// The region made of the mesh tets `tets` and the boundary faces `faces` (indices into
-    /// `mesh.boundary`: those with a free vertex of this region), whose points are `global`
-    /// (ascending; empty if [`Source::local_id`] is `None`: then they are found here).
+    /// `mesh.boundary`: those with a free vertex of this region), whose points are `points`
+    /// (ascending, with [`Source::local_id`]; `None`: found here).
     fn from_tets(
         copy: &Source,
         tets: &[u32],
         faces: &[u32],
-        mut global: Vec<u32>,
+        points: Option<Vec<u32>>,
         ctx: &Ctx,
     ) -> Self {
         let mesh = copy.mesh;
-        if copy.local_id.is_none() {
-            global = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
-            global.sort_unstable();
-            global.dedup();
-        }
+        let global = points.unwrap_or_else(|| {
+            let mut all: Vec<u32> = tets.iter().flat_map(|&t| mesh.tets[t as usize]).collect();
+            all.sort_unstable();
+            all.dedup();
+            all
+        });
         let local = |g: u32| match copy.local_id {
             Some(ids) => ids[g as usize],
             None => global.binary_search(&g).map_or(NONE, |i| i as u32),
@@ -722,7 +722,7 @@ pub fn splice(
         .iter()
         .map(|lm| {
             let first = next;
-            next += lm.global.iter().filter(|&&g| g == NEW_POINT).count() as u32;
+            next += lm.added_points() as u32;
             first
         })
         .collect();
@@ -799,14 +799,19 @@ fn retain_flagged<T>(items: &mut Vec<T>, keep: &[bool]) {
 }
 
 impl LocalMesh {
+    /// How many points the region added (they come after the copied ones).
+    fn added_points(&self) -> usize {
+        self.global
+            .iter()
+            .rev()
+            .take_while(|&&g| g == NEW_POINT)
+            .count()
+    }
+
     /// This region in global ids; its added points get ids from `first` on, in order.
     fn into_spliced(self, first: u32) -> Spliced {
+        let added = self.global.len() - self.added_points();
         let mut global = self.global;
-        // Added points come after the copied ones.
-        let added = global
-            .iter()
-            .position(|&g| g == NEW_POINT)
-            .unwrap_or(global.len());
         for (gid, id) in global[added..].iter_mut().zip(first..) {
             *gid = id;
         }
@@ -896,9 +901,8 @@ pub fn drop_points(mesh: &mut TetMesh, removed: &[u32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::improve::fixtures::wavy_torus;
-    use crate::improve::{context, tet_qualities, QualityOptions, DEFAULT_WARP};
-    use crate::{mesh_interval, MeshOptions, Method};
+    use crate::improve::fixtures::{wavy_torus, wavy_torus_mesh};
+    use crate::improve::tet_qualities;
 
     fn faces_sorted(lm: &LocalMesh) -> Vec<([u32; 3], BoundaryLabel)> {
         let mut f: Vec<_> = lm.faces.values().map(|f| (f.tri, f.label)).collect();
@@ -911,27 +915,14 @@ mod tests {
     #[test]
     fn owner_scan_and_sorting_give_the_same_regions() {
         let grid = wavy_torus();
-        let mesh = mesh_interval(
-            &grid,
-            &MeshOptions::new(-10.0, 2.2, Method::Ctd).warp(DEFAULT_WARP),
-        )
-        .unwrap()
-        .mesh;
-        let ctx = context(
-            &grid,
-            -10.0,
-            2.2,
-            &QualityOptions::default(),
-            std::time::Instant::now(),
-        );
+        let (mesh, ctx) = wavy_torus_mesh(&grid);
         let quality = tet_qualities(&mesh, &ctx);
+        let mesh_tets: std::collections::HashSet<[u32; 4]> = mesh.tets.iter().copied().collect();
         // Every third point needs work: regions with frozen points and holes.
         let work: Vec<bool> = (0..mesh.points.len()).map(|v| v % 3 == 0).collect();
         for phase in 0..2 {
-            let (fast, _) = extract_regions(&mesh, &work, &quality, &ctx, phase);
-            SORT_POINTS.with(|c| c.set(true));
-            let (sorted, _) = extract_regions(&mesh, &work, &quality, &ctx, phase);
-            SORT_POINTS.with(|c| c.set(false));
+            let (fast, _) = extract(&mesh, &work, &quality, &ctx, phase, false);
+            let (sorted, _) = extract(&mesh, &work, &quality, &ctx, phase, true);
             assert_eq!(fast.len(), sorted.len());
             assert!(fast.iter().map(|lm| lm.tets.len()).sum::<usize>() > 100);
             for (a, b) in fast.iter().zip(&sorted) {
@@ -940,13 +931,9 @@ mod tests {
                 assert_eq!(a.q, b.q);
                 assert_eq!(a.frozen, b.frozen);
                 assert_eq!(faces_sorted(a), faces_sorted(b));
-                // Local ids name the same points as the mesh's tets.
+                // Local ids name the mesh's tets.
                 for t in &a.tets {
-                    let x = t.map(|v| a.x[v as usize]);
-                    assert!(mesh
-                        .tets
-                        .iter()
-                        .any(|m| m.map(|v| mesh.points[v as usize]) == x));
+                    assert!(mesh_tets.contains(&t.map(|v| a.global[v as usize])));
                 }
             }
         }
