@@ -7,6 +7,8 @@ quality" section of benchmarks/README.md.
   python3 benchmarks/quality.py --size 48 --mri-crop 64 --timeout 300 --ftetwild-timeout 300   # the issue's sizes
   python3 benchmarks/quality.py --quick          # N = 32, sphere + torus, short timeouts (< 2 min)
   python3 benchmarks/quality.py --domains sphere,shell --no-ftetwild --timeout 120
+  python3 benchmarks/quality.py --domains sphere,torus,genus3,shell,two_spheres --no-tetgen \
+      --targets 20/150,25/145,30/140 --out benchmarks/quality_targets_results   # higher targets
 
 For every domain and interval:
 
@@ -420,18 +422,25 @@ def has_quality_flag(binary):
 # the tools
 # ----------------------------------------------------------------------------
 
-def run_ours(args, dom, iv, tag, quality):
-    """tptd-mesh (ctd) on one domain/interval; returns (row, points, tets)."""
+def run_ours(args, dom, iv, tag, quality, target=None):
+    """tptd-mesh (ctd) on one domain/interval, with `--quality` if `quality`, aiming at
+    `target` = (min, max) dihedral angles if given; returns (row, points, tets)."""
     label = f"{tag}_ours{'_quality' if quality else ''}"
+    tool = "ours --quality" if quality else "ours"
+    extra = []
+    if target:
+        extra = ["--min-angle", f"{target[0]:g}", "--max-angle", f"{target[1]:g}"]
+        label += f"_{target[0]:g}_{target[1]:g}"
+        tool += " " + " ".join(extra)
     msh, rep = os.path.join(OUT, label + ".msh"), os.path.join(OUT, label + ".report.json")
     cmd = [args.bin, dom["path"]]
     if iv[0] is not None:
         cmd += ["--alpha", repr(float(iv[0]))]
     if iv[1] is not None:
         cmd += ["--beta", repr(float(iv[1]))]
-    cmd += ["-o", msh, "--report", rep] + (["--quality"] if quality else [])
+    cmd += ["-o", msh, "--report", rep] + (["--quality"] if quality else []) + extra
     r = run_child(cmd, os.path.join(OUT, label), args.timeout)
-    row = {"tool": "ours --quality" if quality else "ours", "command": " ".join(cmd), **r}
+    row = {"tool": tool, "command": " ".join(cmd), **r}
     P = T = None
     if r["status"] == "ok":
         with open(rep) as f:
@@ -523,6 +532,8 @@ def bench_interval(args, dom, k, iv, with_quality):
     add(base)
     if with_quality:
         add(run_ours(args, dom, iv, tag, True)[0])
+        for target in args.targets:
+            add(run_ours(args, dom, iv, tag, True, target)[0])
     if T is None or (args.no_tetgen and args.no_ftetwild):
         return rows
     used, F = boundary_surface(T)
@@ -618,7 +629,8 @@ def render_md(p):
                      + " | ".join(f"{r[f'p{q}']:.1f}" for q in PCTS)
                      + f" | {r['pct_min_below_5']:.2f} | {r['pct_max_above_165']:.2f} |")
     L.append("\n## Commands\n")
-    L.append("- ours: `tptd-mesh IN.npy [--alpha A] [--beta B] -o OUT.msh --report R.json [--quality]`")
+    L.append("- ours: `tptd-mesh IN.npy [--alpha A] [--beta B] -o OUT.msh --report R.json [--quality "
+             "[--min-angle MIN --max-angle MAX]]`")
     L.append(f"- TetGen: `tetgen {' | '.join(p['tetgen_switches'])} surf.smesh` (`F`: no .face/.edge output); "
              "surf.smesh = boundary of our mesh plus one hole point per enclosed cavity; address space limited "
              f"to {p['mem_limit_gb']:g} GB; timeout {p['timeout']:g} s")
@@ -693,6 +705,9 @@ def parse_args():
     ap.add_argument("--tetgen", default=shutil.which("tetgen") or "/usr/bin/tetgen")
     ap.add_argument("--tetgen-switches", default="-pq1.2F,-pq1.2/10F",
                     help="comma-separated TetGen switch sets (default -pq1.2F,-pq1.2/10F)")
+    ap.add_argument("--targets", default="",
+                    help="comma-separated MIN/MAX dihedral targets: one more row of ours --quality "
+                         "--min-angle MIN --max-angle MAX per pair (e.g. 20/150,25/145)")
     ap.add_argument("--no-tetgen", action="store_true")
     ap.add_argument("--no-ftetwild", action="store_true")
     ap.add_argument("--timeout", type=float, default=None, help="per tptd-mesh / TetGen run, s (default 60)")
@@ -717,6 +732,12 @@ def parse_args():
     args.timeout = args.timeout or (QUICK_TIMEOUT if args.quick else TIMEOUT)
     args.ftetwild_timeout = args.ftetwild_timeout or (QUICK_TIMEOUT if args.quick else TIMEOUT)
     args.tetgen_switches = [s for s in args.tetgen_switches.split(",") if s]
+    try:
+        args.targets = [tuple(float(x) for x in t.split("/")) for t in args.targets.split(",") if t]
+    except ValueError:
+        ap.error(f"--targets: expected MIN/MAX pairs like 20/150, got {args.targets!r}")
+    if any(len(t) != 2 or not 0 < t[0] < t[1] < 180 for t in args.targets):
+        ap.error(f"--targets: each pair needs 0 < MIN < MAX < 180, got {args.targets}")
     args.out = args.out or os.path.join(HERE, "quality_results" + quick)
     args.hist = args.hist or os.path.join(HERE, f"quality_hist{quick}.png")
     return args

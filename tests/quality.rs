@@ -244,6 +244,40 @@ fn thin_shell_and_close_balls_keep_their_topology() {
 }
 
 #[test]
+fn higher_targets_climb_in_stages_and_never_end_below_a_lower_one() {
+    // Aimed straight at 20° (one pass), the thin shell collapses across its 1.2-voxel layer
+    // and ends below what the default target gives (measured on the benchmark's 32³ shell:
+    // 12.5° against 15.0°). In stages (15°, then 2.5° higher at a time), each higher target
+    // ends at least where the lower one did. Higher targets coarsen more, and the splits and
+    // the volume restoration may not take a tet below the target, so the volume may move by
+    // more than the default's 0.5 % (measured here: the shell +0.6 % at 25°; README).
+    const VOLUME_AT_HIGHER_TARGETS: f64 = 1.5e-2;
+    for (name, f, alpha, beta) in [
+        ("shell", sphere(26, 8.3), -0.6, 0.6),
+        ("torus", torus(36, 10.0, 4.2), f64::NEG_INFINITY, 0.0),
+    ] {
+        let mut last = mesh_and_improve(&f, alpha, beta);
+        for (lo, hi) in [(20.0, 150.0), (25.0, 145.0)] {
+            let opts = QualityOptions {
+                min_angle: lo,
+                max_angle: hi,
+                ..QualityOptions::default()
+            };
+            let o = mesh_and_improve_with(&f, alpha, beta, &opts);
+            let what = format!("{name} at {lo}°/{hi}°");
+            check_invariants_with(&what, &f, alpha, beta, &o, VOLUME_AT_HIGHER_TARGETS);
+            assert!(
+                o.min_angle >= last.min_angle - 1e-9,
+                "{what}: {}° after {}° at the lower target",
+                o.min_angle,
+                last.min_angle
+            );
+            last = o;
+        }
+    }
+}
+
+#[test]
 fn a_boundary_collapse_limit_keeps_the_invariants_and_raises_the_shell() {
     // Unlimited, collapses leave long boundary edges across the 1.2-voxel layer; limited to
     // twice the mean edge at the removed node they do not (measured: 14.82° -> 15.01°).

@@ -151,6 +151,19 @@ fn quality_lines(s: &mut String, r: &Report) {
             ""
         }
     );
+    if !p.stages.is_empty() {
+        let stages: Vec<String> = p
+            .stages
+            .iter()
+            .map(|st| {
+                let [lo, hi] = st.target_degrees;
+                let what = if st.kept { "kept" } else { "undone" };
+                let deg = |x: f64| (x * 100.0).round() / 100.0;
+                format!("{}°/{}° {what}", deg(lo), deg(hi))
+            })
+            .collect();
+        let _ = writeln!(s, "            in stages: {}", stages.join(", "));
+    }
     if let (Some(b), Some(a)) = (&q.before, &q.after) {
         for (label, summary) in [("before:", b), ("after: ", a)] {
             let _ = writeln!(
