@@ -248,7 +248,9 @@ impl Ctx<'_> {
 /// pass aimed straight at a high target collapses more (every tet below the target is
 /// worked on), and on a thin layer that can leave it worse than the default target does
 /// (the 32³ shell of the benchmark: 12.5° for `--min-angle 20`, against 15.0° by default);
-/// in stages a higher target never ends below a lower target of the same ladder.
+/// in stages (each ladder's first stages are those of every lower target on the same line,
+/// and a stage does not lower the worst tet in its measure), a higher target ended at least
+/// where a lower one did on every domain measured (README, *Higher targets*).
 pub fn improve(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,
@@ -281,11 +283,15 @@ pub fn improve(
             run_rounds(mesh, &ctx, opts.max_rounds, &mut state, &mut report);
             break;
         }
-        let stage = run_stage(mesh, &ctx, opts.max_rounds, i == 0, &mut state, &mut report);
-        report.stages.push(Stage {
-            target_degrees: [lo, hi],
-            ..stage
-        });
+        let stage = run_stage(
+            mesh,
+            &ctx,
+            opts.max_rounds,
+            (i == 0, [lo, hi]),
+            &mut state,
+            &mut report,
+        );
+        report.stages.push(stage);
         if report.out_of_time {
             break;
         }
@@ -372,14 +378,14 @@ fn run_rounds(
     }
 }
 
-/// One stage of [`improve`]: [`run_rounds`] at `ctx`'s targets (`state.quality` in its
-/// measure), undone (mesh and state) if the worst tet ends worse than it started, unless it
-/// is the `first`. Returns the stage's outcome (its targets left for the caller).
+/// One stage of [`improve`]: [`run_rounds`] at `ctx`'s targets (`target_degrees`, with
+/// `state.quality` in its measure), undone (mesh and state) if the worst tet ends worse than
+/// it started, unless it is the `first`. Returns the stage's outcome.
 fn run_stage(
     mesh: &mut TetMesh,
     ctx: &Ctx,
     rounds: usize,
-    first: bool,
+    (first, target_degrees): (bool, [f64; 2]),
     state: &mut PassState,
     report: &mut ImproveReport,
 ) -> Stage {
@@ -394,7 +400,7 @@ fn run_stage(
         *state = old_state;
     }
     Stage {
-        target_degrees: [0.0; 2],
+        target_degrees,
         worst_before: before,
         worst_after: after,
         kept,
@@ -618,4 +624,43 @@ fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<boo
         }
     }
     work
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn targets(min_angle: f64, max_angle: f64) -> Vec<[f64; 2]> {
+        stage_targets(&QualityOptions {
+            min_angle,
+            max_angle,
+            ..QualityOptions::default()
+        })
+    }
+
+    #[test]
+    fn stages_start_at_the_default_and_climb_by_at_most_a_step() {
+        // The default and lower targets: one pass.
+        assert_eq!(targets(15.0, 155.0), vec![[15.0, 155.0]]);
+        assert_eq!(targets(10.0, 170.0), vec![[10.0, 170.0]]);
+        // Both angles in equal steps of at most STAGE_STEP.
+        assert_eq!(
+            targets(20.0, 150.0),
+            vec![[15.0, 155.0], [17.5, 152.5], [20.0, 150.0]]
+        );
+        let t = targets(23.0, 141.0);
+        assert_eq!((t[0], t[t.len() - 1]), ([15.0, 155.0], [23.0, 141.0]));
+        assert_eq!(t.len(), 7, "{t:?}");
+        for w in t.windows(2) {
+            assert!(w[1][0] - w[0][0] <= STAGE_STEP + 1e-12 && w[1][0] >= w[0][0]);
+            assert!(w[0][1] - w[1][1] <= STAGE_STEP + 1e-12 && w[1][1] <= w[0][1]);
+        }
+        // A target below the default in one angle stays as requested in every stage.
+        assert_eq!(
+            targets(20.0, 170.0),
+            vec![[15.0, 170.0], [17.5, 170.0], [20.0, 170.0]]
+        );
+        // The ladder of a lower target on the same line is a prefix of a higher one's.
+        assert_eq!(targets(25.0, 145.0)[..3], targets(20.0, 150.0)[..]);
+    }
 }
