@@ -89,12 +89,18 @@ struct Outcome {
     max_angle: f64,
 }
 
-fn improve_with_threads(grid: &ScalarGrid, mesh: &mut TetMesh, a: f64, b: f64, threads: usize) {
+fn improve_with_threads(
+    grid: &ScalarGrid,
+    mesh: &mut TetMesh,
+    (a, b): (f64, f64),
+    q: &QualityOptions,
+    threads: usize,
+) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .unwrap();
-    pool.install(|| improve(mesh, grid, a, b, &QualityOptions::default()));
+    pool.install(|| improve(mesh, grid, a, b, q));
 }
 
 fn mesh_and_improve(field: &Field, alpha: f64, beta: f64) -> Outcome {
@@ -468,8 +474,21 @@ fn output_does_not_depend_on_the_thread_count() {
         mesh == mesh2,
         "warped meshes differ between 1 and 2 threads"
     );
-    let (mut one, mut two) = (mesh.clone(), mesh);
-    improve_with_threads(&grid, &mut one, -0.3, 0.6, 1);
-    improve_with_threads(&grid, &mut two, -0.3, 0.6, 2);
-    assert!(one == two, "1 and 2 threads give different meshes");
+    // The default pass, and one in stages (a higher target).
+    let higher = QualityOptions {
+        min_angle: 22.0,
+        max_angle: 148.0,
+        ..QualityOptions::default()
+    };
+    for q in [QualityOptions::default(), higher] {
+        let (mut one, mut two) = (mesh.clone(), mesh.clone());
+        improve_with_threads(&grid, &mut one, (-0.3, 0.6), &q, 1);
+        improve_with_threads(&grid, &mut two, (-0.3, 0.6), &q, 2);
+        assert!(
+            one == two,
+            "1 and 2 threads give different meshes at {}°/{}°",
+            q.min_angle,
+            q.max_angle
+        );
+    }
 }
