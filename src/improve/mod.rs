@@ -23,6 +23,7 @@ pub(crate) mod restore;
 mod schedule;
 pub(crate) mod smooth;
 pub(crate) mod split;
+pub mod stages;
 
 use std::time::{Duration, Instant};
 
@@ -34,6 +35,7 @@ use crate::mesh::TetMesh;
 use field::Field;
 use local::LocalMesh;
 use quality::biased_min_sine;
+use stages::{run_stage, stage_targets, Stage};
 
 /// The warping threshold ([`crate::MeshOptions::warp`]) to mesh with before improving: grid
 /// vertices that a level passes within this fraction of an edge from are put on the level
@@ -141,20 +143,6 @@ pub struct ImproveReport {
     pub stages: Vec<Stage>,
 }
 
-/// One stage of a pass towards targets above the default ([`improve`]).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Stage {
-    /// Its target dihedral angles (degrees).
-    pub target_degrees: [f64; 2],
-    /// The worst tet quality in this stage's measure before it (`None` for the first stage,
-    /// which is kept whatever it does).
-    pub worst_before: Option<f64>,
-    /// The worst tet quality in this stage's measure after it.
-    pub worst_after: f64,
-    /// Whether its result was kept (it did not lower the worst quality).
-    pub kept: bool,
-}
-
 /// Where the quality pass spends its time (wall-clock seconds, summed over rounds).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct StageSeconds {
@@ -243,7 +231,7 @@ impl Ctx<'_> {
 ///
 /// Targets above the default ([`QualityOptions::default`]: 15° and 155°) are climbed to in
 /// stages: a pass at the default targets, then passes at targets raised by at most
-/// [`STAGE_STEP`] each, the last at the requested ones. A stage whose result has a worse
+/// [`stages::STAGE_STEP`] each, the last at the requested ones. A stage whose result has a worse
 /// worst tet (in that stage's own measure) than the mesh it started from is undone. A single
 /// pass aimed straight at a high target collapses more (every tet below the target is
 /// worked on), and on a thin layer that can leave it worse than the default target does
@@ -311,35 +299,6 @@ pub fn improve(
     report
 }
 
-/// Largest raise of the target angles from one stage of [`improve`] to the next (degrees).
-pub const STAGE_STEP: f64 = 2.5;
-
-/// The targets `[min, max]` (degrees) of the stages of [`improve`]: just `opts`' own when they
-/// are not above the default; else the default, then equal steps of at most [`STAGE_STEP`] in
-/// each angle up to `opts`' (a requested target below the default in one angle stays
-/// where it is requested in every stage).
-fn stage_targets(opts: &QualityOptions) -> Vec<[f64; 2]> {
-    let d = QualityOptions::default();
-    let (lo0, hi0) = (
-        d.min_angle.min(opts.min_angle),
-        d.max_angle.max(opts.max_angle),
-    );
-    let rise = (opts.min_angle - lo0).max(hi0 - opts.max_angle);
-    if rise <= 0.0 {
-        return vec![[opts.min_angle, opts.max_angle]];
-    }
-    let n = (rise / STAGE_STEP).ceil() as usize;
-    (0..=n)
-        .map(|i| {
-            let f = i as f64 / n as f64;
-            [
-                lo0 + f * (opts.min_angle - lo0),
-                hi0 + f * (opts.max_angle - hi0),
-            ]
-        })
-        .collect()
-}
-
 /// What a pass carries from round to round and from stage to stage.
 #[derive(Clone)]
 struct PassState {
@@ -375,35 +334,6 @@ fn run_rounds(
         if !run_round(mesh, ctx, round, progress) {
             break;
         }
-    }
-}
-
-/// One stage of [`improve`]: [`run_rounds`] at `ctx`'s targets (`target_degrees`, with
-/// `state.quality` in its measure), undone (mesh and state) if the worst tet ends worse than
-/// it started, unless it is the `first`. Returns the stage's outcome.
-fn run_stage(
-    mesh: &mut TetMesh,
-    ctx: &Ctx,
-    rounds: usize,
-    (first, target_degrees): (bool, [f64; 2]),
-    state: &mut PassState,
-    report: &mut ImproveReport,
-) -> Stage {
-    let worst = |q: &[f64]| q.iter().copied().fold(f64::INFINITY, f64::min);
-    let before = (!first).then(|| worst(&state.quality));
-    let snapshot = before.map(|_| (mesh.clone(), state.clone()));
-    run_rounds(mesh, ctx, rounds, state, report);
-    let after = worst(&state.quality);
-    let kept = before.is_none_or(|b| after >= b);
-    if let (false, Some((old_mesh, old_state))) = (kept, snapshot) {
-        *mesh = old_mesh;
-        *state = old_state;
-    }
-    Stage {
-        target_degrees,
-        worst_before: before,
-        worst_after: after,
-        kept,
     }
 }
 
@@ -624,43 +554,4 @@ fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<boo
         }
     }
     work
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn targets(min_angle: f64, max_angle: f64) -> Vec<[f64; 2]> {
-        stage_targets(&QualityOptions {
-            min_angle,
-            max_angle,
-            ..QualityOptions::default()
-        })
-    }
-
-    #[test]
-    fn stages_start_at_the_default_and_climb_by_at_most_a_step() {
-        // The default and lower targets: one pass.
-        assert_eq!(targets(15.0, 155.0), vec![[15.0, 155.0]]);
-        assert_eq!(targets(10.0, 170.0), vec![[10.0, 170.0]]);
-        // Both angles in equal steps of at most STAGE_STEP.
-        assert_eq!(
-            targets(20.0, 150.0),
-            vec![[15.0, 155.0], [17.5, 152.5], [20.0, 150.0]]
-        );
-        let t = targets(23.0, 141.0);
-        assert_eq!((t[0], t[t.len() - 1]), ([15.0, 155.0], [23.0, 141.0]));
-        assert_eq!(t.len(), 7, "{t:?}");
-        for w in t.windows(2) {
-            assert!(w[1][0] - w[0][0] <= STAGE_STEP + 1e-12 && w[1][0] >= w[0][0]);
-            assert!(w[0][1] - w[1][1] <= STAGE_STEP + 1e-12 && w[1][1] <= w[0][1]);
-        }
-        // A target below the default in one angle stays as requested in every stage.
-        assert_eq!(
-            targets(20.0, 170.0),
-            vec![[15.0, 170.0], [17.5, 170.0], [20.0, 170.0]]
-        );
-        // The ladder of a lower target on the same line is a prefix of a higher one's.
-        assert_eq!(targets(25.0, 145.0)[..3], targets(20.0, 150.0)[..]);
-    }
 }
