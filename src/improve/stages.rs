@@ -21,13 +21,14 @@ pub struct Stage {
     pub kept: bool,
 }
 
-/// Largest raise of the target angles from one stage of [`super::improve`] to the next (degrees).
+/// Largest raise of the target angles from one stage of [`super::improve`] to the next
+/// (degrees).
 pub const STAGE_STEP: f64 = 2.5;
 
-/// The targets `[min, max]` (degrees) of the stages of [`super::improve`]: just `opts`' own when they
-/// are not above the default; else the default, then equal steps of at most [`STAGE_STEP`] in
-/// each angle up to `opts`' (a requested target below the default in one angle stays
-/// where it is requested in every stage).
+/// The targets `[min, max]` (degrees) of the stages of [`super::improve`]: just `opts`' own
+/// when they are not above the default; else the default, then equal steps of at most
+/// [`STAGE_STEP`] in each angle up to `opts`' (a requested target below the default in one
+/// angle stays where it is requested in every stage).
 pub(super) fn stage_targets(opts: &QualityOptions) -> Vec<[f64; 2]> {
     let d = QualityOptions::default();
     let (lo0, hi0) = (
