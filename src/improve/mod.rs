@@ -230,15 +230,8 @@ impl Ctx<'_> {
 /// trilinear level set once projected).
 ///
 /// Targets above the default ([`QualityOptions::default`]: 15° and 155°) are climbed to in
-/// stages: a pass at the default targets, then passes at targets raised by at most
-/// [`stages::STAGE_STEP`] each, the last at the requested ones. A stage whose result has a worse
-/// worst tet (in that stage's own measure) than the mesh it started from is undone. A single
-/// pass aimed straight at a high target collapses more (every tet below the target is
-/// worked on), and on a thin layer that can leave it worse than the default target does
-/// (the 32³ shell of the benchmark: 12.5° for `--min-angle 20`, against 15.0° by default);
-/// in stages (each ladder's first stages are those of every lower target on the same line,
-/// and a stage does not lower the worst tet in its measure), a higher target ended at least
-/// where a lower one did on every domain measured (README, *Higher targets*).
+/// stages ([`stages`]); the last stage (splits and volume restoration) runs once, at the
+/// requested targets.
 pub fn improve(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,
@@ -256,14 +249,12 @@ pub fn improve(
     let ladder = stage_targets(opts);
     let mut ctx = context(grid, alpha, beta, opts, start);
     for (i, &[lo, hi]) in ladder.iter().enumerate() {
-        if ladder.len() > 1 {
-            let stage = QualityOptions {
-                min_angle: lo,
-                max_angle: hi,
-                ..opts.clone()
-            };
-            ctx = context(grid, alpha, beta, &stage, start);
-        }
+        let stage = QualityOptions {
+            min_angle: lo,
+            max_angle: hi,
+            ..opts.clone()
+        };
+        ctx = context(grid, alpha, beta, &stage, start);
         // Per tet: its quality. Kept up to date through projections and splices, so that
         // each round evaluates only the tets that changed, and the regions copy it out.
         state.quality = tet_qualities(mesh, &ctx);
