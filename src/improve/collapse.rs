@@ -179,6 +179,7 @@ pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> Vec<BoundaryFace> {
     if !lm.on_boundary(v) {
         return out;
     }
+    let all = lm.boundary_faces_of(v);
     for &t in &lm.star[v as usize] {
         let tet = lm.tets[t as usize];
         for skip in 0..4 {
@@ -187,6 +188,9 @@ pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> Vec<BoundaryFace> {
                 if let Some(f) = lm.faces.get(&face_key(tri)) {
                     if !out.contains(f) {
                         out.push(*f);
+                        if out.len() == all {
+                            return out;
+                        }
                     }
                 }
             }
@@ -324,11 +328,10 @@ fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
         let mut verts = Vec::new();
         let mut edges = Vec::new();
         for f in faces {
-            let o: Vec<u32> = f.tri.into_iter().filter(|&w| w != v).collect();
+            let i = f.tri.iter().position(|&w| w == v).unwrap_or(0);
+            let o = [f.tri[(i + 1) % 3], f.tri[(i + 2) % 3]];
             verts.extend_from_slice(&o);
-            let mut e = [o[0], o[1]];
-            e.sort_unstable();
-            edges.push(e);
+            edges.push([o[0].min(o[1]), o[0].max(o[1])]);
         }
         verts.sort_unstable();
         verts.dedup();

@@ -14,7 +14,7 @@ pub fn try_flip23(lm: &mut LocalMesh, ctx: &Ctx, t: u32, i: usize) -> bool {
     let p = tet[i];
     // [p, b, c, d] is an even permutation of `tet`.
     let [b, c, d] = opposite_face(tet, i);
-    if ![b, c, d].iter().any(|&v| lm.is_free(v)) || lm.faces.contains_key(&face_key([b, c, d])) {
+    if ![b, c, d].iter().any(|&v| lm.is_free(v)) || is_boundary_face(lm, [b, c, d]) {
         return false;
     }
     let Some(s) = other_tet_with_face(lm, t, [b, c, d]) else {
@@ -40,22 +40,31 @@ pub fn try_flip32(lm: &mut LocalMesh, ctx: &Ctx, t: u32, p: u32, q: u32) -> bool
     if !lm.is_free(p) && !lm.is_free(q) {
         return false;
     }
-    let around: Vec<u32> = lm.star[p as usize]
-        .iter()
-        .copied()
-        .filter(|&u| lm.tets[u as usize].contains(&q))
-        .collect();
-    if around.len() != 3 {
+    // The tets around the edge, and the vertices of its ring: three each, or no 3-2 flip.
+    let (mut around, mut n) = ([0u32; 3], 0);
+    for &u in lm.star[p as usize].iter() {
+        if lm.tets[u as usize].contains(&q) {
+            if n == 3 {
+                return false;
+            }
+            around[n] = u;
+            n += 1;
+        }
+    }
+    if n != 3 {
         return false;
     }
-    let mut ring: Vec<u32> = around
-        .iter()
-        .flat_map(|&u| lm.tets[u as usize])
-        .filter(|&v| v != p && v != q)
-        .collect();
-    ring.sort_unstable();
-    ring.dedup();
-    if ring.len() != 3 {
+    let (mut ring, mut m) = ([0u32; 3], 0);
+    for w in around.iter().flat_map(|&u| lm.tets[u as usize]) {
+        if w != p && w != q && !ring[..m].contains(&w) {
+            if m == 3 {
+                return false;
+            }
+            ring[m] = w;
+            m += 1;
+        }
+    }
+    if m != 3 {
         return false; // an open ring: the edge is on the boundary
     }
     // Orient from tet t: [p, b, c, q] even permutation of it; d is the third ring vertex.
@@ -106,6 +115,12 @@ fn other_tet_with_face(lm: &LocalMesh, t: u32, f: [u32; 3]) -> Option<u32> {
         .find(|&u| u != t && f.iter().all(|v| lm.tets[u as usize].contains(v)))
 }
 
+/// Whether `f` is a domain-boundary face (its corners are checked first: that is cheaper
+/// than the lookup, and most faces have a corner off the boundary).
+fn is_boundary_face(lm: &LocalMesh, f: [u32; 3]) -> bool {
+    f.iter().all(|&v| lm.on_boundary(v)) && lm.faces.contains_key(&face_key(f))
+}
+
 /// Whether some alive tet has the face `f`.
 fn face_exists(lm: &LocalMesh, f: [u32; 3]) -> bool {
     lm.star[f[0] as usize]
@@ -116,7 +131,13 @@ fn face_exists(lm: &LocalMesh, f: [u32; 3]) -> bool {
 /// The two vertices `(x, y)` of `tet` besides `p` and `q` such that `[p, x, y, q]` is an even
 /// permutation of `tet`.
 fn even_completion(tet: [u32; 4], p: u32, q: u32) -> (u32, u32) {
-    let rest: Vec<u32> = tet.into_iter().filter(|&v| v != p && v != q).collect();
+    let (mut rest, mut n) = ([0u32; 2], 0);
+    for v in tet {
+        if v != p && v != q && n < 2 {
+            rest[n] = v;
+            n += 1;
+        }
+    }
     let cand = [p, rest[0], rest[1], q];
     if is_even_permutation(tet, cand) {
         (rest[0], rest[1])

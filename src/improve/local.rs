@@ -398,6 +398,12 @@ impl LocalMesh {
         self.face_count[v as usize] > 0
     }
 
+    /// How many domain-boundary faces `v` is a corner of.
+    #[inline]
+    pub fn boundary_faces_of(&self, v: u32) -> usize {
+        self.face_count[v as usize] as usize
+    }
+
     /// Records a change to tet `t` (created, removed, or a corner moved).
     #[inline]
     fn touch(&mut self, t: u32) {
