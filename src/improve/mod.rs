@@ -5,9 +5,10 @@
 //! work: each round marks the vertices of tets below the target quality and the level
 //! vertices off the trilinear level set, copies their stars out (`local`), improves them
 //! there (projection, edge collapse, flips, smoothing; one operation per file) and splices the
-//! result back. A last stage splits the boundary edges whose chord sags from a curved level
-//! set (`split`) and gives back the volume the operations moved (`restore`). Everything runs
-//! in a fixed order, so the output does not depend on the number of threads.
+//! result back. A last stage after the rounds splits the boundary edges whose chord sags from
+//! a curved level set (`split`) and gives back the volume the operations moved (`restore`);
+//! with targets above the default, every target stage ends with it (`stages`). Everything
+//! runs in a fixed order, so the output does not depend on the number of threads.
 
 pub(crate) mod collapse;
 pub(crate) mod constraint;
@@ -156,8 +157,8 @@ pub struct StageSeconds {
     pub local: f64,
     /// Writing the regions back.
     pub splice: f64,
-    /// The last stage: splitting the boundary edges that sag from the level set
-    /// ([`QualityOptions::split_sag`]) and giving the volume back
+    /// The last stage after the rounds (of each target stage): splitting the boundary edges
+    /// that sag from the level set ([`QualityOptions::split_sag`]) and giving the volume back
     /// ([`QualityOptions::restore_volume`]).
     pub finish: f64,
 }
@@ -230,8 +231,8 @@ impl Ctx<'_> {
 /// trilinear level set once projected).
 ///
 /// Targets above the default ([`QualityOptions::default`]: 15° and 155°) are climbed to in
-/// stages ([`stages`]); the last stage (splits and volume restoration) runs once, at the
-/// requested targets.
+/// stages ([`stages`]); each ends with the splits and the volume restoration at its targets
+/// ([`finish_stage`]).
 pub fn improve(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,
@@ -260,26 +261,30 @@ pub fn improve(
         state.quality = tet_qualities(mesh, &ctx);
         if ladder.len() == 1 {
             run_rounds(mesh, &ctx, opts.max_rounds, &mut state, &mut report);
-            break;
+        } else {
+            let stage = run_stage(
+                mesh,
+                &ctx,
+                opts.max_rounds,
+                (i == 0, [lo, hi]),
+                &mut state,
+                &mut report,
+            );
+            report.stages.push(stage);
         }
-        let stage = run_stage(
-            mesh,
-            &ctx,
-            opts.max_rounds,
-            (i == 0, [lo, hi]),
-            &mut state,
-            &mut report,
-        );
-        report.stages.push(stage);
         if report.out_of_time {
             break;
         }
+        if opts.restore_volume || opts.split_sag.is_finite() {
+            let PassState { quality, drift, .. } = &mut state;
+            finish_stage(mesh, &ctx, opts, drift, quality, &mut report);
+            // The drift is given back: the next stage starts from none (and from the points
+            // the splits added).
+            drift.iter_mut().for_each(|d| *d = 0.0);
+            drift.resize(mesh.points.len(), 0.0);
+        }
     }
     // `ctx` is now at the requested targets (the last stage's).
-    if (opts.restore_volume || opts.split_sag.is_finite()) && !report.out_of_time {
-        let PassState { quality, drift, .. } = &mut state;
-        finish_stage(mesh, &ctx, opts, drift, quality, &mut report);
-    }
     state.removed.sort_unstable();
     local::drop_points(mesh, &state.removed);
     report.unprojected = project::off_level_points(mesh, &ctx)
@@ -295,8 +300,8 @@ pub fn improve(
 struct PassState {
     /// Per tet: its quality (in the current stage's measure).
     quality: Vec<f64>,
-    /// Per point: the volume the operations merged into it or moving it added. Given back
-    /// once, after the last stage ([`finish_stage`]).
+    /// Per point: the volume the operations merged into it or moving it added. Given back at
+    /// the end of each stage ([`finish_stage`]).
     drift: Vec<f64>,
     /// Points merged away. They stay (unused) until the end: renumbering once keeps every
     /// round's work proportional to what it touches, and keeps the relative order of ids.
@@ -447,12 +452,12 @@ fn collect_drift((regions, _): &(Vec<LocalMesh>, local::Regions), drift: &mut [f
     }
 }
 
-/// The last stage, region by region: splits the boundary edges whose chord sags from the
-/// level set ([`split::split_sagging_edges`]), then, around the points that carry volume
-/// drift, gives it back by moving level vertices along their level sets
-/// ([`restore::restore_volume`]). Neither lets a tet fall below the target (or below where it
-/// was), so nothing they do needs improving again. New points are appended to the mesh, so
-/// point ids stay valid.
+/// The last stage after the rounds (of each target stage), region by region: splits the
+/// boundary edges whose chord sags from the level set ([`split::split_sagging_edges`]), then,
+/// around the points that carry volume drift, gives it back by moving level vertices along
+/// their level sets ([`restore::restore_volume`]). Neither lets a tet fall below the target
+/// (or below where it was), so nothing they do needs improving again. New points are appended
+/// to the mesh, so point ids stay valid.
 fn finish_stage(
     mesh: &mut TetMesh,
     ctx: &Ctx,
