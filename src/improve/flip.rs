@@ -130,7 +130,7 @@ fn face_exists(lm: &LocalMesh, f: [u32; 3]) -> bool {
 
 /// The two vertices `(x, y)` of `tet` besides `p` and `q` such that `[p, x, y, q]` is an even
 /// permutation of `tet`.
-fn even_completion(tet: [u32; 4], p: u32, q: u32) -> (u32, u32) {
+pub(super) fn even_completion(tet: [u32; 4], p: u32, q: u32) -> (u32, u32) {
     let (mut rest, mut n) = ([0u32; 2], 0);
     for v in tet {
         if v != p && v != q && n < 2 {

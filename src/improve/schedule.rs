@@ -2,6 +2,7 @@
 //! topology changes where moves are not enough, then smoothing again).
 
 use super::collapse::{apply_collapse, best_collapse, evaluate_merge, star_floor};
+use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
 use super::local::{LocalMesh, TetOp};
 use super::project::{project_levels, untangle_around};
@@ -28,7 +29,8 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
     }
 }
 
-/// Up to `n` sweeps of collapses, flips, smoothing and projection over the region's bad
+/// Up to `n` sweeps of collapses, flips and edge removals, smoothing and projection over the
+/// region's bad
 /// tets, until one changes nothing.
 fn sweeps(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport, n: usize) {
     for _ in 0..n {
@@ -161,27 +163,45 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
     false
 }
 
-/// 2-3 flips of the faces and 3-2 flips of the edges of bad tets.
+/// 2-3 flips of the faces, 3-2 flips and removals of the edges of bad tets.
 fn flip_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
-    let n = for_each_bad_tet(lm, ctx, TetOp::Flip, |lm, t| flip_tet(lm, ctx, t));
-    report.flips += n;
+    let mut removals = 0;
+    let n = for_each_bad_tet(lm, ctx, TetOp::Flip, |lm, t| match flip_tet(lm, ctx, t) {
+        Some(Flipped::EdgeRemoved) => {
+            removals += 1;
+            true
+        }
+        Some(Flipped::Flip) => true,
+        None => false,
+    });
+    report.flips += n - removals;
+    report.edge_removals += removals;
     n
 }
 
-/// The first improving 2-3 flip of a face of `t`, else 3-2 flip of an edge of `t`.
-fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
+/// What [`flip_tet`] did.
+enum Flipped {
+    /// A 2-3 or 3-2 flip.
+    Flip,
+    /// An edge removal.
+    EdgeRemoved,
+}
+
+/// The first improving 2-3 flip of a face of `t`, else 3-2 flip of an edge of `t`, else
+/// removal of an edge of `t` with 4 to 7 tets around it.
+fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
     let tet = lm.tets[t as usize];
     if (0..4).any(|i| try_flip23(lm, ctx, t, i)) {
-        return true;
+        return Some(Flipped::Flip);
     }
-    for i in 0..4 {
-        for j in i + 1..4 {
-            if try_flip32(lm, ctx, t, tet[i], tet[j]) {
-                return true;
-            }
-        }
+    let edges = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(i, j)| (tet[i], tet[j]));
+    if edges.iter().any(|&(p, q)| try_flip32(lm, ctx, t, p, q)) {
+        return Some(Flipped::Flip);
     }
-    false
+    edges
+        .iter()
+        .any(|&(p, q)| try_remove_edge(lm, ctx, t, p, q))
+        .then_some(Flipped::EdgeRemoved)
 }
 
 /// Smooths every free vertex of a bad tet once, in vertex order.

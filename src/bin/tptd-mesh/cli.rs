@@ -86,9 +86,9 @@ pub(crate) struct Cli {
     #[arg(long)]
     pub(crate) no_analysis: bool,
 
-    /// Improve the elements after meshing (collapses, flips, smoothing) towards the target
-    /// dihedral angles, keeping the topology, the labels and the boundary on the trilinear
-    /// level sets
+    /// Improve the elements after meshing (collapses, flips, edge removal, smoothing) towards
+    /// the target dihedral angles, keeping the topology, the labels and the boundary on the
+    /// trilinear level sets
     #[arg(long)]
     pub(crate) quality: bool,
 

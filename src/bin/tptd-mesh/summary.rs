@@ -133,12 +133,14 @@ fn quality_lines(s: &mut String, r: &Report) {
     let p = &q.pass;
     let _ = writeln!(
         s,
-        "  quality   target [{}, {}] deg: {} collapses, {} flips, {} edge splits, {} moves ({} \
-         giving volume back), {} nodes onto the level sets ({} left off) in {} rounds{}",
+        "  quality   target [{}, {}] deg: {} collapses, {} flips, {} edge removals, {} edge \
+         splits, {} moves ({} giving volume back), {} nodes onto the level sets ({} left off) in \
+         {} rounds{}",
         q.target_degrees[0],
         q.target_degrees[1],
         p.collapses,
         p.flips,
+        p.edge_removals,
         p.splits,
         p.smoothed + p.restored,
         p.restored,
