@@ -7,6 +7,7 @@ use crate::trilinear;
 
 /// The piecewise-trilinear interpolant of a [`ScalarGrid`], in index coordinates
 /// (grid vertex `(i, j, k)` at `(i, j, k)`).
+#[derive(Clone, Copy)]
 pub struct Field<'a> {
     grid: &'a ScalarGrid,
     /// Inverse of [`ScalarGrid::linear_map`]: physical offset → index offset.

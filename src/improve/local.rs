@@ -107,7 +107,7 @@ pub const NEW_POINT: u32 = u32::MAX;
 /// Thickness (in voxels, along the grid's longest axis) of the slabs that split the work into
 /// independent regions. Regions of slabs of the same parity are at least a slab apart, so they
 /// share no tet and no vertex and are improved in parallel.
-const SLAB: f64 = 6.0;
+pub const SLAB: f64 = 6.0;
 
 /// How the mesh is split into regions, in global terms (what the splice needs).
 pub struct Regions {
@@ -124,7 +124,7 @@ pub fn longest_axis(field: &Field) -> usize {
 }
 
 /// The slab of each work vertex along the grid's longest axis (`NONE` for the others).
-fn slabs(mesh: &TetMesh, work: &[bool], field: &Field) -> Vec<u32> {
+fn slabs(mesh: &TetMesh, work: &[bool], field: &Field, offset: f64) -> Vec<u32> {
     let axis = longest_axis(field);
     (0..mesh.points.len())
         .into_par_iter()
@@ -132,7 +132,7 @@ fn slabs(mesh: &TetMesh, work: &[bool], field: &Field) -> Vec<u32> {
             if !work[v] {
                 return NONE;
             }
-            let u = field.to_index(mesh.points[v])[axis];
+            let u = field.to_index(mesh.points[v])[axis] + offset;
             (u / SLAB).floor().max(0.0) as u32
         })
         .collect()
@@ -161,7 +161,7 @@ fn extract(
     phase: u32,
     sort: bool,
 ) -> (Vec<LocalMesh>, Regions) {
-    let slab = slabs(mesh, work, &ctx.field);
+    let slab = slabs(mesh, work, &ctx.field, ctx.slab_offset);
     let of_tet: Vec<u32> = mesh
         .tets
         .par_iter()

@@ -204,6 +204,9 @@ pub struct Ctx<'a> {
     pub boundary_collapse_ratio: f64,
     /// When the time budget runs out.
     pub deadline: Option<Instant>,
+    /// Where the slabs that split the work into regions start along the grid's longest axis
+    /// (index units; [`local::SLAB`]).
+    pub slab_offset: f64,
 }
 
 impl Ctx<'_> {
@@ -335,6 +338,22 @@ fn run_rounds(
             break;
         }
     }
+    // A level vertex still off its level now has been stuck at a slab boundary, its
+    // neighbours across it frozen in every round: one more round with the slab boundaries
+    // moved by half a slab frees them.
+    if !ctx.out_of_time() && project::off_level_points(mesh, ctx).contains(&true) {
+        let shifted = Ctx {
+            slab_offset: 0.5 * local::SLAB,
+            ..*ctx
+        };
+        let progress = Progress {
+            quality: &mut state.quality,
+            drift: &mut state.drift,
+            removed: &mut state.removed,
+            report,
+        };
+        run_round(mesh, &shifted, rounds.max(1), progress);
+    }
 }
 
 /// What the rounds carry from one to the next.
@@ -398,6 +417,7 @@ fn context<'a>(
         target: lo_s.min(obtuse_weight * hi_s),
         boundary_collapse_ratio: opts.boundary_collapse_ratio,
         deadline: opts.time_budget.map(|b| start + b),
+        slab_offset: 0.0,
     }
 }
 
