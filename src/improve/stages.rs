@@ -15,7 +15,7 @@
 //! `benchmarks/stages_matrix.py`; build 892dab5), and there every domain's minimum rose (or
 //! stayed) from target to target and none ended below 15° (given back once: the 28³ shell
 //! 12.6° at 20°). The drift left to the end had grown past what the restoration can give back
-//! without taking a tet below the higher target. With edge removal (build 807c96a) every
+//! without taking a tet below the higher target. With edge removal (build b04640b) every
 //! minimum still rises or stays with the target; the 24³ shell ends at 14.84° at 20°, where
 //! its default pass ends too.
 
