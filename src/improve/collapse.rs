@@ -31,7 +31,7 @@ pub fn best_collapse(
         (None, Some(y)) => (y, b, a),
         (None, None) => return None,
     };
-    link_condition(lm, a, b, &shared_tets(lm, a, b)).then_some(best)
+    link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(best)
 }
 
 /// The collapse of `a` into `b`, if legal and every remaining tet stays positive (no gain
@@ -39,7 +39,7 @@ pub fn best_collapse(
 /// used to remove vertices that cannot reach their level set).
 pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
     let new = collapse_quality(lm, ctx, a, b, 0.0, f64::INFINITY)?;
-    link_condition(lm, a, b, &shared_tets(lm, a, b)).then_some(new)
+    link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(new)
 }
 
 /// The worst quality in the star of `v` (at least 0): what a collapse of `v` must beat.
@@ -132,7 +132,7 @@ pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
     // vertex's star.
     let level = lm.con[a as usize].level.is_some();
     let mut added = if level { -lm.star_volume(a) } else { 0.0 };
-    let shared = shared_tets(lm, a, b);
+    let shared = lm.edge_tets(a, b);
     let faces = boundary_faces_at(lm, a);
     for f in &faces {
         lm.remove_face(f.tri);
@@ -162,15 +162,6 @@ pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
     }
     lm.drift[b as usize] += std::mem::take(&mut lm.drift[a as usize]) + added;
     lm.removed[a as usize] = true;
-}
-
-/// Alive tets containing both `a` and `b`.
-pub fn shared_tets(lm: &LocalMesh, a: u32, b: u32) -> Vec<u32> {
-    lm.star[a as usize]
-        .iter()
-        .copied()
-        .filter(|&t| lm.tets[t as usize].contains(&b))
-        .collect()
 }
 
 /// Boundary faces with `v` as a corner.
@@ -441,7 +432,7 @@ mod tests {
                         continue;
                     }
                     let (a, b) = (tet[i], tet[j]);
-                    let shared = shared_tets(lm, a, b);
+                    let shared = lm.edge_tets(a, b);
                     let fast = link_condition(lm, a, b, &shared);
                     assert_eq!(fast, reference_link_condition(lm, a, b, &shared), "{a} {b}");
                     if !fast {
@@ -506,7 +497,7 @@ mod tests {
         nbrs.into_iter().find(|&a| {
             let xb = lm.x[b as usize];
             lm.con[a as usize].may_merge_into(&lm.con[b as usize])
-                && link_condition(lm, a, b, &shared_tets(lm, a, b))
+                && link_condition(lm, a, b, &lm.edge_tets(a, b))
                 && lm.star[a as usize]
                     .iter()
                     .filter(|&&t| !lm.tets[t as usize].contains(&b))

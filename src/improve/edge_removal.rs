@@ -52,9 +52,8 @@ pub fn try_remove_edge(lm: &mut LocalMesh, ctx: &Ctx, t: u32, a: u32, b: u32) ->
     for &u in &around {
         lm.kill_tet(u);
     }
-    for [i, j, l] in tris {
-        lm.add_tet(cone(a, b, &ring, [i, j, l])[0]);
-        lm.add_tet(cone(a, b, &ring, [i, j, l])[1]);
+    for tet in tris.into_iter().flat_map(|tri| cone(a, b, &ring, tri)) {
+        lm.add_tet(tet);
     }
     true
 }
@@ -72,15 +71,7 @@ fn cone(a: u32, b: u32, ring: &[u32], [i, j, l]: [usize; 3]) -> [[u32; 4]; 2] {
 /// positive, and the tets around the edge (`[a, b, r_i, r_{i+1}]` at `i`); `None` when the ring
 /// is open (the edge is on the boundary or leaves the region) or longer than [`MAX_RING`].
 fn ring_around(lm: &LocalMesh, t: u32, a: u32, b: u32) -> Option<(Vec<u32>, Vec<u32>)> {
-    let free = if lm.is_free(a) { a } else { b };
-    let edge_tets: Vec<u32> = lm.star[free as usize]
-        .iter()
-        .copied()
-        .filter(|&u| {
-            let tet = lm.tets[u as usize];
-            tet.contains(&a) && tet.contains(&b)
-        })
-        .collect();
+    let edge_tets = lm.edge_tets(a, b);
     if edge_tets.len() > MAX_RING {
         return None;
     }

@@ -398,6 +398,16 @@ impl LocalMesh {
         self.face_count[v as usize] > 0
     }
 
+    /// Alive tets containing both `a` and `b`, in the order of `a`'s star. When either is free,
+    /// these are all the tets around the edge: a free vertex's whole star is in the region.
+    pub fn edge_tets(&self, a: u32, b: u32) -> Vec<u32> {
+        self.star[a as usize]
+            .iter()
+            .copied()
+            .filter(|&t| self.tets[t as usize].contains(&b))
+            .collect()
+    }
+
     /// How many domain-boundary faces `v` is a corner of.
     #[inline]
     pub fn boundary_faces_of(&self, v: u32) -> usize {

@@ -30,8 +30,7 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
 }
 
 /// Up to `n` sweeps of collapses, flips and edge removals, smoothing and projection over the
-/// region's bad
-/// tets, until one changes nothing.
+/// region's bad tets, until one changes nothing.
 fn sweeps(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport, n: usize) {
     for _ in 0..n {
         if ctx.out_of_time() {

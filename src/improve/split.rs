@@ -273,15 +273,8 @@ impl Split {
 /// The split of edge `ab` at its midpoint projected onto the level set, if the two boundary
 /// faces on it carry that level and the projection stays near the midpoint.
 fn plan(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<Split> {
-    let free = if lm.is_free(a) { a } else { b };
-    let around: Vec<u32> = lm.star[free as usize]
-        .iter()
-        .copied()
-        .filter(|&t| {
-            let tet = lm.tets[t as usize];
-            tet.contains(&a) && tet.contains(&b)
-        })
-        .collect();
+    let (free, other) = if lm.is_free(a) { (a, b) } else { (b, a) };
+    let around = lm.edge_tets(free, other);
     let level = lm.con[a as usize].level?;
     let faces = faces_on_edge(lm, &around, a, b);
     if faces.len() != 2 {
