@@ -316,6 +316,11 @@ struct PassState {
 }
 
 /// Up to `rounds` rounds at `ctx`'s targets, until one finds nothing to do.
+///
+/// The last round moves the slab boundaries by half a slab: what is still below the target
+/// or off its level then has mostly been stuck at a slab boundary, with corners across it
+/// frozen in every round. A level vertex still off its level after that gets one more round
+/// with the boundaries back where they were.
 fn run_rounds(
     mesh: &mut TetMesh,
     ctx: &Ctx,
@@ -323,6 +328,10 @@ fn run_rounds(
     state: &mut PassState,
     report: &mut ImproveReport,
 ) {
+    let shifted = Ctx {
+        slab_offset: 0.5 * local::SLAB,
+        ..*ctx
+    };
     for round in 0..rounds {
         if ctx.out_of_time() {
             report.out_of_time = true;
@@ -334,26 +343,29 @@ fn run_rounds(
             removed: &mut state.removed,
             report,
         };
-        if !run_round(mesh, ctx, round, progress) {
+        let at = if round > 0 && round + 1 == rounds {
+            &shifted
+        } else {
+            ctx
+        };
+        if !run_round(mesh, at, round, progress) {
             break;
         }
     }
-    // A level vertex still off its level now has been stuck at a slab boundary, its
-    // neighbours across it frozen in every round: one more round with the slab boundaries
-    // moved by half a slab frees them.
-    if !ctx.out_of_time() && project::off_level_points(mesh, ctx).contains(&true) {
-        let shifted = Ctx {
-            slab_offset: 0.5 * local::SLAB,
-            ..*ctx
-        };
+    if !ctx.out_of_time() && any_off_level(mesh, ctx) {
         let progress = Progress {
             quality: &mut state.quality,
             drift: &mut state.drift,
             removed: &mut state.removed,
             report,
         };
-        run_round(mesh, &shifted, rounds.max(1), progress);
+        run_round(mesh, ctx, rounds.max(1), progress);
     }
+}
+
+/// Whether some level vertex is off its level set.
+fn any_off_level(mesh: &TetMesh, ctx: &Ctx) -> bool {
+    project::off_level_points(mesh, ctx).contains(&true)
 }
 
 /// What the rounds carry from one to the next.
