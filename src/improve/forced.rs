@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::field::Field;
-use super::quality::tet_dihedral_range;
+use super::quality::{cosine_extremes, tet_dihedral_range};
 use super::QualityOptions;
 use crate::critical::find::vertex_class;
 use crate::geom::{distance, dot, norm};
@@ -169,11 +169,19 @@ pub fn classify_forced(
         tol: opts.forced_critical_tol,
         labels: mesh.vertex_label_bits(),
     };
+    // A smallest angle whose cosine is below this is not below the floor, whatever `acos`
+    // rounds to.
+    let clear_of_floor = floor.to_radians().cos() - 1e-9;
     // The reasons of all, cheaply; the details only for the listed ones.
     let mut below: Vec<(f64, f64, usize, ForcedReason)> = (0..mesh.tets.len())
         .into_par_iter()
         .filter_map(|t| {
-            let (lo, hi) = tet_dihedral_range(tet_points(mesh, t));
+            let p = tet_points(mesh, t);
+            // Most tets are far above the floor: their largest cosine tells, without `acos`.
+            if cosine_extremes(p).0 < clear_of_floor {
+                return None;
+            }
+            let (lo, hi) = tet_dihedral_range(p);
             (lo < floor).then(|| (lo, hi, t, c.reason(t)))
         })
         .collect();
