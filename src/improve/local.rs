@@ -24,6 +24,7 @@ pub struct BoundaryFace {
 }
 
 /// The working region with local vertex numbers.
+#[derive(Clone)]
 pub struct LocalMesh {
     /// Global id of each local vertex (sorted ascending), then [`NEW_POINT`] for each vertex
     /// added in the region (given an id when it is spliced back).
@@ -71,7 +72,7 @@ pub struct LocalMesh {
 /// three of `t`'s corners, so changing it or moving its fourth corner stamps them too); so an
 /// attempt on a tet that failed after its corners' last stamps would fail again, and is
 /// skipped (the same result, without the work).
-#[derive(Default)]
+#[derive(Clone, Default)]
 struct Memo {
     clock: u64,
     /// Per vertex: the last change to a tet around it.

@@ -207,6 +207,12 @@ pub struct Ctx<'a> {
     /// Where the slabs that split the work into regions start along the grid's longest axis
     /// (index units; [`local::SLAB`]).
     pub slab_offset: f64,
+    /// Smoothing tries the steepest ascent direction first ([`smooth`]).
+    pub steepest: bool,
+    /// A region that ends with tets below the target is improved once more from its start
+    /// with [`Ctx::steepest`], and the better of the two is kept ([`schedule`]). Set for the
+    /// last round of a single pass.
+    pub retry_stuck: bool,
 }
 
 impl Ctx<'_> {
@@ -267,7 +273,14 @@ pub fn improve(
         // each round evaluates only the tets that changed, and the regions copy it out.
         state.quality = tet_qualities(mesh, &ctx);
         if ladder.len() == 1 {
-            run_rounds(mesh, &ctx, opts.max_rounds, &mut state, &mut report);
+            // Retrying stuck regions is for the single pass: in stages, which regions end
+            // stuck at one stage changes where the next starts, and the stages got worse
+            // (README, *Element quality*).
+            let retry = Ctx {
+                retry_stuck: true,
+                ..ctx
+            };
+            run_rounds(mesh, &retry, opts.max_rounds, &mut state, &mut report);
         } else {
             let stage = run_stage(
                 mesh,
@@ -330,6 +343,11 @@ fn run_rounds(
 ) {
     let shifted = Ctx {
         slab_offset: 0.5 * local::SLAB,
+        ..*ctx
+    };
+    // Only the last round retries its stuck regions (its regions are small).
+    let ctx = &Ctx {
+        retry_stuck: false,
         ..*ctx
     };
     for round in 0..rounds {
@@ -430,6 +448,8 @@ fn context<'a>(
         boundary_collapse_ratio: opts.boundary_collapse_ratio,
         deadline: opts.time_budget.map(|b| start + b),
         slab_offset: 0.0,
+        steepest: false,
+        retry_stuck: false,
     }
 }
 

@@ -15,8 +15,46 @@ const SWEEPS: usize = 6;
 /// Sweeps after level vertices were untangled onto their level sets at the end.
 const SWEEPS_AFTER_UNTANGLING: usize = 2;
 
-/// Improves the region `lm` in place.
+/// Improves the region `lm` in place. With [`Ctx::retry_stuck`], a region left with tets
+/// below the target is improved again from its start with the steepest-ascent smoothing
+/// ([`Ctx::steepest`]), and the better end is kept (higher worst tet, then fewer below the
+/// target): where tets are stuck, which ones stay stuck depends on small differences in the
+/// moves, and either way can win.
 pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
+    if !ctx.retry_stuck {
+        return improve_once(lm, ctx, report);
+    }
+    let start = lm.clone();
+    let mut first = ImproveReport::default();
+    improve_once(lm, ctx, &mut first);
+    if worst(lm, ctx.target).0 < ctx.target {
+        let mut other = start;
+        let mut second = ImproveReport::default();
+        let steep = Ctx {
+            steepest: true,
+            ..*ctx
+        };
+        improve_once(&mut other, &steep, &mut second);
+        let (a, b) = (worst(lm, ctx.target), worst(&other, ctx.target));
+        if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) {
+            *lm = other;
+            first = second;
+        }
+    }
+    report.add(&first);
+}
+
+/// The worst quality of the region's alive tets, and how many are below `target`.
+fn worst(lm: &LocalMesh, target: f64) -> (f64, usize) {
+    (0..lm.tets.len())
+        .filter(|&t| lm.alive[t])
+        .fold((f64::INFINITY, 0), |(w, n), t| {
+            (w.min(lm.q[t]), n + usize::from(lm.q[t] < target))
+        })
+}
+
+/// [`improve_local`] once.
+fn improve_once(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     report.projected += project_levels(lm, ctx);
     sweeps(lm, ctx, report, SWEEPS);
     report.projected += project_levels(lm, ctx);

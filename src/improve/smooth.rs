@@ -8,7 +8,7 @@
 
 use super::local::{LocalMesh, StarCorners};
 use super::Ctx;
-use crate::geom::{norm, sub};
+use crate::geom::{dot, norm, sub};
 
 /// Gradient steps per call.
 const ITERATIONS: usize = 4;
@@ -63,10 +63,12 @@ pub fn climb(
     let mut next = Vec::with_capacity(qs.len());
     for _ in 0..iterations {
         let scale = local_scale(lm, v, u);
-        let Some(d) = ascent_direction(lm, ctx, v, star, (u, qs, q0), scale) else {
-            break;
-        };
-        match line_search(lm, ctx, v, star, (u, d, q0, scale), &mut next) {
+        let dirs = ascent_directions(lm, ctx, v, star, (u, qs, q0), scale);
+        let found = dirs
+            .into_iter()
+            .flatten()
+            .find_map(|d| line_search(lm, ctx, v, star, (u, d, q0, scale), &mut next));
+        match found {
             Some((p, q)) => {
                 (u, q0, moved) = (p, q, true);
                 std::mem::swap(qs, &mut next);
@@ -77,20 +79,26 @@ pub fn climb(
     moved.then_some((u, q0))
 }
 
-/// A direction (index space, over the free axes, tangent to the level set) along which the
-/// worst tets of the star improve: the normalised sum of their normalised gradients.
+/// Directions (index space, over the free axes, tangent to the level set) along which the
+/// worst tets of the star improve, to be tried in order. By default one: the normalised sum
+/// of their normalised gradients. With [`Ctx::steepest`], first the steepest ascent of the
+/// worst quality, the point of smallest norm in the convex hull of their gradients (Freitag
+/// and Ollivier-Gooch; along it every one of them improves at first), then the normalised
+/// sum where it points elsewhere.
 /// `star` is the star of `v`, with `v` at `u` and qualities `qs` (worst `q0`); `scale` is
 /// [`local_scale`] there.
-fn ascent_direction(
+fn ascent_directions(
     lm: &LocalMesh,
     ctx: &Ctx,
     v: u32,
     star: &StarCorners,
     (u, qs, q0): ([f64; 3], &[f64], f64),
     scale: f64,
-) -> Option<[f64; 3]> {
+) -> [Option<[f64; 3]>; 2] {
     let free = lm.con[v as usize].free_axes();
     let h = 1e-7 * scale.max(1e-12);
+    let level = lm.con[v as usize].level.is_some();
+    let mut grads: Vec<[f64; 3]> = Vec::with_capacity(8);
     let mut sum = [0.0; 3];
     for (i, &q) in qs.iter().enumerate() {
         if q > q0 + ACTIVE_BAND * q0.abs().max(1e-3) {
@@ -110,12 +118,66 @@ fn ascent_direction(
                 sum[a] += g[a] / n;
             }
         }
+        grads.push(g);
     }
-    if lm.con[v as usize].level.is_some() {
+    if level {
         sum = ctx.field.tangent(u, free, sum);
     }
     let n = norm(sum);
-    (n > 0.0 && n.is_finite()).then(|| sum.map(|x| x / n))
+    let mean = (n > 0.0 && n.is_finite()).then(|| sum.map(|x| x / n));
+    if !ctx.steepest {
+        return [mean, None];
+    }
+    if level {
+        let normal = ctx.field.value_gradient_on(u, free).1;
+        grads.iter_mut().for_each(|g| *g = tangential(*g, normal));
+    }
+    grads.retain(|g| g.iter().all(|x| x.is_finite()));
+    let steepest = min_norm_in_hull(&grads).and_then(|d| {
+        let n = norm(d);
+        (n > 1e-12 && n.is_finite()).then(|| d.map(|x| x / n))
+    });
+    [
+        steepest,
+        mean.filter(|m| steepest.is_none_or(|s| dot(*m, s) < 0.999)),
+    ]
+}
+
+/// `g` without its component along `n`.
+fn tangential(g: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+    let n2 = dot(n, n);
+    if n2 == 0.0 {
+        return g;
+    }
+    let s = dot(g, n) / n2;
+    [g[0] - s * n[0], g[1] - s * n[1], g[2] - s * n[2]]
+}
+
+/// Iterations of [`min_norm_in_hull`].
+const HULL_ITERATIONS: usize = 64;
+
+/// The point of (nearly) smallest norm in the convex hull of `points` (Gilbert's algorithm:
+/// step from the current point towards the vertex least along it, exactly as far as
+/// shortens it most). `None` if `points` is empty.
+fn min_norm_in_hull(points: &[[f64; 3]]) -> Option<[f64; 3]> {
+    let mut p = *points
+        .iter()
+        .min_by(|a, b| dot(**a, **a).total_cmp(&dot(**b, **b)))?;
+    for _ in 0..HULL_ITERATIONS {
+        let pp = dot(p, p);
+        let (s, ps) = points
+            .iter()
+            .map(|&g| (g, dot(g, p)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        // `p` is the nearest point when no vertex lies below the plane through it.
+        if pp - ps <= 1e-12 * pp {
+            break;
+        }
+        let e = sub(s, p);
+        let t = ((pp - ps) / dot(e, e)).clamp(0.0, 1.0);
+        p = [p[0] + t * e[0], p[1] + t * e[1], p[2] + t * e[2]];
+    }
+    Some(p)
 }
 
 /// Backtracking search along `d` from `u`: the first step (longest first)
