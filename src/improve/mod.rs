@@ -209,6 +209,9 @@ pub struct Ctx<'a> {
     pub slab_offset: f64,
     /// Smoothing tries the steepest ascent direction first ([`smooth`]).
     pub steepest: bool,
+    /// Smoothing tries the centroid of the neighbours where its line searches fail
+    /// ([`smooth`]).
+    pub centroid: bool,
     /// A region that ends with tets below the target is improved once more from its start
     /// with [`Ctx::steepest`], and the better of the two is kept ([`schedule`]). Set for the
     /// last round of a single pass.
@@ -449,6 +452,7 @@ fn context<'a>(
         deadline: opts.time_budget.map(|b| start + b),
         slab_offset: 0.0,
         steepest: false,
+        centroid: false,
         retry_stuck: false,
     }
 }

@@ -16,33 +16,42 @@ const SWEEPS: usize = 6;
 const SWEEPS_AFTER_UNTANGLING: usize = 2;
 
 /// Improves the region `lm` in place. With [`Ctx::retry_stuck`], a region left with tets
-/// below the target is improved again from its start with the steepest-ascent smoothing
-/// ([`Ctx::steepest`]), and the better end is kept (higher worst tet, then fewer below the
-/// target): where tets are stuck, which ones stay stuck depends on small differences in the
-/// moves, and either way can win.
+/// below the target is improved again from its start with each smoothing variant of
+/// [`RETRIES`] in turn while tets stay below it, and the best end is kept (higher worst tet,
+/// then fewer below the target): where tets are stuck, which ones stay stuck depends on
+/// small differences in the moves, and any variant can win.
 pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     if !ctx.retry_stuck {
         return improve_once(lm, ctx, report);
     }
     let start = lm.clone();
-    let mut first = ImproveReport::default();
-    improve_once(lm, ctx, &mut first);
-    if worst(lm, ctx.target).0 < ctx.target {
-        let mut other = start;
-        let mut second = ImproveReport::default();
-        let steep = Ctx {
-            steepest: true,
+    let mut best = ImproveReport::default();
+    improve_once(lm, ctx, &mut best);
+    for (steepest, centroid) in RETRIES {
+        let now = worst(lm, ctx.target);
+        if now.0 >= ctx.target {
+            break;
+        }
+        let mut other = start.clone();
+        let mut r = ImproveReport::default();
+        let variant = Ctx {
+            steepest,
+            centroid,
             ..*ctx
         };
-        improve_once(&mut other, &steep, &mut second);
-        let (a, b) = (worst(lm, ctx.target), worst(&other, ctx.target));
-        if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) {
+        improve_once(&mut other, &variant, &mut r);
+        let then = worst(&other, ctx.target);
+        if then.0 > now.0 || (then.0 == now.0 && then.1 < now.1) {
             *lm = other;
-            first = second;
+            best = r;
         }
     }
-    report.add(&first);
+    report.add(&best);
 }
+
+/// The smoothing variants ([`Ctx::steepest`], [`Ctx::centroid`]) a stuck region is retried
+/// with, in order.
+const RETRIES: [(bool, bool); 2] = [(true, false), (true, true)];
 
 /// The worst quality of the region's alive tets, and how many are below `target`.
 fn worst(lm: &LocalMesh, target: f64) -> (f64, usize) {

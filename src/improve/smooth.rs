@@ -36,13 +36,68 @@ pub fn move_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32, iterations: usize) -> 
         .map(|&t| lm.q[t as usize])
         .collect();
     let from = lm.u[v as usize];
-    let (u, _) = climb(lm, ctx, v, &star, from, &mut qs, iterations)?;
+    let (u, _) = climb(lm, ctx, v, &star, from, &mut qs, iterations)
+        .or_else(|| centroid_step(lm, ctx, v, &star, &mut qs))?;
     if c.level.is_some() {
         let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
         lm.drift[v as usize] += star.volume(x1) - star.volume(x0);
     }
     lm.set_position_with(v, u, ctx, &qs);
     Some(from)
+}
+
+/// Where the max–min steps find no way up (a kink of the worst qualities whose gradients
+/// oppose each other), the centroid of `v`'s neighbours (on the axes it may move along, put
+/// on its level set) may still lie higher: `v` goes there if that raises its star's worst
+/// quality, with the qualities there left in `qs`.
+fn centroid_step(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    star: &StarCorners,
+    qs: &mut Vec<f64>,
+) -> Option<([f64; 3], f64)> {
+    if !ctx.centroid {
+        return None;
+    }
+    let c = lm.con[v as usize];
+    let free = c.free_axes();
+    let u = lm.u[v as usize];
+    let (mut sum, mut n) = ([0.0; 3], 0.0);
+    for &t in &lm.star[v as usize] {
+        for w in lm.tets[t as usize] {
+            if w != v {
+                for a in 0..3 {
+                    sum[a] += lm.u[w as usize][a];
+                }
+                n += 1.0;
+            }
+        }
+    }
+    if n == 0.0 {
+        return None;
+    }
+    let mut p = u;
+    for a in 0..3 {
+        if free & (1 << a) != 0 {
+            p[a] = sum[a] / n;
+        }
+    }
+    let p = match c.level {
+        Some(l) => ctx
+            .field
+            .project(p, ctx.levels[l as usize], free, ctx.tol)?,
+        None => Some(p).filter(|&p| ctx.inside_interval(p))?,
+    };
+    let q0 = qs.iter().copied().fold(f64::INFINITY, f64::min);
+    let floor = q0 * (1.0 + 1e-9) + 1e-12;
+    let mut next = Vec::with_capacity(qs.len());
+    let mut hint = 0;
+    if !star.qualities_above(ctx.field.to_physical(p), ctx, floor, &mut next, &mut hint) {
+        return None;
+    }
+    *qs = next;
+    Some((p, qs.iter().copied().fold(f64::INFINITY, f64::min)))
 }
 
 /// Up to `iterations` max–min steps of `v` (whose star is `star`) from index point `u`, where
