@@ -212,9 +212,9 @@ pub struct Ctx<'a> {
     /// Smoothing tries the centroid of the neighbours where its line searches fail
     /// ([`smooth`]).
     pub centroid: bool,
-    /// A region that ends with tets below the target is improved once more from its start
-    /// with [`Ctx::steepest`], and the better of the two is kept ([`schedule`]). Set for the
-    /// last round of a single pass.
+    /// A region that ends with a few tets below the target is improved again from its start
+    /// with other smoothing ([`Ctx::steepest`], [`Ctx::centroid`]), and the best end is kept
+    /// ([`schedule::improve_local`]). Set for the last round of a single pass.
     pub retry_stuck: bool,
 }
 

@@ -153,7 +153,8 @@ fn ascent_directions(
     let free = lm.con[v as usize].free_axes();
     let h = 1e-7 * scale.max(1e-12);
     let level = lm.con[v as usize].level.is_some();
-    let mut grads: Vec<[f64; 3]> = Vec::with_capacity(8);
+    // Kept only for the steepest ascent (no allocation otherwise).
+    let mut grads: Vec<[f64; 3]> = Vec::new();
     let mut sum = [0.0; 3];
     for (i, &q) in qs.iter().enumerate() {
         if q > q0 + ACTIVE_BAND * q0.abs().max(1e-3) {
@@ -173,7 +174,9 @@ fn ascent_directions(
                 sum[a] += g[a] / n;
             }
         }
-        grads.push(g);
+        if ctx.steepest {
+            grads.push(g);
+        }
     }
     if level {
         sum = ctx.field.tangent(u, free, sum);
