@@ -279,11 +279,11 @@ pub fn improve(
             // Retrying stuck regions is for the single pass: in stages, which regions end
             // stuck at one stage changes where the next starts, and the stages got worse
             // (README, *Element quality*).
-            let retry = Ctx {
-                retry_stuck: true,
-                ..ctx
+            let rounds = Rounds {
+                max: opts.max_rounds,
+                retry_last: true,
             };
-            run_rounds(mesh, &retry, opts.max_rounds, &mut state, &mut report);
+            run_rounds(mesh, &ctx, rounds, &mut state, &mut report);
         } else {
             let stage = run_stage(
                 mesh,
@@ -331,7 +331,15 @@ struct PassState {
     removed: Vec<u32>,
 }
 
-/// Up to `rounds` rounds at `ctx`'s targets, until one finds nothing to do.
+/// How many rounds a pass (or a stage) runs at most, and whether the last one retries its
+/// stuck regions ([`Ctx::retry_stuck`]).
+#[derive(Clone, Copy)]
+struct Rounds {
+    max: usize,
+    retry_last: bool,
+}
+
+/// Up to `rounds.max` rounds at `ctx`'s targets, until one finds nothing to do.
 ///
 /// The last round moves the slab boundaries by half a slab: what is still below the target
 /// or off its level then has mostly been stuck at a slab boundary, with corners across it
@@ -340,17 +348,17 @@ struct PassState {
 fn run_rounds(
     mesh: &mut TetMesh,
     ctx: &Ctx,
-    rounds: usize,
+    Rounds {
+        max: rounds,
+        retry_last,
+    }: Rounds,
     state: &mut PassState,
     report: &mut ImproveReport,
 ) {
+    // Only the last round retries its stuck regions (its regions are small).
     let shifted = Ctx {
         slab_offset: 0.5 * local::SLAB,
-        ..*ctx
-    };
-    // Only the last round retries its stuck regions (its regions are small).
-    let ctx = &Ctx {
-        retry_stuck: false,
+        retry_stuck: retry_last,
         ..*ctx
     };
     for round in 0..rounds {

@@ -64,15 +64,11 @@ fn centroid_step(
     let free = c.free_axes();
     let u = lm.u[v as usize];
     let (mut sum, mut n) = ([0.0; 3], 0.0);
-    for &t in &lm.star[v as usize] {
-        for w in lm.tets[t as usize] {
-            if w != v {
-                for a in 0..3 {
-                    sum[a] += lm.u[w as usize][a];
-                }
-                n += 1.0;
-            }
+    for w in star_others(lm, v) {
+        for a in 0..3 {
+            sum[a] += lm.u[w as usize][a];
         }
+        n += 1.0;
     }
     if n == 0.0 {
         return None;
@@ -89,15 +85,24 @@ fn centroid_step(
             .project(p, ctx.levels[l as usize], free, ctx.tol)?,
         None => Some(p).filter(|&p| ctx.inside_interval(p))?,
     };
-    let q0 = qs.iter().copied().fold(f64::INFINITY, f64::min);
-    let floor = q0 * (1.0 + 1e-9) + 1e-12;
+    let floor = rise_over(worst_of(qs));
     let mut next = Vec::with_capacity(qs.len());
     let mut hint = 0;
     if !star.qualities_above(ctx.field.to_physical(p), ctx, floor, &mut next, &mut hint) {
         return None;
     }
     *qs = next;
-    Some((p, qs.iter().copied().fold(f64::INFINITY, f64::min)))
+    Some((p, worst_of(qs)))
+}
+
+/// The smallest of the qualities `qs`.
+fn worst_of(qs: &[f64]) -> f64 {
+    qs.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+/// The worst quality a move must beat to count as raising `q0` (above rounding).
+fn rise_over(q0: f64) -> f64 {
+    q0 * (1.0 + 1e-9) + 1e-12
 }
 
 /// Up to `iterations` max–min steps of `v` (whose star is `star`) from index point `u`, where
@@ -113,7 +118,7 @@ pub fn climb(
     qs: &mut Vec<f64>,
     iterations: usize,
 ) -> Option<([f64; 3], f64)> {
-    let mut q0 = qs.iter().copied().fold(f64::INFINITY, f64::min);
+    let mut q0 = worst_of(qs);
     let mut moved = false;
     let mut next = Vec::with_capacity(qs.len());
     for _ in 0..iterations {
@@ -265,9 +270,8 @@ fn line_search(
             None => Some(p).filter(|&p| ctx.inside_interval(p)),
         };
         if let Some(p) = p {
-            let floor = q0 * (1.0 + 1e-9) + 1e-12;
-            if star.qualities_above(ctx.field.to_physical(p), ctx, floor, qs, &mut hint) {
-                return Some((p, qs.iter().copied().fold(f64::INFINITY, f64::min)));
+            if star.qualities_above(ctx.field.to_physical(p), ctx, rise_over(q0), qs, &mut hint) {
+                return Some((p, worst_of(qs)));
             }
         }
         step *= 0.5;
@@ -278,17 +282,21 @@ fn line_search(
 /// Mean index-space length of the edges at `v`, placed at `u` (each counted once per tet).
 pub(crate) fn local_scale(lm: &LocalMesh, v: u32, u: [f64; 3]) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
-    for &t in &lm.star[v as usize] {
-        for w in lm.tets[t as usize] {
-            if w != v {
-                sum += norm(sub(lm.u[w as usize], u));
-                n += 1;
-            }
-        }
+    for w in star_others(lm, v) {
+        sum += norm(sub(lm.u[w as usize], u));
+        n += 1;
     }
     if n == 0 {
         0.0
     } else {
         sum / n as f64
     }
+}
+
+/// The corners other than `v` of the tets around `v` (each once per tet).
+fn star_others(lm: &LocalMesh, v: u32) -> impl Iterator<Item = u32> + '_ {
+    lm.star[v as usize]
+        .iter()
+        .flat_map(move |&t| lm.tets[t as usize])
+        .filter(move |&w| w != v)
 }
