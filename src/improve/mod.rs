@@ -214,7 +214,8 @@ pub struct Ctx<'a> {
     pub centroid: bool,
     /// A region that ends with a few tets below the target is improved again from its start
     /// with other smoothing ([`Ctx::steepest`], [`Ctx::centroid`]), and the best end is kept
-    /// ([`schedule::improve_local`]). Set for the last round of a single pass.
+    /// ([`schedule::improve_local`]). Set for the last round of a single pass and of the
+    /// first stage of a ladder ([`stages`]).
     pub retry_stuck: bool,
 }
 
@@ -276,9 +277,10 @@ pub fn improve(
         // each round evaluates only the tets that changed, and the regions copy it out.
         state.quality = tet_qualities(mesh, &ctx);
         if ladder.len() == 1 {
-            // Retrying stuck regions is for the single pass: in stages, which regions end
-            // stuck at one stage changes where the next starts, and the stages got worse
-            // (README, *Element quality*).
+            // Stuck regions are retried in the single pass and in a ladder's first stage
+            // (the same pass) only: in later stages, which regions end stuck at one stage
+            // changes where the next starts, and the stages got worse (README, *Element
+            // quality*).
             let rounds = Rounds {
                 max: opts.max_rounds,
                 retry_last: true,
