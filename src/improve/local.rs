@@ -118,6 +118,18 @@ pub struct Regions {
     free_in: Vec<u32>,
 }
 
+impl Regions {
+    /// Whether the splice keeps mesh tet `t` where it is (it is in no region).
+    pub fn keeps_tet(&self, t: usize) -> bool {
+        self.of_tet[t] == NONE
+    }
+
+    /// Whether the splice keeps boundary face `tri` where it is (no corner is free).
+    pub fn keeps_face(&self, tri: [u32; 3]) -> bool {
+        tri.iter().all(|&v| self.free_in[v as usize] == NONE)
+    }
+}
+
 /// The grid's longest axis (the first of equals), along which the work is cut into slabs.
 pub fn longest_axis(field: &Field) -> usize {
     let dims = field.grid().dims;
@@ -200,10 +212,13 @@ fn extract(
             }
         }
     }
+    // Pinned points (the rim of a submesh) are frozen like shared ones.
+    let pinned = |v: usize| ctx.pinned.is_some_and(|p| p[v]);
     let free_in: Vec<u32> = owner
         .iter()
         .zip(&shared)
-        .map(|(&o, &s)| if s { NONE } else { o })
+        .enumerate()
+        .map(|(v, (&o, &s))| if s || pinned(v) { NONE } else { o })
         .collect();
     let faces_of = faces_by_region(mesh, &free_in, n_regions as usize);
     let (points_of, local_id) = if overlap || sort {
@@ -729,7 +744,7 @@ pub fn splice(
     let keep: Vec<bool> = mesh
         .boundary
         .iter()
-        .map(|tri| tri.iter().all(|&v| bookkeeping.free_in[v as usize] == NONE))
+        .map(|&tri| bookkeeping.keeps_face(tri))
         .collect();
     retain_flagged(&mut mesh.boundary, &keep);
     retain_flagged(&mut mesh.boundary_labels, &keep);

@@ -26,6 +26,7 @@ mod schedule;
 pub(crate) mod smooth;
 pub(crate) mod split;
 pub mod stages;
+pub(crate) mod submesh;
 
 use std::time::{Duration, Instant};
 
@@ -38,6 +39,7 @@ use field::Field;
 use local::LocalMesh;
 use quality::biased_min_sine;
 use stages::{run_stage, stage_targets, Stage};
+use submesh::{SubMesh, Untouched};
 
 /// The warping threshold ([`crate::MeshOptions::warp`]) to mesh with before improving: grid
 /// vertices that a level passes within this fraction of an edge from are put on the level
@@ -154,11 +156,11 @@ pub struct StageSeconds {
     pub project: f64,
     /// Marking the vertices that need work.
     pub mark: f64,
-    /// Copying the regions out.
+    /// Copying the regions out (and the rounds' copy of the mesh, [`submesh`]).
     pub extract: f64,
     /// Improving the regions.
     pub local: f64,
-    /// Writing the regions back.
+    /// Writing the regions back (and the rounds' copy).
     pub splice: f64,
     /// The last stage after the rounds (of each target stage): splitting the boundary edges
     /// that sag from the level set ([`QualityOptions::split_sag`]) and giving the volume back
@@ -212,6 +214,8 @@ pub struct Ctx<'a> {
     /// Smoothing tries the centroid of the neighbours where its line searches fail
     /// ([`smooth`]).
     pub centroid: bool,
+    /// Per point: pinned (frozen in every region), as the rim of a [`submesh::SubMesh`] is.
+    pub pinned: Option<&'a [bool]>,
     /// A region that ends with a few tets below the target is improved again from its start
     /// with other smoothing ([`Ctx::steepest`], [`Ctx::centroid`]), and the best end is kept
     /// ([`schedule::improve_local`]). Set for the last round of a single pass and of the
@@ -257,6 +261,18 @@ pub fn improve(
     beta: f64,
     opts: &QualityOptions,
 ) -> ImproveReport {
+    improve_in(mesh, grid, [alpha, beta], opts, Some(submesh::RINGS))
+}
+
+/// [`improve`], the rounds after the first on a copy within `rings` rings of their work
+/// ([`submesh`]; `None`: on the whole mesh, which gives the same mesh).
+fn improve_in(
+    mesh: &mut TetMesh,
+    grid: &ScalarGrid,
+    [alpha, beta]: [f64; 2],
+    opts: &QualityOptions,
+    rings: Option<usize>,
+) -> ImproveReport {
     let start = Instant::now();
     let mut report = ImproveReport::default();
     let mut state = PassState {
@@ -284,13 +300,19 @@ pub fn improve(
             let rounds = Rounds {
                 max: opts.max_rounds,
                 retry_last: true,
+                rings,
             };
             run_rounds(mesh, &ctx, rounds, &mut state, &mut report);
         } else {
+            let rounds = Rounds {
+                max: opts.max_rounds,
+                retry_last: i == 0,
+                rings,
+            };
             let stage = run_stage(
                 mesh,
                 &ctx,
-                opts.max_rounds,
+                rounds,
                 (i == 0, [lo, hi]),
                 &mut state,
                 &mut report,
@@ -333,12 +355,14 @@ struct PassState {
     removed: Vec<u32>,
 }
 
-/// How many rounds a pass (or a stage) runs at most, and whether the last one retries its
-/// stuck regions ([`Ctx::retry_stuck`]).
+/// How many rounds a pass (or a stage) runs at most, whether the last one retries its stuck
+/// regions ([`Ctx::retry_stuck`]), and within how many rings of their work the rounds after
+/// the first copy the mesh ([`submesh`]; `None`: they run on the whole mesh).
 #[derive(Clone, Copy)]
 struct Rounds {
     max: usize,
     retry_last: bool,
+    rings: Option<usize>,
 }
 
 /// Up to `rounds.max` rounds at `ctx`'s targets, until one finds nothing to do.
@@ -346,13 +370,15 @@ struct Rounds {
 /// The last round moves the slab boundaries by half a slab: what is still below the target
 /// or off its level then has mostly been stuck at a slab boundary, with corners across it
 /// frozen in every round. A level vertex still off its level after that gets one more round
-/// with the boundaries back where they were.
+/// with the boundaries back where they were. The rounds after the first run on a copy of the
+/// part of the mesh they can reach ([`submesh`]).
 fn run_rounds(
     mesh: &mut TetMesh,
     ctx: &Ctx,
     Rounds {
         max: rounds,
         retry_last,
+        rings,
     }: Rounds,
     state: &mut PassState,
     report: &mut ImproveReport,
@@ -363,34 +389,116 @@ fn run_rounds(
         retry_stuck: retry_last,
         ..*ctx
     };
+    let mut sub = None;
     for round in 0..rounds {
         if ctx.out_of_time() {
             report.out_of_time = true;
             break;
         }
-        let progress = Progress {
-            quality: &mut state.quality,
-            drift: &mut state.drift,
-            removed: &mut state.removed,
-            report,
-        };
         let at = if round > 0 && round + 1 == rounds {
             &shifted
         } else {
             ctx
         };
-        if !run_round(mesh, at, round, progress) {
+        if !run_round_on(mesh, (&mut sub, rings), at, round, state, report) {
             break;
         }
     }
-    if !ctx.out_of_time() && any_off_level(mesh, ctx) {
+    let off = match &sub {
+        Some(s) => any_off_level(&s.mesh, ctx),
+        None => any_off_level(mesh, ctx),
+    };
+    if !ctx.out_of_time() && off {
+        run_round_on(mesh, (&mut sub, rings), ctx, rounds.max(1), state, report);
+    }
+    write_back(&mut sub, mesh, state, report);
+}
+
+/// Writes the copy `sub`, if any, back into `mesh` (a splice, in the report's stage times).
+fn write_back(
+    sub: &mut Option<SubMesh>,
+    mesh: &mut TetMesh,
+    state: &mut PassState,
+    report: &mut ImproveReport,
+) {
+    if let Some(s) = sub.take() {
+        let mut clock = Instant::now();
+        s.write_back(
+            mesh,
+            &mut state.quality,
+            &mut state.drift,
+            &mut state.removed,
+        );
+        lap(&mut report.stage_seconds.splice, &mut clock);
+    }
+}
+
+/// Round `round` of [`run_rounds`]: the first on `mesh`, the later ones on the copy `sub`
+/// within `rings` rings of the work (cut when there is none, and cut again when the work
+/// reaches its rim; on `mesh` for `rings == None`). Returns false when nothing needed work.
+fn run_round_on(
+    mesh: &mut TetMesh,
+    (sub, rings): (&mut Option<SubMesh>, Option<usize>),
+    ctx: &Ctx,
+    round: usize,
+    state: &mut PassState,
+    report: &mut ImproveReport,
+) -> bool {
+    let Some(rings) = rings.filter(|_| round > 0) else {
         let progress = Progress {
             quality: &mut state.quality,
             drift: &mut state.drift,
             removed: &mut state.removed,
             report,
         };
-        run_round(mesh, ctx, rounds.max(1), progress);
+        return run_round(mesh, ctx, (round, 0), progress, None) != Round::Idle;
+    };
+    let mut phase = 0;
+    loop {
+        if sub.is_none() {
+            let work = needs_work(mesh, ctx, &state.quality, true);
+            if phase == 0 && !work.iter().any(|&w| w) {
+                return false;
+            }
+            let mut clock = Instant::now();
+            *sub = Some(SubMesh::cut(
+                mesh,
+                &work,
+                rings,
+                &state.quality,
+                &state.drift,
+            ));
+            // Copying out is part of extracting.
+            lap(&mut report.stage_seconds.extract, &mut clock);
+        }
+        let Some(s) = sub.as_mut() else {
+            return false;
+        };
+        let pinned = Ctx {
+            pinned: Some(&s.rim),
+            ..*ctx
+        };
+        let progress = Progress {
+            quality: &mut s.quality,
+            drift: &mut s.drift,
+            removed: &mut s.removed,
+            report,
+        };
+        match run_round(
+            &mut s.mesh,
+            &pinned,
+            (round, phase),
+            progress,
+            Some(&mut s.untouched),
+        ) {
+            Round::Idle => return false,
+            Round::Done => return true,
+            Round::Rim(at) => {
+                // Written back and cut again around the work of phase `at`.
+                write_back(sub, mesh, state, report);
+                phase = at;
+            }
+        }
     }
 }
 
@@ -410,9 +518,29 @@ struct Progress<'a> {
     report: &'a mut ImproveReport,
 }
 
-/// One round: marks the vertices that need work and improves their regions, in slabs of
-/// even and then odd parity. Returns false when nothing needed work.
-fn run_round(mesh: &mut TetMesh, ctx: &Ctx, round: usize, p: Progress) -> bool {
+/// How [`run_round`] ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Round {
+    /// Nothing needed work.
+    Idle,
+    /// It ran.
+    Done,
+    /// On a copy, the work of this phase reached the copy's rim ([`submesh`]); the phases
+    /// before it ran.
+    Rim(u32),
+}
+
+/// One round (`round`, from phase `first_phase`): marks the vertices that need work and
+/// improves their regions, in slabs of even and then odd parity. On a copy (`ctx.pinned`
+/// set), `untouched` follows what its splices keep, and the round stops when the work reaches
+/// the rim.
+fn run_round(
+    mesh: &mut TetMesh,
+    ctx: &Ctx,
+    (round, first_phase): (usize, u32),
+    p: Progress,
+    mut untouched: Option<&mut Untouched>,
+) -> Round {
     let mut clock = Instant::now();
     // Later rounds find few vertices off their level, all marked as work: the regions
     // project them, so the whole-mesh scan runs once.
@@ -422,22 +550,31 @@ fn run_round(mesh: &mut TetMesh, ctx: &Ctx, round: usize, p: Progress) -> bool {
         refresh_quality(mesh, ctx, &moved, p.quality);
     }
     lap(&mut p.report.stage_seconds.project, &mut clock);
-    for phase in 0..2 {
+    for phase in first_phase..2 {
         clock = Instant::now();
         let work = needs_work(mesh, ctx, p.quality, round > 0);
         lap(&mut p.report.stage_seconds.mark, &mut clock);
+        if ctx
+            .pinned
+            .is_some_and(|rim| submesh::reaches_rim(&work, rim))
+        {
+            return Round::Rim(phase);
+        }
         if phase == 0 {
             if !work.iter().any(|&w| w) {
-                return false;
+                return Round::Idle;
             }
             p.report.rounds += 1;
         }
         let regions = improve_phase(mesh, ctx, phase, &work, p.quality, p.report);
         collect_drift(&regions, p.drift);
+        if let Some(u) = untouched.as_deref_mut() {
+            u.before_splice(mesh, &regions.1);
+        }
         p.removed
             .extend(splice_phase(mesh, regions, p.quality, p.report));
     }
-    true
+    Round::Done
 }
 
 fn context<'a>(
@@ -464,6 +601,7 @@ fn context<'a>(
         steepest: false,
         centroid: false,
         retry_stuck: false,
+        pinned: None,
     }
 }
 

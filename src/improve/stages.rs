@@ -78,7 +78,7 @@ pub(super) fn stage_targets(opts: &QualityOptions) -> Vec<[f64; 2]> {
 pub(super) fn run_stage(
     mesh: &mut TetMesh,
     ctx: &Ctx,
-    rounds: usize,
+    rounds: Rounds,
     (first, target_degrees): (bool, [f64; 2]),
     state: &mut PassState,
     report: &mut ImproveReport,
@@ -86,10 +86,6 @@ pub(super) fn run_stage(
     let worst = |q: &[f64]| q.iter().copied().fold(f64::INFINITY, f64::min);
     let before = (!first).then(|| worst(&state.quality));
     let snapshot = before.map(|_| (mesh.clone(), state.clone()));
-    let rounds = Rounds {
-        max: rounds,
-        retry_last: first,
-    };
     run_rounds(mesh, ctx, rounds, state, report);
     let after = worst(&state.quality);
     let kept = before.is_none_or(|b| after >= b);

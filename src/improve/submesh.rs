@@ -1,0 +1,322 @@
+//! The later rounds on the part of the mesh they can reach.
+//!
+//! After the first round, what still needs work is a small part of the mesh, but a round's
+//! marking, region extraction and splice each scan the whole mesh. The later rounds therefore
+//! run on a copy of the tets within [`RINGS`] rings of the vertices that need work, its *rim*
+//! (points with a tet outside the copy) pinned. They do there exactly what they would do on
+//! the whole mesh as long as no vertex that needs work is on the rim: a region then never
+//! reaches a tet outside, and every point it would free is inside. That is checked at every
+//! marking; when it fails, the copy is written back and cut again around the new work.
+//!
+//! Writing back leaves the tets and faces in the order the rounds would have left them in
+//! the whole mesh: each splice keeps what its regions did not touch in order and appends what
+//! they made, so the tets (faces) that no round touched stay where they were and the rest
+//! follow them in the copy's order. Rounds add no points (only the last stage's splits do);
+//! points added here would get the ids the whole mesh would have given them.
+
+use rayon::prelude::*;
+
+use super::local::Regions;
+use crate::mesh::TetMesh;
+
+/// Rings of tets around the vertices that need work that the copy takes in. A marking finds
+/// new work at most about three rings from the last (a changed tet has a corner free in a
+/// region, and level vertices off their level take the tets around them along); a rim
+/// reached only costs a new cut.
+pub const RINGS: usize = 3;
+
+/// Not in the copy.
+const NONE: u32 = u32::MAX;
+
+/// A copy of part of a mesh with the pass state of its tets and points.
+pub struct SubMesh {
+    /// The copy (its points in the order of their global ids).
+    pub mesh: TetMesh,
+    /// Per tet of the copy: its quality.
+    pub quality: Vec<f64>,
+    /// Per point of the copy: its volume drift.
+    pub drift: Vec<f64>,
+    /// Per point of the copy: on the rim (a tet outside the copy uses it).
+    pub rim: Vec<bool>,
+    /// Points of the copy merged away (copy ids).
+    pub removed: Vec<u32>,
+    /// What the splices left untouched.
+    pub untouched: Untouched,
+    /// Global id of each point of the copy (ascending) it was cut with.
+    points: Vec<u32>,
+    /// Global ids of the tets the copy was cut with (ascending).
+    tets: Vec<u32>,
+    /// Global indices of the boundary faces the copy was cut with (ascending).
+    faces: Vec<u32>,
+}
+
+/// The tets and faces of a copy that no splice has touched: its first ones, in order.
+pub struct Untouched {
+    /// Global ids of those tets.
+    tets: Vec<u32>,
+    /// Global indices of those faces.
+    faces: Vec<u32>,
+}
+
+/// Whether some point that needs work is on the rim (`work` and `rim` per point of a copy).
+pub fn reaches_rim(work: &[bool], rim: &[bool]) -> bool {
+    work.par_iter().zip(rim).any(|(&w, &r)| w && r)
+}
+
+impl SubMesh {
+    /// The tets of `mesh` within `rings` (at least 1) rings of the points `work`, with their
+    /// `quality` and their points' `drift` (per tet and per point of `mesh`).
+    pub fn cut(
+        mesh: &TetMesh,
+        work: &[bool],
+        rings: usize,
+        quality: &[f64],
+        drift: &[f64],
+    ) -> SubMesh {
+        let mut near = work.to_vec();
+        for _ in 1..rings {
+            near = grow(mesh, &near);
+        }
+        let tets: Vec<u32> = (0..mesh.tets.len() as u32)
+            .into_par_iter()
+            .filter(|&t| mesh.tets[t as usize].iter().any(|&v| near[v as usize]))
+            .collect();
+        let mut local = vec![NONE; mesh.points.len()];
+        for &t in &tets {
+            for v in mesh.tets[t as usize] {
+                local[v as usize] = 0;
+            }
+        }
+        let mut points = Vec::new();
+        for (v, id) in local.iter_mut().enumerate() {
+            if *id == 0 {
+                *id = points.len() as u32;
+                points.push(v as u32);
+            }
+        }
+        let rim = rim_of(mesh, &tets, &local, points.len());
+        let faces: Vec<u32> = (0..mesh.boundary.len() as u32)
+            .into_par_iter()
+            .filter(|&f| {
+                mesh.boundary[f as usize]
+                    .iter()
+                    .all(|&v| local[v as usize] != NONE)
+            })
+            .collect();
+        let to_local = |v: &u32| local[*v as usize];
+        let sub = TetMesh {
+            points: points.iter().map(|&v| mesh.points[v as usize]).collect(),
+            values: points.iter().map(|&v| mesh.values[v as usize]).collect(),
+            tets: tets
+                .iter()
+                .map(|&t| mesh.tets[t as usize].each_ref().map(to_local))
+                .collect(),
+            boundary: faces
+                .iter()
+                .map(|&f| mesh.boundary[f as usize].each_ref().map(to_local))
+                .collect(),
+            boundary_labels: faces
+                .iter()
+                .map(|&f| mesh.boundary_labels[f as usize])
+                .collect(),
+        };
+        SubMesh {
+            mesh: sub,
+            quality: tets.iter().map(|&t| quality[t as usize]).collect(),
+            drift: points.iter().map(|&v| drift[v as usize]).collect(),
+            rim,
+            removed: Vec::new(),
+            untouched: Untouched {
+                tets: tets.clone(),
+                faces: faces.clone(),
+            },
+            points,
+            tets,
+            faces,
+        }
+    }
+
+    /// Writes the copy back into `mesh` (cut from it), with its quality (into `quality`,
+    /// per tet), drift (into `drift`, per point) and merged points (appended to `removed`).
+    pub fn write_back(
+        self,
+        mesh: &mut TetMesh,
+        quality: &mut Vec<f64>,
+        drift: &mut Vec<f64>,
+        removed: &mut Vec<u32>,
+    ) {
+        let n = self.points.len();
+        let mut global = self.points;
+        for (i, (&x, &f)) in self.mesh.points.iter().zip(&self.mesh.values).enumerate() {
+            if i < n {
+                let g = global[i] as usize;
+                mesh.points[g] = x;
+                mesh.values[g] = f;
+                drift[g] = self.drift[i];
+            } else {
+                global.push(mesh.points.len() as u32);
+                mesh.points.push(x);
+                mesh.values.push(f);
+            }
+        }
+        let to_global = |v: &u32| global[*v as usize];
+        removed.extend(self.removed.iter().map(to_global));
+        let touched = |all: &[u32], kept: &[u32], len: usize| {
+            let mut out = vec![false; len];
+            for &i in all {
+                out[i as usize] = true;
+            }
+            for &i in kept {
+                out[i as usize] = false;
+            }
+            out
+        };
+        let gone = touched(&self.tets, &self.untouched.tets, mesh.tets.len());
+        retain_unflagged(&mut mesh.tets, &gone);
+        retain_unflagged(quality, &gone);
+        let from = self.untouched.tets.len();
+        let tets = &self.mesh.tets[from..];
+        mesh.tets
+            .extend(tets.iter().map(|t| t.each_ref().map(to_global)));
+        quality.extend_from_slice(&self.quality[from..]);
+        let gone = touched(&self.faces, &self.untouched.faces, mesh.boundary.len());
+        retain_unflagged(&mut mesh.boundary, &gone);
+        retain_unflagged(&mut mesh.boundary_labels, &gone);
+        let from = self.untouched.faces.len();
+        let faces = &self.mesh.boundary[from..];
+        mesh.boundary
+            .extend(faces.iter().map(|f| f.each_ref().map(to_global)));
+        mesh.boundary_labels
+            .extend_from_slice(&self.mesh.boundary_labels[from..]);
+        drift.resize(mesh.points.len(), 0.0);
+    }
+}
+
+impl Untouched {
+    /// Keeps those that the splice of `regions` into `mesh` (the copy) keeps where they are
+    /// (call before that splice).
+    pub fn before_splice(&mut self, mesh: &TetMesh, regions: &Regions) {
+        let mut i = 0;
+        self.tets.retain(|_| {
+            i += 1;
+            regions.keeps_tet(i - 1)
+        });
+        let mut i = 0;
+        self.faces.retain(|_| {
+            i += 1;
+            regions.keeps_face(mesh.boundary[i - 1])
+        });
+    }
+}
+
+/// `near` and the corners of every tet with a corner in it.
+fn grow(mesh: &TetMesh, near: &[bool]) -> Vec<bool> {
+    let hit: Vec<u32> = (0..mesh.tets.len() as u32)
+        .into_par_iter()
+        .filter(|&t| mesh.tets[t as usize].iter().any(|&v| near[v as usize]))
+        .collect();
+    let mut out = near.to_vec();
+    for t in hit {
+        for v in mesh.tets[t as usize] {
+            out[v as usize] = true;
+        }
+    }
+    out
+}
+
+/// Per point of the copy (`local`: copy id per mesh point, `NONE` outside): whether a tet
+/// outside the copy (`tets`: the copy's, ascending) uses it.
+fn rim_of(mesh: &TetMesh, tets: &[u32], local: &[u32], n: usize) -> Vec<bool> {
+    let mut inside = vec![false; mesh.tets.len()];
+    for &t in tets {
+        inside[t as usize] = true;
+    }
+    let outside: Vec<u32> = (0..mesh.tets.len() as u32)
+        .into_par_iter()
+        .filter(|&t| {
+            !inside[t as usize]
+                && mesh.tets[t as usize]
+                    .iter()
+                    .any(|&v| local[v as usize] != NONE)
+        })
+        .collect();
+    let mut rim = vec![false; n];
+    for t in outside {
+        for v in mesh.tets[t as usize] {
+            if local[v as usize] != NONE {
+                rim[local[v as usize] as usize] = true;
+            }
+        }
+    }
+    rim
+}
+
+/// Keeps the items whose flag in `gone` is not set, in order.
+fn retain_unflagged<T>(items: &mut Vec<T>, gone: &[bool]) {
+    let mut i = 0;
+    items.retain(|_| {
+        i += 1;
+        !gone[i - 1]
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::improve::fixtures::{wavy_torus, wavy_torus_mesh};
+    use crate::improve::{improve_in, tet_qualities, QualityOptions};
+
+    #[test]
+    fn a_copy_written_back_unchanged_leaves_the_mesh_as_it_was() {
+        let grid = wavy_torus();
+        let (mesh, ctx) = wavy_torus_mesh(&grid);
+        let quality = tet_qualities(&mesh, &ctx);
+        let drift: Vec<f64> = (0..mesh.points.len()).map(|v| v as f64).collect();
+        let work: Vec<bool> = (0..mesh.points.len()).map(|v| v % 97 == 0).collect();
+        for rings in [1, 2, 3] {
+            let sub = SubMesh::cut(&mesh, &work, rings, &quality, &drift);
+            assert!(sub.mesh.tets.len() < mesh.tets.len(), "{rings} rings");
+            assert!(sub.rim.contains(&true) && sub.rim.contains(&false));
+            let (mut back, mut q, mut d, mut removed) =
+                (mesh.clone(), quality.clone(), drift.clone(), Vec::new());
+            sub.write_back(&mut back, &mut q, &mut d, &mut removed);
+            assert_eq!(back, mesh, "{rings} rings");
+            assert_eq!((q, d), (quality.clone(), drift.clone()));
+            assert!(removed.is_empty());
+        }
+    }
+
+    #[test]
+    fn later_rounds_on_a_copy_give_the_mesh_of_the_whole_mesh() {
+        // One ring makes the work reach the rim often: the copy is cut again each time.
+        let grid = wavy_torus();
+        let (mesh, _) = wavy_torus_mesh(&grid);
+        let staged = QualityOptions {
+            min_angle: 25.0,
+            max_angle: 145.0,
+            ..QualityOptions::default()
+        };
+        for opts in [QualityOptions::default(), staged] {
+            let run = |rings| {
+                let mut m = mesh.clone();
+                let r = improve_in(&mut m, &grid, [-10.0, 2.2], &opts, rings);
+                (m, r)
+            };
+            let (whole, report) = run(None);
+            assert!(report.rounds > 1, "later rounds ran: {}", report.rounds);
+            for rings in [1, 3] {
+                let (copy, r) = run(Some(rings));
+                assert_eq!(copy, whole, "{rings} rings, {}°", opts.min_angle);
+                assert_eq!(
+                    (r.rounds, r.collapses, r.flips, r.smoothed),
+                    (
+                        report.rounds,
+                        report.collapses,
+                        report.flips,
+                        report.smoothed
+                    )
+                );
+            }
+        }
+    }
+}
