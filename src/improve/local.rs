@@ -710,11 +710,17 @@ impl StarCorners {
     ) -> bool {
         out.clear();
         let above = |i: usize| Some(self.quality(i, x, ctx)).filter(|&q| q > floor);
-        if *hint < self.corners.len() && above(*hint).is_none() {
-            return false;
+        // The hint's quality, once it passed (not evaluated twice).
+        let mut at_hint = None;
+        if *hint < self.corners.len() {
+            at_hint = above(*hint);
+            if at_hint.is_none() {
+                return false;
+            }
         }
         for i in 0..self.corners.len() {
-            match above(i) {
+            let q = if i == *hint { at_hint } else { above(i) };
+            match q {
                 Some(q) => out.push(q),
                 None => {
                     *hint = i;
