@@ -87,14 +87,18 @@ fn replace_if_better(lm: &mut LocalMesh, ctx: &Ctx, old: &[u32], new: &[[u32; 4]
         .map(|&t| lm.q[t as usize])
         .fold(f64::INFINITY, f64::min);
     let floor = q_old.max(0.0);
-    if !new.iter().all(|&t| ctx.quality(lm.corners(t)) > floor) {
-        return false;
+    let mut q_new = [0.0; 3];
+    for (q, &t) in q_new.iter_mut().zip(new) {
+        *q = ctx.quality(lm.corners(t));
+        if *q <= floor {
+            return false;
+        }
     }
     for &t in old {
         lm.kill_tet(t);
     }
-    for &t in new {
-        lm.add_tet(t);
+    for (&t, &q) in new.iter().zip(&q_new) {
+        lm.push_tet(t, q);
     }
     true
 }

@@ -512,8 +512,8 @@ impl LocalMesh {
         self.push_tet(t, biased_min_sine(self.corners(t), self.weight))
     }
 
-    /// Appends tet `t` (local ids) whose quality is `q` and returns its id.
-    fn push_tet(&mut self, t: [u32; 4], q: f64) -> u32 {
+    /// Appends tet `t` (local ids) whose quality (already evaluated) is `q` and returns its id.
+    pub fn push_tet(&mut self, t: [u32; 4], q: f64) -> u32 {
         let id = self.tets.len() as u32;
         self.tets.push(t);
         self.alive.push(true);
