@@ -228,29 +228,42 @@ pub const BELOW_ANGLES: [f64; 4] = [5.0, 10.0, 15.0, 20.0];
 pub const ABOVE_ANGLES: [f64; 4] = [150.0, 155.0, 160.0, 170.0];
 
 impl QualitySummary {
-    fn of_tet(p: [[f64; 3]; 4]) -> Self {
-        let mut s = QualitySummary {
-            tets: 1,
+    /// The summary of no tet, to [`QualitySummary::add`] tets to (its extremes are the
+    /// identities of min and max).
+    fn empty() -> Self {
+        QualitySummary {
             min_dihedral: f64::INFINITY,
             max_dihedral: f64::NEG_INFINITY,
-            min_radius_ratio: radius_ratio(p),
-            min_sicn: sicn(p),
-            min_gamma: gamma(p),
+            min_radius_ratio: f64::INFINITY,
+            min_sicn: f64::INFINITY,
+            min_gamma: f64::INFINITY,
             histogram: vec![0; HISTOGRAM_BINS],
             ..Default::default()
-        };
-        for a in dihedral_angles(p) {
-            s.min_dihedral = s.min_dihedral.min(a);
-            s.max_dihedral = s.max_dihedral.max(a);
-            s.histogram[(a as usize).min(HISTOGRAM_BINS - 1)] += 1;
         }
+    }
+
+    /// Adds the tet with corners `p` (in place: a whole mesh is summed without a summary per
+    /// tet).
+    fn add(mut self, p: [[f64; 3]; 4]) -> Self {
+        self.tets += 1;
+        self.min_radius_ratio = self.min_radius_ratio.min(radius_ratio(p));
+        self.min_sicn = self.min_sicn.min(sicn(p));
+        self.min_gamma = self.min_gamma.min(gamma(p));
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for a in dihedral_angles(p) {
+            lo = lo.min(a);
+            hi = hi.max(a);
+            self.histogram[(a as usize).min(HISTOGRAM_BINS - 1)] += 1;
+        }
+        self.min_dihedral = self.min_dihedral.min(lo);
+        self.max_dihedral = self.max_dihedral.max(hi);
         for (i, t) in BELOW_ANGLES.iter().enumerate() {
-            s.below[i] = usize::from(s.min_dihedral < *t);
+            self.below[i] += usize::from(lo < *t);
         }
         for (i, t) in ABOVE_ANGLES.iter().enumerate() {
-            s.above[i] = usize::from(s.max_dihedral > *t);
+            self.above[i] += usize::from(hi > *t);
         }
-        s
+        self
     }
 
     fn merge(mut self, o: Self) -> Self {
@@ -278,12 +291,22 @@ impl QualitySummary {
 }
 
 /// Quality summary of `mesh`, computed in parallel; independent of the thread count (every
-/// field is a minimum, a maximum or an integer count).
+/// field is a minimum, a maximum or an integer count). Each thread sums its tets into one
+/// summary; the summaries are then merged.
 pub fn summarize(mesh: &TetMesh) -> QualitySummary {
-    mesh.tets
+    let s = mesh
+        .tets
         .par_iter()
-        .map(|t| QualitySummary::of_tet(t.map(|i| mesh.points[i as usize])))
-        .reduce(QualitySummary::default, QualitySummary::merge)
+        .fold(QualitySummary::empty, |s, t| {
+            s.add(t.map(|i| mesh.points[i as usize]))
+        })
+        .reduce(QualitySummary::empty, QualitySummary::merge);
+    // No tet: the summary of nothing, as before (zeros, no histogram).
+    if s.tets == 0 {
+        QualitySummary::default()
+    } else {
+        s
+    }
 }
 
 #[cfg(test)]
@@ -417,5 +440,39 @@ mod tests {
         assert_eq!((bins(45), bins(60), bins(90)), (6, 3, 9));
         assert_eq!(s.below, [0, 0, 0, 0]);
         assert!((s.min_dihedral - 45.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_mesh_summary_is_the_sum_of_its_tets_for_any_thread_count() {
+        let grid = crate::improve::fixtures::wavy_torus();
+        let (mesh, _) = crate::improve::fixtures::wavy_torus_mesh(&grid);
+        let ranges: Vec<(f64, f64)> = mesh
+            .tets
+            .iter()
+            .map(|t| tet_dihedral_range(t.map(|i| mesh.points[i as usize])))
+            .collect();
+        let pool = |n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+        };
+        let s = pool(1).install(|| summarize(&mesh));
+        assert_eq!(pool(2).install(|| summarize(&mesh)), s);
+        assert_eq!(s.tets, mesh.tets.len());
+        assert_eq!(s.histogram.iter().sum::<u64>(), 6 * mesh.tets.len() as u64);
+        for (i, t) in BELOW_ANGLES.iter().enumerate() {
+            assert_eq!(s.below[i], ranges.iter().filter(|r| r.0 < *t).count());
+        }
+        for (i, t) in ABOVE_ANGLES.iter().enumerate() {
+            assert_eq!(s.above[i], ranges.iter().filter(|r| r.1 > *t).count());
+        }
+        let lo = ranges.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+        assert!(
+            (s.min_dihedral - lo).abs() < 1e-9,
+            "{} {lo}",
+            s.min_dihedral
+        );
+        assert!(s.below[3] > 0, "the fixture has tets below 20°");
     }
 }
