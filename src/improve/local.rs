@@ -828,7 +828,7 @@ fn retain_outside<T>(items: &mut Vec<T>, of: &[u32]) {
 }
 
 /// Keeps the items whose flag in `keep` is set, in order.
-fn retain_flagged<T>(items: &mut Vec<T>, keep: &[bool]) {
+pub fn retain_flagged<T>(items: &mut Vec<T>, keep: &[bool]) {
     let mut i = 0;
     items.retain(|_| {
         i += 1;

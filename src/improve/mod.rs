@@ -292,23 +292,17 @@ fn improve_in(
         // Per tet: its quality. Kept up to date through projections and splices, so that
         // each round evaluates only the tets that changed, and the regions copy it out.
         state.quality = tet_qualities(mesh, &ctx);
+        // Stuck regions are retried in the single pass and in a ladder's first stage (the
+        // same pass) only: in later stages, which regions end stuck at one stage changes
+        // where the next starts, and the stages got worse (README, *Element quality*).
+        let rounds = Rounds {
+            max: opts.max_rounds,
+            retry_last: i == 0,
+            rings,
+        };
         if ladder.len() == 1 {
-            // Stuck regions are retried in the single pass and in a ladder's first stage
-            // (the same pass) only: in later stages, which regions end stuck at one stage
-            // changes where the next starts, and the stages got worse (README, *Element
-            // quality*).
-            let rounds = Rounds {
-                max: opts.max_rounds,
-                retry_last: true,
-                rings,
-            };
             run_rounds(mesh, &ctx, rounds, &mut state, &mut report);
         } else {
-            let rounds = Rounds {
-                max: opts.max_rounds,
-                retry_last: i == 0,
-                rings,
-            };
             let stage = run_stage(
                 mesh,
                 &ctx,

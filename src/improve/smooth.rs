@@ -6,6 +6,7 @@
 //! every evaluation. Moving a vertex with every tet of its star positive is a homeomorphism of
 //! the mesh, so smoothing never changes the topology.
 
+use super::constraint::Constraint;
 use super::local::{LocalMesh, StarCorners};
 use super::Ctx;
 use crate::geom::{dot, norm, sub};
@@ -79,12 +80,7 @@ fn centroid_step(
             p[a] = sum[a] / n;
         }
     }
-    let p = match c.level {
-        Some(l) => ctx
-            .field
-            .project(p, ctx.levels[l as usize], free, ctx.tol)?,
-        None => Some(p).filter(|&p| ctx.inside_interval(p))?,
-    };
+    let p = place(ctx, c, p)?;
     let floor = rise_over(worst_of(qs));
     let mut next = Vec::with_capacity(qs.len());
     let mut hint = 0;
@@ -93,6 +89,18 @@ fn centroid_step(
     }
     *qs = next;
     Some((p, worst_of(qs)))
+}
+
+/// Where a vertex with constraint `c` tried at index point `p` goes: a level vertex onto
+/// its level set (along the axes it may move), an interior one stays at `p` if that is inside
+/// the interval; `None` if neither works.
+fn place(ctx: &Ctx, c: Constraint, p: [f64; 3]) -> Option<[f64; 3]> {
+    match c.level {
+        Some(l) => ctx
+            .field
+            .project(p, ctx.levels[l as usize], c.free_axes(), ctx.tol),
+        None => Some(p).filter(|&p| ctx.inside_interval(p)),
+    }
 }
 
 /// The smallest of the qualities `qs`.
@@ -263,13 +271,7 @@ fn line_search(
         for a in 0..3 {
             p[a] = (u[a] + step * d[a]).clamp(0.0, (dims[a] - 1) as f64);
         }
-        let p = match c.level {
-            Some(l) => ctx
-                .field
-                .project(p, ctx.levels[l as usize], c.free_axes(), ctx.tol),
-            None => Some(p).filter(|&p| ctx.inside_interval(p)),
-        };
-        if let Some(p) = p {
+        if let Some(p) = place(ctx, c, p) {
             if star.qualities_above(ctx.field.to_physical(p), ctx, rise_over(q0), qs, &mut hint) {
                 return Some((p, worst_of(qs)));
             }

@@ -16,7 +16,7 @@
 
 use rayon::prelude::*;
 
-use super::local::Regions;
+use super::local::{retain_flagged, Regions};
 use crate::mesh::TetMesh;
 
 /// Rings of tets around the vertices that need work that the copy takes in. More rings copy
@@ -78,10 +78,7 @@ impl SubMesh {
         for _ in 1..rings {
             near = grow(mesh, &near);
         }
-        let tets: Vec<u32> = (0..mesh.tets.len() as u32)
-            .into_par_iter()
-            .filter(|&t| mesh.tets[t as usize].iter().any(|&v| near[v as usize]))
-            .collect();
+        let tets = touching(mesh, &near);
         let mut local = vec![NONE; mesh.points.len()];
         for &t in &tets {
             for v in mesh.tets[t as usize] {
@@ -95,7 +92,7 @@ impl SubMesh {
                 points.push(v as u32);
             }
         }
-        let rim = rim_of(mesh, &tets, &local, points.len());
+        let rim = rim_of(mesh, &near, &local, points.len());
         let faces: Vec<u32> = (0..mesh.boundary.len() as u32)
             .into_par_iter()
             .filter(|&f| {
@@ -162,27 +159,28 @@ impl SubMesh {
         }
         let to_global = |v: &u32| global[*v as usize];
         removed.extend(self.removed.iter().map(to_global));
-        let touched = |all: &[u32], kept: &[u32], len: usize| {
-            let mut out = vec![false; len];
+        // What stays where it is: everything but the copy's touched tets (faces).
+        let keep = |all: &[u32], untouched: &[u32], len: usize| {
+            let mut out = vec![true; len];
             for &i in all {
-                out[i as usize] = true;
-            }
-            for &i in kept {
                 out[i as usize] = false;
+            }
+            for &i in untouched {
+                out[i as usize] = true;
             }
             out
         };
-        let gone = touched(&self.tets, &self.untouched.tets, mesh.tets.len());
-        retain_unflagged(&mut mesh.tets, &gone);
-        retain_unflagged(quality, &gone);
+        let stay = keep(&self.tets, &self.untouched.tets, mesh.tets.len());
+        retain_flagged(&mut mesh.tets, &stay);
+        retain_flagged(quality, &stay);
         let from = self.untouched.tets.len();
         let tets = &self.mesh.tets[from..];
         mesh.tets
             .extend(tets.iter().map(|t| t.each_ref().map(to_global)));
         quality.extend_from_slice(&self.quality[from..]);
-        let gone = touched(&self.faces, &self.untouched.faces, mesh.boundary.len());
-        retain_unflagged(&mut mesh.boundary, &gone);
-        retain_unflagged(&mut mesh.boundary_labels, &gone);
+        let stay = keep(&self.faces, &self.untouched.faces, mesh.boundary.len());
+        retain_flagged(&mut mesh.boundary, &stay);
+        retain_flagged(&mut mesh.boundary_labels, &stay);
         let from = self.untouched.faces.len();
         let faces = &self.mesh.boundary[from..];
         mesh.boundary
@@ -210,14 +208,23 @@ impl Untouched {
     }
 }
 
+/// The tets (ascending) with a corner in `near` (per point).
+fn touching(mesh: &TetMesh, near: &[bool]) -> Vec<u32> {
+    (0..mesh.tets.len() as u32)
+        .into_par_iter()
+        .filter(|&t| touches(mesh, t, near))
+        .collect()
+}
+
+/// Whether tet `t` has a corner in `near`.
+fn touches(mesh: &TetMesh, t: u32, near: &[bool]) -> bool {
+    mesh.tets[t as usize].iter().any(|&v| near[v as usize])
+}
+
 /// `near` and the corners of every tet with a corner in it.
 fn grow(mesh: &TetMesh, near: &[bool]) -> Vec<bool> {
-    let hit: Vec<u32> = (0..mesh.tets.len() as u32)
-        .into_par_iter()
-        .filter(|&t| mesh.tets[t as usize].iter().any(|&v| near[v as usize]))
-        .collect();
     let mut out = near.to_vec();
-    for t in hit {
+    for t in touching(mesh, near) {
         for v in mesh.tets[t as usize] {
             out[v as usize] = true;
         }
@@ -225,21 +232,12 @@ fn grow(mesh: &TetMesh, near: &[bool]) -> Vec<bool> {
     out
 }
 
-/// Per point of the copy (`local`: copy id per mesh point, `NONE` outside): whether a tet
-/// outside the copy (`tets`: the copy's, ascending) uses it.
-fn rim_of(mesh: &TetMesh, tets: &[u32], local: &[u32], n: usize) -> Vec<bool> {
-    let mut inside = vec![false; mesh.tets.len()];
-    for &t in tets {
-        inside[t as usize] = true;
-    }
+/// Per point of the copy (`local`: copy id per mesh point, `NONE` outside; the copy's tets
+/// are those with a corner in `near`): whether a tet outside the copy uses it.
+fn rim_of(mesh: &TetMesh, near: &[bool], local: &[u32], n: usize) -> Vec<bool> {
     let outside: Vec<u32> = (0..mesh.tets.len() as u32)
         .into_par_iter()
-        .filter(|&t| {
-            !inside[t as usize]
-                && mesh.tets[t as usize]
-                    .iter()
-                    .any(|&v| local[v as usize] != NONE)
-        })
+        .filter(|&t| !touches(mesh, t, near) && touches_copy(mesh, t, local))
         .collect();
     let mut rim = vec![false; n];
     for t in outside {
@@ -252,13 +250,11 @@ fn rim_of(mesh: &TetMesh, tets: &[u32], local: &[u32], n: usize) -> Vec<bool> {
     rim
 }
 
-/// Keeps the items whose flag in `gone` is not set, in order.
-fn retain_unflagged<T>(items: &mut Vec<T>, gone: &[bool]) {
-    let mut i = 0;
-    items.retain(|_| {
-        i += 1;
-        !gone[i - 1]
-    });
+/// Whether tet `t` has a corner in the copy.
+fn touches_copy(mesh: &TetMesh, t: u32, local: &[u32]) -> bool {
+    mesh.tets[t as usize]
+        .iter()
+        .any(|&v| local[v as usize] != NONE)
 }
 
 #[cfg(test)]
