@@ -23,6 +23,7 @@ pub(crate) mod project;
 pub mod quality;
 pub(crate) mod restore;
 mod schedule;
+pub(crate) mod search;
 pub(crate) mod smooth;
 pub(crate) mod split;
 pub mod stages;

@@ -6,6 +6,7 @@ use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
 use super::local::{LocalMesh, TetOp};
 use super::project::{project_levels, untangle_around};
+use super::search::search_vertex;
 use super::smooth::smooth_vertex;
 use super::{Ctx, ImproveReport};
 
@@ -46,7 +47,36 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
             best = r;
         }
     }
+    let now = worst(lm, ctx.target);
+    if now.0 < ctx.target && now.1 <= RETRY_MAX_BELOW {
+        polish(lm, ctx, &mut best);
+    }
     report.add(&best);
+}
+
+/// Rounds of [`polish`] at most.
+const POLISH_ROUNDS: usize = 2;
+
+/// Compass search ([`search_vertex`]) on the corners of the tets still below the target, each
+/// round followed by short sweeps, while it moves a vertex.
+fn polish(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
+    for _ in 0..POLISH_ROUNDS {
+        let mut verts: Vec<u32> = bad_tets(lm, ctx)
+            .into_iter()
+            .flat_map(|t| lm.tets[t as usize])
+            .collect();
+        verts.sort_unstable();
+        verts.dedup();
+        let moved = verts
+            .into_iter()
+            .filter(|&v| search_vertex(lm, ctx, v))
+            .count();
+        report.smoothed += moved;
+        if moved == 0 {
+            break;
+        }
+        sweeps(lm, ctx, report, SWEEPS_AFTER_UNTANGLING);
+    }
 }
 
 /// A region left with more tets below the target than this is not retried: its tets are

@@ -94,7 +94,7 @@ fn centroid_step(
 /// Where a vertex with constraint `c` tried at index point `p` goes: a level vertex onto
 /// its level set (along the axes it may move), an interior one stays at `p` if that is inside
 /// the interval; `None` if neither works.
-fn place(ctx: &Ctx, c: Constraint, p: [f64; 3]) -> Option<[f64; 3]> {
+pub(crate) fn place(ctx: &Ctx, c: Constraint, p: [f64; 3]) -> Option<[f64; 3]> {
     match c.level {
         Some(l) => ctx
             .field
@@ -104,12 +104,12 @@ fn place(ctx: &Ctx, c: Constraint, p: [f64; 3]) -> Option<[f64; 3]> {
 }
 
 /// The smallest of the qualities `qs`.
-fn worst_of(qs: &[f64]) -> f64 {
+pub(crate) fn worst_of(qs: &[f64]) -> f64 {
     qs.iter().copied().fold(f64::INFINITY, f64::min)
 }
 
 /// The worst quality a move must beat to count as raising `q0` (above rounding).
-fn rise_over(q0: f64) -> f64 {
+pub(crate) fn rise_over(q0: f64) -> f64 {
     q0 * (1.0 + 1e-9) + 1e-12
 }
 

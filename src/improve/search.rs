@@ -1,0 +1,101 @@
+//! Compass search: a derivative-free move of one vertex for tets the smoothing leaves stuck.
+//!
+//! The smoothing ([`super::smooth`]) steps along the gradients of the worst tets of a star;
+//! where those gradients oppose each other (a kink of the max–min), it finds no way up even
+//! when a better position lies a fraction of an edge away. The compass search tries the 26
+//! directions of the cube around the vertex (over the axes it may move along; a level vertex
+//! is put back on its level set), moves to the best point that raises the star's worst
+//! quality (and leaves no more tets below the target), and halves the step when none does. It is dear (dozens of star evaluations per
+//! step), so it runs only on the corners of the few tets a region leaves below the target
+//! ([`super::schedule`]).
+
+use super::local::{LocalMesh, StarCorners};
+use super::smooth::{local_scale, place, rise_over, worst_of};
+use super::Ctx;
+
+/// Step halvings at most.
+const HALVINGS: usize = 8;
+
+/// Moves to the best point at most (each after a full scan of the directions).
+const MOVES: usize = 16;
+
+/// Moves `v` by compass search where that raises the worst quality of its star and leaves no
+/// more of its tets below the target. Returns whether it moved.
+pub fn search_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
+    let c = lm.con[v as usize];
+    if !lm.is_free(v) || c.pinned || c.freedom() == 0 {
+        return false;
+    }
+    let star = StarCorners::of(lm, v);
+    let mut qs: Vec<f64> = lm.star[v as usize]
+        .iter()
+        .map(|&t| lm.q[t as usize])
+        .collect();
+    let from = lm.u[v as usize];
+    let dirs = directions(c.free_axes());
+    let dims = ctx.field.grid().dims;
+    let (mut u, mut q0) = (from, worst_of(&qs));
+    let mut step = 0.25 * local_scale(lm, v, from);
+    let (mut halvings, mut moves) = (0, 0);
+    let mut next = Vec::with_capacity(qs.len());
+    let mut best_qs = Vec::with_capacity(qs.len());
+    // The tet that failed last is tried first.
+    let mut hint = 0;
+    while halvings < HALVINGS && moves < MOVES {
+        let mut best: Option<([f64; 3], f64)> = None;
+        for d in &dirs {
+            let mut p = [0.0; 3];
+            for a in 0..3 {
+                p[a] = (u[a] + step * d[a]).clamp(0.0, (dims[a] - 1) as f64);
+            }
+            let Some(p) = place(ctx, c, p) else { continue };
+            let floor = rise_over(best.map_or(q0, |b| b.1));
+            let x = ctx.field.to_physical(p);
+            if star.qualities_above(x, ctx, floor, &mut next, &mut hint)
+                && below(&next, ctx.target) <= below(&qs, ctx.target)
+            {
+                best = Some((p, worst_of(&next)));
+                std::mem::swap(&mut best_qs, &mut next);
+            }
+        }
+        match best {
+            Some((p, q)) => {
+                (u, q0) = (p, q);
+                std::mem::swap(&mut qs, &mut best_qs);
+                moves += 1;
+            }
+            None => {
+                step *= 0.5;
+                halvings += 1;
+            }
+        }
+    }
+    if moves == 0 {
+        return false;
+    }
+    if c.level.is_some() {
+        let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
+        lm.drift[v as usize] += star.volume(x1) - star.volume(x0);
+    }
+    lm.set_position_with(v, u, ctx, &qs);
+    true
+}
+
+/// How many of the qualities `qs` are below `target`.
+fn below(qs: &[f64], target: f64) -> usize {
+    qs.iter().filter(|&&q| q < target).count()
+}
+
+/// The unit directions of the cube's 26 neighbours over the free axes (bit `a` of `free`).
+fn directions(free: u8) -> Vec<[f64; 3]> {
+    let mut out = Vec::with_capacity(26);
+    for code in 0..27 {
+        let d = [code % 3, code / 3 % 3, code / 9].map(|k| k as f64 - 1.0);
+        let moves_fixed = (0..3).any(|a| d[a] != 0.0 && free & (1 << a) == 0);
+        let n = crate::geom::norm(d);
+        if n > 0.0 && !moves_fixed {
+            out.push(d.map(|x| x / n));
+        }
+    }
+    out
+}
