@@ -16,23 +16,34 @@ const SWEEPS: usize = 6;
 /// Sweeps after level vertices were untangled onto their level sets at the end.
 const SWEEPS_AFTER_UNTANGLING: usize = 2;
 
-/// Improves the region `lm` in place. With [`Ctx::retry_stuck`], a region left with tets
-/// below the target is improved again from its start with each smoothing variant of
-/// [`RETRIES`] in turn while tets stay below it, and the best end is kept (higher worst tet,
-/// then fewer below the target): where tets are stuck, which ones stay stuck depends on
-/// small differences in the moves, and any variant can win.
+/// Improves the region `lm` in place. With [`Ctx::retry_stuck`], a stuck region ([`stuck`])
+/// is improved again from its start with each smoothing variant of [`RETRIES`] in turn while
+/// it stays stuck, and the best end is kept (higher worst tet, then fewer below the target):
+/// which tets stay stuck depends on small differences in the moves, and any variant can win.
+/// With [`Ctx::polish`], a region still stuck then gets the compass search ([`polish`]).
 pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
-    if !ctx.retry_stuck {
-        return improve_once(lm, ctx, report);
+    let mut done = ImproveReport::default();
+    if ctx.retry_stuck {
+        retry(lm, ctx, &mut done);
+    } else {
+        improve_once(lm, ctx, &mut done);
     }
+    if ctx.polish && stuck(lm, ctx) {
+        polish(lm, ctx, &mut done);
+    }
+    report.add(&done);
+}
+
+/// [`improve_once`], then again from the start with each variant of [`RETRIES`] while the
+/// region is [`stuck`]; keeps the best end and its counts in `report`.
+fn retry(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     let start = lm.clone();
-    let mut best = ImproveReport::default();
-    improve_once(lm, ctx, &mut best);
+    improve_once(lm, ctx, report);
     for (steepest, centroid) in RETRIES {
-        let now = worst(lm, ctx.target);
-        if now.0 >= ctx.target || now.1 > RETRY_MAX_BELOW {
+        if !stuck(lm, ctx) {
             break;
         }
+        let now = worst(lm, ctx.target);
         let mut other = start.clone();
         let mut r = ImproveReport::default();
         let variant = Ctx {
@@ -44,14 +55,15 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
         let then = worst(&other, ctx.target);
         if then.0 > now.0 || (then.0 == now.0 && then.1 < now.1) {
             *lm = other;
-            best = r;
+            *report = r;
         }
     }
-    let now = worst(lm, ctx.target);
-    if now.0 < ctx.target && now.1 <= RETRY_MAX_BELOW {
-        polish(lm, ctx, &mut best);
-    }
-    report.add(&best);
+}
+
+/// Whether the region has tets below the target, but at most [`RETRY_MAX_BELOW`] of them.
+fn stuck(lm: &LocalMesh, ctx: &Ctx) -> bool {
+    let (w, n) = worst(lm, ctx.target);
+    w < ctx.target && n <= RETRY_MAX_BELOW
 }
 
 /// Rounds of [`polish`] at most.
@@ -79,10 +91,10 @@ fn polish(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     }
 }
 
-/// A region left with more tets below the target than this is not retried: its tets are
-/// stuck for reasons of their own (mostly near critical values, as on the noisy 256³ field
-/// and the T1 band, where nearly every slab's region is left with many; retrying them all
-/// made the full-size passes 6–9 % longer in unpaired runs).
+/// A region left with more tets below the target than this is neither retried nor polished:
+/// its tets are stuck for reasons of their own (mostly near critical values, as on the noisy
+/// 256³ field and the T1 band, where nearly every slab's region is left with many; retrying
+/// them all made the full-size passes 6–9 % longer in unpaired runs).
 const RETRY_MAX_BELOW: usize = 16;
 
 /// The smoothing variants ([`Ctx::steepest`], [`Ctx::centroid`]) a stuck region is retried
