@@ -222,7 +222,7 @@ pub struct Ctx<'a> {
     /// ([`schedule::improve_local`]). Set for the last round of a single pass and of the
     /// first stage of a ladder ([`stages`]).
     pub retry_stuck: bool,
-    /// A region that ends with a few tets below the target gets a compass search over their
+    /// A region that ends with tets below the target gets a compass search over their
     /// corners ([`search`], [`schedule::improve_local`]). Set for the last round of every
     /// stage.
     pub polish: bool,
@@ -368,8 +368,8 @@ struct Rounds {
 ///
 /// The last round moves the slab boundaries by half a slab: what is still below the target
 /// or off its level then has mostly been stuck at a slab boundary, with corners across it
-/// frozen in every round; its stuck regions are retried (with `retry_last`) and polished
-/// ([`Ctx::polish`]). A level vertex still off its level after that gets one more round
+/// frozen in every round; its stuck regions are retried (with `retry_last`), and the tets it
+/// leaves below the target polished ([`Ctx::polish`]). A level vertex still off its level after that gets one more round
 /// with the boundaries back where they were. The rounds after the first run on a copy of the
 /// part of the mesh they can reach ([`submesh`]).
 fn run_rounds(

@@ -20,7 +20,8 @@ const SWEEPS_AFTER_UNTANGLING: usize = 2;
 /// is improved again from its start with each smoothing variant of [`RETRIES`] in turn while
 /// it stays stuck, and the best end is kept (higher worst tet, then fewer below the target):
 /// which tets stay stuck depends on small differences in the moves, and any variant can win.
-/// With [`Ctx::polish`], a region still stuck then gets the compass search ([`polish`]).
+/// With [`Ctx::polish`], a region still left with tets below the target then gets the compass
+/// search over their corners ([`polish`]; its cost is proportional to those tets).
 pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     let mut done = ImproveReport::default();
     if ctx.retry_stuck {
@@ -28,7 +29,7 @@ pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) 
     } else {
         improve_once(lm, ctx, &mut done);
     }
-    if ctx.polish && stuck(lm, ctx) {
+    if ctx.polish && worst(lm, ctx.target).0 < ctx.target {
         polish(lm, ctx, &mut done);
     }
     report.add(&done);
@@ -91,10 +92,10 @@ fn polish(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     }
 }
 
-/// A region left with more tets below the target than this is neither retried nor polished:
-/// its tets are stuck for reasons of their own (mostly near critical values, as on the noisy
-/// 256³ field and the T1 band, where nearly every slab's region is left with many; retrying
-/// them all made the full-size passes 6–9 % longer in unpaired runs).
+/// A region left with more tets below the target than this is not retried: its tets are
+/// stuck for reasons of their own (mostly near critical values, as on the noisy 256³ field
+/// and the T1 band, where nearly every slab's region is left with many; retrying them all
+/// made the full-size passes 6–9 % longer in unpaired runs).
 const RETRY_MAX_BELOW: usize = 16;
 
 /// The smoothing variants ([`Ctx::steepest`], [`Ctx::centroid`]) a stuck region is retried

@@ -5,9 +5,9 @@
 //! when a better position lies a fraction of an edge away. The compass search tries the 26
 //! directions of the cube around the vertex (over the axes it may move along; a level vertex
 //! is put back on its level set), moves to the best point that raises the star's worst
-//! quality (and leaves no more tets below the target), and halves the step when none does. It is dear (dozens of star evaluations per
-//! step), so it runs only on the corners of the few tets a region leaves below the target
-//! ([`super::schedule`]).
+//! quality (and leaves no more tets below the target), and halves the step when none does.
+//! It is dear (dozens of star evaluations per step), so it runs only in the last round of a
+//! stage, on the corners of the tets a region leaves below the target ([`super::schedule`]).
 
 use super::local::{LocalMesh, StarCorners};
 use super::smooth::{local_scale, place, rise_over, worst_of};
