@@ -7,6 +7,7 @@
 
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
+use smallvec::SmallVec;
 
 use super::constraint::Constraint;
 use super::field::Field;
@@ -416,7 +417,7 @@ impl LocalMesh {
 
     /// Alive tets containing both `a` and `b`, in the order of `a`'s star. When either is free,
     /// these are all the tets around the edge: a free vertex's whole star is in the region.
-    pub fn edge_tets(&self, a: u32, b: u32) -> Vec<u32> {
+    pub fn edge_tets(&self, a: u32, b: u32) -> EdgeTets {
         self.star[a as usize]
             .iter()
             .copied()
@@ -639,6 +640,9 @@ impl LocalMesh {
         })
     }
 }
+
+/// The tets around an edge ([`LocalMesh::edge_tets`]; inline up to 8).
+pub type EdgeTets = SmallVec<[u32; 8]>;
 
 /// The tets around one vertex with the positions of their other corners: what a search
 /// for a better position of that vertex evaluates again and again while only it moves.
