@@ -7,8 +7,17 @@
 //! (same level, same box planes), boundary faces keep their labels, and every remaining tet
 //! must stay positive and better than the worst one the collapse removes or changes.
 
+use smallvec::SmallVec;
+
 use super::local::{face_key, BoundaryFace, LocalMesh};
 use super::Ctx;
+
+/// The boundary faces at a vertex ([`boundary_faces_at`]; inline up to 16).
+pub type VertexFaces = SmallVec<[BoundaryFace; 16]>;
+
+/// The vertices of a link ([`link_vertices`]; inline up to 96 before deduplication, three
+/// per tet of a star of 32).
+type LinkVertices = SmallVec<[u32; 96]>;
 
 /// The better legal and improving collapse of edge `ab` (either way), as
 /// `(smallest quality of the changed tets afterwards, from, to)`; `a` into `b` on a tie.
@@ -165,8 +174,8 @@ pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
 }
 
 /// Boundary faces with `v` as a corner.
-pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> Vec<BoundaryFace> {
-    let mut out: Vec<BoundaryFace> = Vec::new();
+pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> VertexFaces {
+    let mut out = VertexFaces::new();
     if !lm.on_boundary(v) {
         return out;
     }
@@ -205,10 +214,9 @@ fn face_without(tet: [u32; 4], skip: usize) -> [u32; 3] {
 }
 
 /// The vertices of the tets around `v` other than `v`, sorted (the vertices of its link).
-fn link_vertices(lm: &LocalMesh, v: u32) -> Vec<u32> {
-    let star = &lm.star[v as usize];
-    let mut out = Vec::with_capacity(3 * star.len());
-    for &t in star {
+fn link_vertices(lm: &LocalMesh, v: u32) -> LinkVertices {
+    let mut out = LinkVertices::new();
+    for &t in &lm.star[v as usize] {
         out.extend(lm.tets[t as usize].into_iter().filter(|&w| w != v));
     }
     out.sort_unstable();
@@ -231,7 +239,7 @@ fn star_has(lm: &LocalMesh, v: u32, ws: &[u32]) -> bool {
 /// looked up in the star of `b`: an edge `vw` of both links must lie in a tet of `shared`,
 /// and no triangle may be in both links (the two tets would become one).
 fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
-    let mut ring: Vec<u32> = shared
+    let mut ring: SmallVec<[u32; 16]> = shared
         .iter()
         .flat_map(|&t| lm.tets[t as usize])
         .filter(|&w| w != a && w != b)
@@ -306,7 +314,7 @@ fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
         return true;
     }
     let on_edge = |f: &BoundaryFace| f.tri.contains(&a) && f.tri.contains(&b);
-    let ab_faces: Vec<[u32; 3]> = fa
+    let ab_faces: SmallVec<[[u32; 3]; 4]> = fa
         .iter()
         .filter(|f| on_edge(f))
         .map(|f| face_key(f.tri))
@@ -315,9 +323,9 @@ fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
         // Both ends on the boundary but the edge is not: collapsing would pinch the boundary.
         return false;
     }
-    let others = |faces: &[BoundaryFace], v: u32| -> (Vec<u32>, Vec<[u32; 2]>) {
-        let mut verts = Vec::new();
-        let mut edges = Vec::new();
+    let others = |faces: &[BoundaryFace], v: u32| {
+        let mut verts: SmallVec<[u32; 32]> = SmallVec::new();
+        let mut edges: SmallVec<[[u32; 2]; 16]> = SmallVec::new();
         for f in faces {
             let i = f.tri.iter().position(|&w| w == v).unwrap_or(0);
             let o = [f.tri[(i + 1) % 3], f.tri[(i + 2) % 3]];

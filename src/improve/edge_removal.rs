@@ -12,6 +12,8 @@
 //! exactly that polyhedron. So the underlying space, the boundary and its labels (no face
 //! around an interior edge is a boundary face) and every vertex stay.
 
+use smallvec::{smallvec, SmallVec};
+
 use super::flip::even_completion;
 use super::local::LocalMesh;
 use super::Ctx;
@@ -19,6 +21,9 @@ use super::Ctx;
 /// Largest ring tried (Stellar's limit): the triangulations of a ring of `k` vertices have
 /// `C(k, 3)` candidate triangles, two tets each.
 pub const MAX_RING: usize = 7;
+
+/// Up to [`MAX_RING`] items (ring vertices or tets around an edge), inline.
+type RingVec<T> = SmallVec<[T; MAX_RING]>;
 
 /// Tries to remove the edge `(a, b)` of tet `t` when 4 to [`MAX_RING`] tets surround it.
 /// Returns whether it did.
@@ -70,14 +75,15 @@ fn cone(a: u32, b: u32, ring: &[u32], [i, j, l]: [usize; 3]) -> [[u32; 4]; 2] {
 /// The ring of edge `(a, b)` around from tet `t`, ordered so that `[a, b, r_i, r_{i+1}]` is
 /// positive, and the tets around the edge (`[a, b, r_i, r_{i+1}]` at `i`); `None` when the ring
 /// is open (the edge is on the boundary or leaves the region) or longer than [`MAX_RING`].
-fn ring_around(lm: &LocalMesh, t: u32, a: u32, b: u32) -> Option<(Vec<u32>, Vec<u32>)> {
+fn ring_around(lm: &LocalMesh, t: u32, a: u32, b: u32) -> Option<(RingVec<u32>, RingVec<u32>)> {
     let edge_tets = lm.edge_tets(a, b);
     if edge_tets.len() > MAX_RING {
         return None;
     }
     // [a, x, y, b] even, so [a, b, x, y] is too.
     let (x, y) = even_completion(lm.tets[t as usize], a, b);
-    let (mut ring, mut around) = (vec![x, y], vec![t]);
+    let mut ring: RingVec<u32> = smallvec![x, y];
+    let mut around: RingVec<u32> = smallvec![t];
     while around.len() < edge_tets.len() {
         let (prev, last) = (ring[ring.len() - 2], ring[ring.len() - 1]);
         let next = edge_tets.iter().copied().find(|&u| {
@@ -116,7 +122,7 @@ fn best_triangulation(
     [a, b]: [u32; 2],
     ring: &[u32],
     floor: f64,
-) -> Option<Vec<[usize; 3]>> {
+) -> Option<RingVec<[usize; 3]>> {
     let k = ring.len();
     let tri_quality = |i: usize, j: usize, l: usize| -> f64 {
         let mut worst = f64::INFINITY;
@@ -153,8 +159,8 @@ fn best_triangulation(
     if best[0][k - 1] <= floor {
         return None;
     }
-    let mut tris = Vec::with_capacity(k - 2);
-    let mut chords = vec![(0, k - 1)];
+    let mut tris = RingVec::new();
+    let mut chords: RingVec<(usize, usize)> = smallvec![(0, k - 1)];
     while let Some((i, l)) = chords.pop() {
         if l - i < 2 {
             continue;

@@ -11,7 +11,7 @@
 //! tangent to the level set, sized to cancel the drift (at most a fifth of the vertex's mean
 //! edge), and is projected back onto the level set.
 
-use super::local::{LocalMesh, StarCorners};
+use super::local::{LocalMesh, StarCorners, StarVec};
 use super::smooth::local_scale;
 use super::Ctx;
 use crate::geom::dot;
@@ -63,7 +63,7 @@ fn restore_at(lm: &mut LocalMesh, ctx: &Ctx, v: u32, owed: &mut f64) -> bool {
         return false;
     };
     let g2 = dot(g, g);
-    let floors: Vec<f64> = lm.star[v as usize]
+    let floors: StarVec<f64> = lm.star[v as usize]
         .iter()
         .map(|&t| lm.q[t as usize].min(ctx.target))
         .collect();
@@ -75,7 +75,7 @@ fn restore_at(lm: &mut LocalMesh, ctx: &Ctx, v: u32, owed: &mut f64) -> bool {
         t = longest / g2.sqrt() * t.signum();
     }
     let dims = ctx.field.grid().dims;
-    let (mut qs, mut hint) = (Vec::new(), 0);
+    let (mut qs, mut hint) = (StarVec::new(), 0);
     for _ in 0..HALVINGS {
         let p = [0, 1, 2].map(|a| (u[a] + t * g[a]).clamp(0.0, (dims[a] - 1) as f64));
         if let Some(p) = ctx

@@ -186,7 +186,7 @@ fn off_level(lm: &LocalMesh, ctx: &Ctx, v: u32) -> bool {
 }
 
 /// Alive tets below the target, worst first (ties by id).
-fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
+fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> impl Iterator<Item = u32> {
     let mut bad: Vec<(f64, u32)> = (0..lm.tets.len() as u32)
         .filter(|&t| lm.alive[t as usize])
         .map(|t| (lm.q[t as usize], t))
@@ -194,7 +194,7 @@ fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
         .collect();
     // The keys are distinct (tet ids are), so an unstable sort gives the one order.
     bad.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    bad.into_iter().map(|(_, t)| t).collect()
+    bad.into_iter().map(|(_, t)| t)
 }
 
 /// Calls `op` (of kind `kind`) on every alive bad tet (worst first) until the time budget
@@ -207,7 +207,7 @@ fn for_each_bad_tet(
     mut op: impl FnMut(&mut LocalMesh, u32) -> bool,
 ) -> usize {
     let mut n = 0;
-    for (i, t) in bad_tets(lm, ctx).into_iter().enumerate() {
+    for (i, t) in bad_tets(lm, ctx).enumerate() {
         if i % 64 == 63 && ctx.out_of_time() {
             break;
         }
@@ -235,13 +235,10 @@ fn collapse_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> u
 /// Collapses the shortest edge of tet `t` (either way) that can be collapsed with a gain.
 fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
     let tet = lm.tets[t as usize];
-    let mut edges: Vec<(f64, u32, u32)> = Vec::with_capacity(6);
-    for i in 0..4 {
-        for j in i + 1..4 {
-            let d = crate::geom::sub(lm.x[tet[i] as usize], lm.x[tet[j] as usize]);
-            edges.push((crate::geom::dot(d, d), tet[i], tet[j]));
-        }
-    }
+    let mut edges = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(i, j)| {
+        let d = crate::geom::sub(lm.x[tet[i] as usize], lm.x[tet[j] as usize]);
+        (crate::geom::dot(d, d), tet[i], tet[j])
+    });
     edges.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
     // Each corner's floor is found when an edge at it is first tried.
     let mut floors = [None; 4];
@@ -303,7 +300,6 @@ fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
 /// Smooths every free vertex of a bad tet once, in vertex order.
 fn smooth_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
     let mut verts: Vec<u32> = bad_tets(lm, ctx)
-        .into_iter()
         .flat_map(|t| lm.tets[t as usize])
         .collect();
     verts.sort_unstable();

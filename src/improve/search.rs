@@ -9,7 +9,7 @@
 //! It is dear (dozens of star evaluations per step), so it runs only in the last round of a
 //! stage, on the corners of the tets a region leaves below the target ([`super::schedule`]).
 
-use super::local::{LocalMesh, StarCorners};
+use super::local::{LocalMesh, StarCorners, StarVec};
 use super::smooth::{local_scale, place, rise_over, worst_of};
 use super::Ctx;
 
@@ -27,7 +27,7 @@ pub fn search_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         return false;
     }
     let star = StarCorners::of(lm, v);
-    let mut qs: Vec<f64> = lm.star[v as usize]
+    let mut qs: StarVec<f64> = lm.star[v as usize]
         .iter()
         .map(|&t| lm.q[t as usize])
         .collect();
@@ -37,8 +37,8 @@ pub fn search_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     let (mut u, mut q0) = (from, worst_of(&qs));
     let mut step = 0.25 * local_scale(lm, v, from);
     let (mut halvings, mut moves) = (0, 0);
-    let mut next = Vec::with_capacity(qs.len());
-    let mut best_qs = Vec::with_capacity(qs.len());
+    let mut next = StarVec::new();
+    let mut best_qs = StarVec::new();
     // The tet that failed last is tried first.
     let mut hint = 0;
     while halvings < HALVINGS && moves < MOVES {

@@ -7,7 +7,7 @@
 //! the mesh, so smoothing never changes the topology.
 
 use super::constraint::Constraint;
-use super::local::{LocalMesh, StarCorners};
+use super::local::{LocalMesh, StarCorners, StarVec};
 use super::Ctx;
 use crate::geom::{dot, norm, sub};
 
@@ -32,7 +32,7 @@ pub fn move_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32, iterations: usize) -> 
     }
     // The other corners stay where they are while `v` moves.
     let star = StarCorners::of(lm, v);
-    let mut qs: Vec<f64> = lm.star[v as usize]
+    let mut qs: StarVec<f64> = lm.star[v as usize]
         .iter()
         .map(|&t| lm.q[t as usize])
         .collect();
@@ -56,7 +56,7 @@ fn centroid_step(
     ctx: &Ctx,
     v: u32,
     star: &StarCorners,
-    qs: &mut Vec<f64>,
+    qs: &mut StarVec<f64>,
 ) -> Option<([f64; 3], f64)> {
     if !ctx.centroid {
         return None;
@@ -82,7 +82,7 @@ fn centroid_step(
     }
     let p = place(ctx, c, p)?;
     let floor = rise_over(worst_of(qs));
-    let mut next = Vec::with_capacity(qs.len());
+    let mut next = StarVec::new();
     let mut hint = 0;
     if !star.qualities_above(ctx.field.to_physical(p), ctx, floor, &mut next, &mut hint) {
         return None;
@@ -123,12 +123,12 @@ pub fn climb(
     v: u32,
     star: &StarCorners,
     mut u: [f64; 3],
-    qs: &mut Vec<f64>,
+    qs: &mut StarVec<f64>,
     iterations: usize,
 ) -> Option<([f64; 3], f64)> {
     let mut q0 = worst_of(qs);
     let mut moved = false;
-    let mut next = Vec::with_capacity(qs.len());
+    let mut next = StarVec::new();
     for _ in 0..iterations {
         let scale = local_scale(lm, v, u);
         let dirs = ascent_directions(lm, ctx, v, star, (u, qs, q0), scale);
@@ -166,8 +166,8 @@ fn ascent_directions(
     let free = lm.con[v as usize].free_axes();
     let h = 1e-7 * scale.max(1e-12);
     let level = lm.con[v as usize].level.is_some();
-    // Kept only for the steepest ascent (no allocation otherwise).
-    let mut grads: Vec<[f64; 3]> = Vec::new();
+    // Kept only for the steepest ascent.
+    let mut grads: StarVec<[f64; 3]> = StarVec::new();
     let mut sum = [0.0; 3];
     for (i, &q) in qs.iter().enumerate() {
         if q > q0 + ACTIVE_BAND * q0.abs().max(1e-3) {
@@ -260,7 +260,7 @@ fn line_search(
     v: u32,
     star: &StarCorners,
     (u, d, q0, scale): ([f64; 3], [f64; 3], f64, f64),
-    qs: &mut Vec<f64>,
+    qs: &mut StarVec<f64>,
 ) -> Option<([f64; 3], f64)> {
     let c = lm.con[v as usize];
     let dims = ctx.field.grid().dims;

@@ -10,7 +10,7 @@
 //! below the target), so the topology holds and no element gets worse than what was there.
 
 use super::constraint::Constraint;
-use super::local::{face_key, BoundaryFace, LocalMesh};
+use super::local::{face_key, BoundaryFace, EdgeTets, LocalMesh};
 use super::Ctx;
 use crate::geom::{norm, signed_volume, sub};
 use crate::mesh::{BoundaryLabel, TetMesh};
@@ -241,7 +241,7 @@ struct Split {
     x: [f64; 3],
     value: f64,
     con: Constraint,
-    around: Vec<u32>,
+    around: EdgeTets,
     faces: Vec<BoundaryFace>,
     gain: f64,
 }
