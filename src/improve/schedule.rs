@@ -74,13 +74,7 @@ const POLISH_ROUNDS: usize = 2;
 /// round followed by short sweeps, while it moves a vertex.
 fn polish(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     for _ in 0..POLISH_ROUNDS {
-        let mut verts: Vec<u32> = bad_tets(lm, ctx)
-            .into_iter()
-            .flat_map(|t| lm.tets[t as usize])
-            .collect();
-        verts.sort_unstable();
-        verts.dedup();
-        let moved = verts
+        let moved = bad_corners(lm, ctx)
             .into_iter()
             .filter(|&v| search_vertex(lm, ctx, v))
             .count();
@@ -297,15 +291,20 @@ fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
         .then_some(Flipped::EdgeRemoved)
 }
 
-/// Smooths every free vertex of a bad tet once, in vertex order.
-fn smooth_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
+/// The corners of the alive tets below the target, ascending.
+fn bad_corners(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
     let mut verts: Vec<u32> = bad_tets(lm, ctx)
         .flat_map(|t| lm.tets[t as usize])
         .collect();
     verts.sort_unstable();
     verts.dedup();
+    verts
+}
+
+/// Smooths every free vertex of a bad tet once, in vertex order.
+fn smooth_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
     let mut n = 0;
-    for (i, v) in verts.into_iter().enumerate() {
+    for (i, v) in bad_corners(lm, ctx).into_iter().enumerate() {
         if i % 64 == 63 && ctx.out_of_time() {
             break;
         }
