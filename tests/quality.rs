@@ -245,7 +245,7 @@ fn thin_shell_and_close_balls_keep_their_topology() {
     let f = sphere(26, 8.3);
     let o = mesh_and_improve(&f, -0.6, 0.6);
     check_invariants("shell", &f, -0.6, 0.6, &o);
-    check_angles("shell", &o, (5.0, 175.0));
+    check_angles("shell", &o, FLOOR);
     let f = two_balls(31, 7.0, 0.3);
     let o = mesh_and_improve(&f, f64::NEG_INFINITY, 0.0);
     check_invariants("two balls", &f, f64::NEG_INFINITY, 0.0, &o);
