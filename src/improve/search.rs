@@ -9,6 +9,7 @@
 //! It is dear (dozens of star evaluations per step), so it runs only in the last round of a
 //! stage, on the corners of the tets a region leaves below the target ([`super::schedule`]).
 
+use super::constraint::Constraint;
 use super::local::{LocalMesh, StarCorners, StarVec};
 use super::smooth::{local_scale, place, rise_over, worst_of};
 use super::Ctx;
@@ -26,39 +27,25 @@ pub fn search_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     if !lm.is_free(v) || c.pinned || c.freedom() == 0 {
         return false;
     }
-    let star = StarCorners::of(lm, v);
+    let mut probe = Probe {
+        ctx,
+        star: StarCorners::of(lm, v),
+        c,
+        dirs: directions(c.free_axes()),
+        hint: 0,
+        next: StarVec::new(),
+    };
     let mut qs: StarVec<f64> = lm.star[v as usize]
         .iter()
         .map(|&t| lm.q[t as usize])
         .collect();
     let from = lm.u[v as usize];
-    let dirs = directions(c.free_axes());
-    let dims = ctx.field.grid().dims;
     let (mut u, mut q0) = (from, worst_of(&qs));
     let mut step = 0.25 * local_scale(lm, v, from);
     let (mut halvings, mut moves) = (0, 0);
-    let mut next = StarVec::new();
     let mut best_qs = StarVec::new();
-    // The tet that failed last is tried first.
-    let mut hint = 0;
     while halvings < HALVINGS && moves < MOVES {
-        let mut best: Option<([f64; 3], f64)> = None;
-        for d in &dirs {
-            let mut p = [0.0; 3];
-            for a in 0..3 {
-                p[a] = (u[a] + step * d[a]).clamp(0.0, (dims[a] - 1) as f64);
-            }
-            let Some(p) = place(ctx, c, p) else { continue };
-            let floor = rise_over(best.map_or(q0, |b| b.1));
-            let x = ctx.field.to_physical(p);
-            if star.qualities_above(x, ctx, floor, &mut next, &mut hint)
-                && below(&next, ctx.target) <= below(&qs, ctx.target)
-            {
-                best = Some((p, worst_of(&next)));
-                std::mem::swap(&mut best_qs, &mut next);
-            }
-        }
-        match best {
+        match probe.best_around(u, step, q0, &qs, &mut best_qs) {
             Some((p, q)) => {
                 (u, q0) = (p, q);
                 std::mem::swap(&mut qs, &mut best_qs);
@@ -75,10 +62,63 @@ pub fn search_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     }
     if c.level.is_some() {
         let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
-        lm.drift[v as usize] += star.volume(x1) - star.volume(x0);
+        lm.drift[v as usize] += probe.star.volume(x1) - probe.star.volume(x0);
     }
     lm.set_position_with(v, u, ctx, &qs);
     true
+}
+
+/// What the search of one vertex evaluates its star with.
+struct Probe<'a> {
+    ctx: &'a Ctx<'a>,
+    /// The vertex's star.
+    star: StarCorners,
+    /// Where the vertex may move.
+    c: Constraint,
+    /// [`directions`] over its free axes.
+    dirs: Vec<[f64; 3]>,
+    /// The tet that failed last, tried first.
+    hint: usize,
+    /// Scratch qualities.
+    next: StarVec<f64>,
+}
+
+impl Probe<'_> {
+    /// The best of the points `step` away from index point `u` along the directions (the star's
+    /// qualities at `u` are `qs`, its worst `q0`) that raises the worst quality and leaves no
+    /// more tets below the target, with that worst; the qualities there go to `best_qs`.
+    fn best_around(
+        &mut self,
+        u: [f64; 3],
+        step: f64,
+        q0: f64,
+        qs: &[f64],
+        best_qs: &mut StarVec<f64>,
+    ) -> Option<([f64; 3], f64)> {
+        let ctx = self.ctx;
+        let dims = ctx.field.grid().dims;
+        let mut best: Option<([f64; 3], f64)> = None;
+        for d in &self.dirs {
+            let mut p = [0.0; 3];
+            for a in 0..3 {
+                p[a] = (u[a] + step * d[a]).clamp(0.0, (dims[a] - 1) as f64);
+            }
+            let Some(p) = place(ctx, self.c, p) else {
+                continue;
+            };
+            let floor = rise_over(best.map_or(q0, |b| b.1));
+            let x = ctx.field.to_physical(p);
+            if self
+                .star
+                .qualities_above(x, ctx, floor, &mut self.next, &mut self.hint)
+                && below(&self.next, ctx.target) <= below(qs, ctx.target)
+            {
+                best = Some((p, worst_of(&self.next)));
+                std::mem::swap(best_qs, &mut self.next);
+            }
+        }
+        best
+    }
 }
 
 /// How many of the qualities `qs` are below `target`.
