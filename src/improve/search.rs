@@ -11,7 +11,7 @@
 
 use super::constraint::Constraint;
 use super::local::{LocalMesh, StarCorners, StarVec};
-use super::smooth::{local_scale, place, rise_over, worst_of};
+use super::smooth::{local_scale, move_by, place, rise_over, stepped, worst_of};
 use super::Ctx;
 
 /// Step halvings at most.
@@ -23,32 +23,37 @@ const MOVES: usize = 16;
 /// Moves `v` by compass search where that raises the worst quality of its star and leaves no
 /// more of its tets below the target. Returns whether it moved.
 pub fn search_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
+    move_by(lm, ctx, v, |lm, star, qs| compass(lm, ctx, v, star, qs)).is_some()
+}
+
+/// The compass search of `v` (star `star`, qualities `qs`) from where it is: the point it
+/// ends at if it moved, with the qualities there left in `qs`.
+fn compass(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    star: &StarCorners,
+    qs: &mut StarVec<f64>,
+) -> Option<[f64; 3]> {
     let c = lm.con[v as usize];
-    if !lm.is_free(v) || c.pinned || c.freedom() == 0 {
-        return false;
-    }
     let mut probe = Probe {
         ctx,
-        star: StarCorners::of(lm, v),
+        star,
         c,
         dirs: directions(c.free_axes()),
         hint: 0,
         next: StarVec::new(),
     };
-    let mut qs: StarVec<f64> = lm.star[v as usize]
-        .iter()
-        .map(|&t| lm.q[t as usize])
-        .collect();
     let from = lm.u[v as usize];
-    let (mut u, mut q0) = (from, worst_of(&qs));
+    let (mut u, mut q0) = (from, worst_of(qs));
     let mut step = 0.25 * local_scale(lm, v, from);
     let (mut halvings, mut moves) = (0, 0);
     let mut best_qs = StarVec::new();
     while halvings < HALVINGS && moves < MOVES {
-        match probe.best_around(u, step, q0, &qs, &mut best_qs) {
+        match probe.best_around(u, step, q0, qs, &mut best_qs) {
             Some((p, q)) => {
                 (u, q0) = (p, q);
-                std::mem::swap(&mut qs, &mut best_qs);
+                std::mem::swap(qs, &mut best_qs);
                 moves += 1;
             }
             None => {
@@ -57,22 +62,14 @@ pub fn search_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
             }
         }
     }
-    if moves == 0 {
-        return false;
-    }
-    if c.level.is_some() {
-        let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
-        lm.drift[v as usize] += probe.star.volume(x1) - probe.star.volume(x0);
-    }
-    lm.set_position_with(v, u, ctx, &qs);
-    true
+    (moves > 0).then_some(u)
 }
 
 /// What the search of one vertex evaluates its star with.
 struct Probe<'a> {
     ctx: &'a Ctx<'a>,
     /// The vertex's star.
-    star: StarCorners,
+    star: &'a StarCorners,
     /// Where the vertex may move.
     c: Constraint,
     /// [`directions`] over its free axes.
@@ -96,14 +93,9 @@ impl Probe<'_> {
         best_qs: &mut StarVec<f64>,
     ) -> Option<([f64; 3], f64)> {
         let ctx = self.ctx;
-        let dims = ctx.field.grid().dims;
         let mut best: Option<([f64; 3], f64)> = None;
-        for d in &self.dirs {
-            let mut p = [0.0; 3];
-            for a in 0..3 {
-                p[a] = (u[a] + step * d[a]).clamp(0.0, (dims[a] - 1) as f64);
-            }
-            let Some(p) = place(ctx, self.c, p) else {
+        for &d in &self.dirs {
+            let Some(p) = place(ctx, self.c, stepped(ctx, u, d, step)) else {
                 continue;
             };
             let floor = rise_over(best.map_or(q0, |b| b.1));

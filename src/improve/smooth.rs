@@ -26,19 +26,36 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
 /// Up to `iterations` max–min steps of `v` from where it is (which raise the worst tet of its
 /// star, an inverted one first), if it may move. Returns its old position if it moved.
 pub fn move_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32, iterations: usize) -> Option<[f64; 3]> {
+    move_by(lm, ctx, v, |lm, star, qs| {
+        let from = lm.u[v as usize];
+        let (u, _) = climb(lm, ctx, v, star, from, qs, iterations)
+            .or_else(|| centroid_step(lm, ctx, v, star, qs))?;
+        Some(u)
+    })
+}
+
+/// Moves `v`, if it may move, to where `search` finds a better place for it: `search` gets the
+/// region, `v`'s star (the other corners stay where they are while `v` moves) and the star's
+/// qualities, and returns the index point, with the qualities there left in them. A level
+/// vertex's move adds the volume it sweeps to its drift. Returns `v`'s old position if it
+/// moved.
+pub(crate) fn move_by(
+    lm: &mut LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    search: impl FnOnce(&LocalMesh, &StarCorners, &mut StarVec<f64>) -> Option<[f64; 3]>,
+) -> Option<[f64; 3]> {
     let c = lm.con[v as usize];
     if !lm.is_free(v) || c.pinned || c.freedom() == 0 {
         return None;
     }
-    // The other corners stay where they are while `v` moves.
     let star = StarCorners::of(lm, v);
     let mut qs: StarVec<f64> = lm.star[v as usize]
         .iter()
         .map(|&t| lm.q[t as usize])
         .collect();
     let from = lm.u[v as usize];
-    let (u, _) = climb(lm, ctx, v, &star, from, &mut qs, iterations)
-        .or_else(|| centroid_step(lm, ctx, v, &star, &mut qs))?;
+    let u = search(lm, &star, &mut qs)?;
     if c.level.is_some() {
         let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
         lm.drift[v as usize] += star.volume(x1) - star.volume(x0);
@@ -101,6 +118,16 @@ pub(crate) fn place(ctx: &Ctx, c: Constraint, p: [f64; 3]) -> Option<[f64; 3]> {
             .project(p, ctx.levels[l as usize], c.free_axes(), ctx.tol),
         None => Some(p).filter(|&p| ctx.inside_interval(p)),
     }
+}
+
+/// Index point `u` moved by `step` along `d`, kept inside the grid.
+pub(crate) fn stepped(ctx: &Ctx, u: [f64; 3], d: [f64; 3], step: f64) -> [f64; 3] {
+    let dims = ctx.field.grid().dims;
+    let mut p = [0.0; 3];
+    for a in 0..3 {
+        p[a] = (u[a] + step * d[a]).clamp(0.0, (dims[a] - 1) as f64);
+    }
+    p
 }
 
 /// The smallest of the qualities `qs`.
@@ -263,15 +290,10 @@ fn line_search(
     qs: &mut StarVec<f64>,
 ) -> Option<([f64; 3], f64)> {
     let c = lm.con[v as usize];
-    let dims = ctx.field.grid().dims;
     let mut step = 0.25 * scale;
     let mut hint = 0;
     for _ in 0..HALVINGS {
-        let mut p = [0.0; 3];
-        for a in 0..3 {
-            p[a] = (u[a] + step * d[a]).clamp(0.0, (dims[a] - 1) as f64);
-        }
-        if let Some(p) = place(ctx, c, p) {
+        if let Some(p) = place(ctx, c, stepped(ctx, u, d, step)) {
             if star.qualities_above(ctx.field.to_physical(p), ctx, rise_over(q0), qs, &mut hint) {
                 return Some((p, worst_of(qs)));
             }
