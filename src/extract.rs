@@ -160,6 +160,19 @@ pub struct MeshOutput {
     pub mesh: TetMesh,
     /// Counters.
     pub stats: MeshStats,
+    /// The grid vertices that warping put on a level ([`MeshOptions::warp`]), by grid index.
+    pub snapped: Vec<Snapped>,
+}
+
+/// A grid vertex that warping put on a level, and the volume that moved (the mesh's volume
+/// with the snap less that without it, in index units: cells of volume 1). The quality pass
+/// gives it back ([`crate::improve::improve_meshed`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Snapped {
+    /// Grid index of the vertex.
+    pub vertex: usize,
+    /// Volume the snap added (negative: took).
+    pub volume: f64,
 }
 
 /// Meshes `{alpha < f < beta}` (its closure) of the piecewise-trilinear field on `grid`.
@@ -185,10 +198,11 @@ pub fn mesh_interval_with_progress(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<MeshOutput, MeshError> {
     let mut gather = Gather::default();
-    let stats = mesh_interval_streamed(grid, opts, progress, &mut gather)?;
+    let (stats, snapped) = mesh_in_pool(grid, opts, progress, &mut gather)?;
     Ok(MeshOutput {
         mesh: gather.mesh,
         stats,
+        snapped,
     })
 }
 
@@ -206,6 +220,16 @@ pub fn mesh_interval_streamed(
     progress: &(dyn Fn(usize, usize) + Sync),
     sink: &mut (dyn MeshSink + Send),
 ) -> Result<MeshStats, MeshError> {
+    mesh_in_pool(grid, opts, progress, sink).map(|(stats, _)| stats)
+}
+
+/// [`mesh_interval_streamed`], with the snapped vertices.
+fn mesh_in_pool(
+    grid: &ScalarGrid,
+    opts: &MeshOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<(MeshStats, Vec<Snapped>), MeshError> {
     if opts.alpha.is_nan() || opts.beta.is_nan() || opts.alpha >= opts.beta {
         return Err(MeshError::InvalidInterval {
             alpha: opts.alpha,
@@ -253,7 +277,7 @@ fn run(
     opts: &MeshOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
     sink: &mut (dyn MeshSink + Send),
-) -> Result<MeshStats, MeshError> {
+) -> Result<(MeshStats, Vec<Snapped>), MeshError> {
     let (tied, alpha, beta) = without_near_ties(grid, opts.alpha, opts.beta);
     let grid = tied.as_ref().unwrap_or(grid);
     let [_, _, cz] = grid.cell_dims();
@@ -268,7 +292,8 @@ fn run(
         },
         snaps: Vec::new(),
     };
-    ctx.snaps = snap_vertices(grid, &ctx.planner, &ctx.interval, opts.warp);
+    let warp = snap_vertices(grid, &ctx.planner, &ctx.interval, opts.warp);
+    ctx.snaps = warp.snaps;
     let window = opts.window();
     let mut stats = MeshStats {
         cells_total: grid.num_cells() as u64,
@@ -299,7 +324,7 @@ fn run(
         handed?;
         pending = next;
     }
-    Ok(stats)
+    Ok((stats, warp.snapped))
 }
 
 /// Counts the slabs' cases, welds them and hands the chunks to `sink` in order.

@@ -42,3 +42,113 @@ pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         a[0] * b[1] - a[1] * b[0],
     ]
 }
+
+/// Volume of `{x in tet p : lo <= f(x) <= hi}` for the linear interpolant of the corner values
+/// `f` (either bound may be infinite).
+pub fn interval_volume(p: [[f64; 3]; 4], f: [f64; 4], lo: f64, hi: f64) -> f64 {
+    sublevel_volume(p, f, hi) - sublevel_volume(p, f, lo)
+}
+
+/// Volume of `{x in tet p : f(x) < c}` for the linear interpolant of the corner values `f`:
+/// the corner tet at a lone corner below `c` (or the tet less the one at a lone corner above
+/// it), or, with two on each side, the wedge between them as three tets.
+pub fn sublevel_volume(p: [[f64; 3]; 4], f: [f64; 4], c: f64) -> f64 {
+    let whole = signed_volume(p[0], p[1], p[2], p[3]).abs();
+    // The corners below `c`, then those above (a stable partition).
+    let mut sides = [0, 1, 2, 3];
+    sides.sort_by_key(|&i| f[i] >= c);
+    let n_below = f.iter().filter(|&&x| x < c).count();
+    let (below, above) = sides.split_at(n_below);
+    // The point where the edge from corner `i` to corner `j` crosses `c`, and its fraction.
+    let t = |i: usize, j: usize| (c - f[i]) / (f[j] - f[i]);
+    let at = |i: usize, j: usize| {
+        let s = t(i, j);
+        [0, 1, 2].map(|a| p[i][a] + s * (p[j][a] - p[i][a]))
+    };
+    match (below, above) {
+        ([], _) => 0.0,
+        (_, []) => whole,
+        (&[i], others) => whole * others.iter().map(|&j| t(i, j)).product::<f64>(),
+        (others, &[j]) => whole * (1.0 - others.iter().map(|&i| t(j, i)).product::<f64>()),
+        (&[a, b], &[c0, d]) => {
+            // The prism (a, a-c0, a-d) over (b, b-c0, b-d): its side quads lie in the tet's
+            // faces and on the plane f = c, so it is convex and any staircase of it tiles it.
+            let (a0, a1, a2) = (p[a], at(a, c0), at(a, d));
+            let (b0, b1, b2) = (p[b], at(b, c0), at(b, d));
+            signed_volume(a0, a1, a2, b2).abs()
+                + signed_volume(a0, a1, b1, b2).abs()
+                + signed_volume(a0, b0, b1, b2).abs()
+        }
+        _ => unreachable!("four corners split into below and above"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The divided-difference formula for distinct values: the volume fraction of
+    /// `{f < c}` is the sum over the corners below `c` of `(c - f_i)^3 / prod (f_j - f_i)`.
+    fn fraction_by_formula(f: [f64; 4], c: f64) -> f64 {
+        (0..4)
+            .filter(|&i| f[i] < c)
+            .map(|i| {
+                let den: f64 = (0..4).filter(|&j| j != i).map(|j| f[j] - f[i]).product();
+                (c - f[i]).powi(3) / den
+            })
+            .sum()
+    }
+
+    #[test]
+    fn sublevel_volumes_match_the_divided_difference_formula() {
+        let p = [
+            [0.1, 0.0, 0.2],
+            [1.3, 0.1, 0.0],
+            [0.2, 0.9, 0.1],
+            [0.3, 0.2, 1.1],
+        ];
+        let whole = signed_volume(p[0], p[1], p[2], p[3]).abs();
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut cases = [0usize; 5];
+        for _ in 0..2000 {
+            let f = [rnd(), rnd(), rnd(), rnd()].map(|x| 4.0 * x - 2.0);
+            let c = 3.0 * rnd() - 1.5;
+            cases[f.iter().filter(|&&x| x < c).count()] += 1;
+            let got = sublevel_volume(p, f, c);
+            let want = whole * fraction_by_formula(f, c);
+            assert!(
+                (got - want).abs() <= 1e-9 * whole,
+                "f {f:?} c {c}: {got} vs {want}"
+            );
+            let rest = sublevel_volume(p, f.map(|x| -x), -c);
+            assert!((got + rest - whole).abs() <= 1e-12 * whole.max(1.0));
+        }
+        assert!(cases.iter().all(|&n| n > 50), "every case met: {cases:?}");
+    }
+
+    #[test]
+    fn interval_volume_of_a_linear_field_is_exact() {
+        // f = x on the unit corner tet: {x <= s} has volume (1 - (1 - s)^3) / 6.
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let f = [0.0, 1.0, 0.0, 0.0];
+        let below = |s: f64| (1.0 - (1.0 - s).powi(3)) / 6.0;
+        let v = interval_volume(p, f, 0.25, 0.75);
+        assert!((v - (below(0.75) - below(0.25))).abs() < 1e-15, "{v}");
+        assert_eq!(
+            interval_volume(p, f, f64::NEG_INFINITY, f64::INFINITY),
+            1.0 / 6.0
+        );
+        assert_eq!(interval_volume(p, f, 2.0, 3.0), 0.0);
+    }
+}

@@ -40,7 +40,7 @@ pub use curvilinear::{mesh_curvilinear, CurvilinearError};
 pub use decompose::CellCase;
 pub use extract::{
     mesh_interval, mesh_interval_streamed, mesh_interval_with_progress, MeshError, MeshOptions,
-    MeshOutput, MeshStats, Method,
+    MeshOutput, MeshStats, Method, Snapped,
 };
 pub use grid::{CurvilinearGrid, ScalarGrid};
 pub use mesh::{BoundaryLabel, TetMesh, TriSurface};

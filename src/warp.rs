@@ -41,6 +41,8 @@ use rustc_hash::FxHashMap;
 use crate::clip::{Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
 use crate::decompose::decompose_cell;
 use crate::decompose::plan::{plan_cell, Layout, Planner};
+use crate::extract::Snapped;
+use crate::geom::interval_volume;
 use crate::grid::{corner_offset, ScalarGrid};
 use crate::keys::{local_key, vertex_key, VertexKey, CORNER};
 
@@ -55,15 +57,20 @@ struct Node {
 /// Rounds of snapping (each snaps an independent set of the vertices that pass).
 const ROUNDS: usize = 6;
 
-/// Per grid vertex: [`SNAP_NONE`], [`SNAP_ALPHA`] or [`SNAP_BETA`]. Empty when `eps <= 0`.
-pub(crate) fn snap_vertices(
-    grid: &ScalarGrid,
-    planner: &Planner,
-    iv: &Interval,
-    eps: f64,
-) -> Vec<u8> {
+/// Which grid vertices warping snaps.
+#[derive(Default)]
+pub(crate) struct Warp {
+    /// Per grid vertex: [`SNAP_NONE`], [`SNAP_ALPHA`] or [`SNAP_BETA`]. Empty when nothing
+    /// is snapped.
+    pub snaps: Vec<u8>,
+    /// The snapped vertices and the volume each snap added, by grid index.
+    pub snapped: Vec<Snapped>,
+}
+
+/// The snaps for threshold `eps` (none when `eps <= 0`).
+pub(crate) fn snap_vertices(grid: &ScalarGrid, planner: &Planner, iv: &Interval, eps: f64) -> Warp {
     if eps <= 0.0 || grid.dims.iter().any(|&n| n < 3) {
-        return Vec::new();
+        return Warp::default();
     }
     let cand = candidates(grid, iv, eps);
     let listed: Vec<(usize, u8)> = cand
@@ -80,6 +87,7 @@ pub(crate) fn snap_vertices(
         .filter(|s| near.holds(s.v, level_of(s.snap, iv)))
         .collect();
     let mut snaps = vec![SNAP_NONE; grid.num_vertices()];
+    let mut snapped = Vec::new();
     let star_of: FxHashMap<usize, usize> =
         stars.iter().enumerate().map(|(i, s)| (s.v, i)).collect();
     let mut open: Vec<usize> = (0..stars.len()).collect();
@@ -97,8 +105,17 @@ pub(crate) fn snap_vertices(
         if chosen.is_empty() {
             break;
         }
-        for &s in &chosen {
+        // Stars snapped in one round share no tet, so their volume changes add up.
+        let moved: Vec<f64> = chosen
+            .par_iter()
+            .map(|&s| stars[s].snap_volume(grid, &snaps, iv))
+            .collect();
+        for (&s, volume) in chosen.iter().zip(moved) {
             snaps[stars[s].v] = stars[s].snap;
+            snapped.push(Snapped {
+                vertex: stars[s].v,
+                volume,
+            });
         }
         open.retain(|&s| snaps[stars[s].v] == SNAP_NONE);
         // A star's test reads only the states of its link's grid vertices, and links are
@@ -112,7 +129,8 @@ pub(crate) fn snap_vertices(
         dirty.sort_unstable();
         dirty.dedup();
     }
-    snaps
+    snapped.sort_unstable_by_key(|s| s.vertex);
+    Warp { snaps, snapped }
 }
 
 /// One round: the open stars that pass the test in the current state (`passes`) and have the
@@ -355,6 +373,38 @@ impl Star {
 
     fn regular(&self, snaps: &[u8], iv: &Interval) -> bool {
         self.link.regular(self.snap, self.from_down, snaps, iv)
+    }
+
+    /// The volume (index units) that snapping the centre adds to the interval volume of the
+    /// piecewise-linear field in its star, in state `snaps` (snapped link nodes on their
+    /// level): the interval volume of each tet of the star with the centre's value on the
+    /// level, less that with its own value.
+    fn snap_volume(&self, grid: &ScalarGrid, snaps: &[u8], iv: &Interval) -> f64 {
+        let centre = grid.vertex_ijk(self.v).map(|c| c as f64);
+        // The values the clipper cuts with (`clip::placed`): tied ones moved outward.
+        let own = iv.effective(grid.values.get(self.v));
+        let level = level_of(self.snap, iv);
+        let value = |n: &Node| {
+            let snap = match n.key & 7 == CORNER {
+                true => snaps[(n.key >> 3) as usize],
+                false => SNAP_NONE,
+            };
+            match snap {
+                SNAP_NONE => iv.effective(n.val),
+                _ => level_of(snap, iv),
+            }
+        };
+        self.link
+            .tris
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| &self.link.nodes[i]);
+                let p = [centre, a.pos, b.pos, c.pos];
+                let f = |x: f64| [x, value(a), value(b), value(c)];
+                interval_volume(p, f(level), iv.alpha, iv.beta)
+                    - interval_volume(p, f(own), iv.alpha, iv.beta)
+            })
+            .sum()
     }
 }
 
@@ -759,5 +809,35 @@ mod tests {
             bad.len(),
             &bad[..bad.len().min(10)]
         );
+    }
+
+    #[test]
+    fn snapped_volumes_add_up_to_what_warping_moved() {
+        // Each snap's volume is the change of the interval volume in its star; snaps never
+        // share a tet within a round and later ones see the earlier ones on their level, so
+        // the sum is the warped mesh's volume less the plain one's, to rounding.
+        let (mut snaps, mut moved) = (0, 0.0);
+        for seed in 0..120u64 {
+            for (levels, alpha, beta) in [
+                (0.0, 0.45, f64::INFINITY),
+                (0.0, 0.3, 0.7),
+                (8.0, 3.0, 5.0),
+                (0.0, f64::NEG_INFINITY, 0.5),
+            ] {
+                let g = noise([7, 6, 8], seed, levels);
+                let o = MeshOptions::new(alpha, beta, Method::Ctd);
+                let plain = mesh_interval(&g, &o).unwrap().mesh.volume();
+                let warped = mesh_interval(&g, &o.clone().warp(0.3)).unwrap();
+                let sum: f64 = warped.snapped.iter().map(|s| s.volume).sum();
+                let change = warped.mesh.volume() - plain;
+                assert!(
+                    (sum - change).abs() <= 1e-9 * plain.max(1.0),
+                    "seed {seed} [{alpha}, {beta}]: snaps {sum}, volume change {change}"
+                );
+                snaps += warped.snapped.len();
+                moved += sum.abs();
+            }
+        }
+        assert!(snaps > 1000 && moved > 1.0, "{snaps} snaps moved {moved}");
     }
 }

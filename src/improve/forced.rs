@@ -548,7 +548,7 @@ impl Classifier<'_> {
 mod tests {
     use super::*;
     use crate::improve::quality::summarize;
-    use crate::improve::{improve, DEFAULT_WARP};
+    use crate::improve::{improve_meshed, DEFAULT_WARP};
     use crate::{mesh_interval, MeshOptions, Method};
 
     /// `f` sampled at the integer points of an `n[0] × n[1] × n[2]` grid.
@@ -572,10 +572,10 @@ mod tests {
         opts: &QualityOptions,
     ) -> (TetMesh, ForcedReport) {
         let mo = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
-        let mut mesh = mesh_interval(g, &mo).unwrap().mesh;
-        improve(&mut mesh, g, alpha, beta, opts);
-        let r = classify_forced(&mesh, g, alpha, beta, opts);
-        (mesh, r)
+        let mut out = mesh_interval(g, &mo).unwrap();
+        improve_meshed(&mut out, g, alpha, beta, opts);
+        let r = classify_forced(&out.mesh, g, alpha, beta, opts);
+        (out.mesh, r)
     }
 
     #[test]

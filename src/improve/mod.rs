@@ -28,12 +28,14 @@ pub(crate) mod smooth;
 pub(crate) mod split;
 pub mod stages;
 pub(crate) mod submesh;
+pub(crate) mod warped;
 
 use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::extract::{MeshOutput, Snapped};
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
 use field::Field;
@@ -266,17 +268,39 @@ pub fn improve(
     beta: f64,
     opts: &QualityOptions,
 ) -> ImproveReport {
-    improve_in(mesh, grid, [alpha, beta], opts, Some(submesh::RINGS))
+    improve_in(mesh, grid, [alpha, beta], opts, Some(submesh::RINGS), &[])
+}
+
+/// [`improve`] on the output of [`crate::mesh_interval`]: the volume that its warping moved
+/// ([`crate::MeshOptions::warp`]) is given back too, where the quality allows ([`warped`]).
+pub fn improve_meshed(
+    out: &mut MeshOutput,
+    grid: &ScalarGrid,
+    alpha: f64,
+    beta: f64,
+    opts: &QualityOptions,
+) -> ImproveReport {
+    let (mesh, snapped) = (&mut out.mesh, &out.snapped);
+    improve_in(
+        mesh,
+        grid,
+        [alpha, beta],
+        opts,
+        Some(submesh::RINGS),
+        snapped,
+    )
 }
 
 /// [`improve`], the rounds after the first on a copy within `rings` rings of their work
-/// ([`submesh`]; `None`: on the whole mesh, which gives the same mesh).
+/// ([`submesh`]; `None`: on the whole mesh, which gives the same mesh), owing the volume of
+/// the warping's `snapped` vertices.
 fn improve_in(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,
     [alpha, beta]: [f64; 2],
     opts: &QualityOptions,
     rings: Option<usize>,
+    snapped: &[Snapped],
 ) -> ImproveReport {
     let start = Instant::now();
     let mut report = ImproveReport::default();
@@ -287,6 +311,7 @@ fn improve_in(
     };
     let ladder = stage_targets(opts);
     let mut ctx = context(grid, alpha, beta, opts, start);
+    warped::seed(mesh, &ctx.field, snapped, &mut state.drift);
     for (i, &[lo, hi]) in ladder.iter().enumerate() {
         let stage = QualityOptions {
             min_angle: lo,
@@ -546,7 +571,7 @@ fn run_round(
     // Later rounds find few vertices off their level, all marked as work: the regions
     // project them, so the whole-mesh scan runs once.
     if round == 0 {
-        let moved = project::project_mesh(mesh, ctx);
+        let moved = project::project_mesh(mesh, ctx, p.drift);
         p.report.projected += moved.iter().filter(|&&m| m).count();
         refresh_quality(mesh, ctx, &moved, p.quality);
     }
@@ -714,19 +739,29 @@ fn finish_region(
     opts: &QualityOptions,
     drift: &[f64],
 ) -> (usize, usize) {
-    let splits = if opts.split_sag.is_finite() {
+    let (splits, added) = if opts.split_sag.is_finite() {
         split::split_sagging_edges(lm, ctx, opts.split_sag)
     } else {
-        0
+        (0, 0.0)
     };
     if !opts.restore_volume {
         return (splits, 0);
     }
     // Points added by splits (here, or in the first phase) carry no drift.
-    let mut owed: f64 = (0..lm.u.len())
+    let drifted: f64 = (0..lm.u.len())
         .filter(|&v| lm.is_free(v as u32))
         .filter_map(|v| drift.get(lm.global[v] as usize))
         .sum();
+    // Volume the splits added pays back volume the region lost, and volume they took pays
+    // back volume it gained; beyond that (or the other way) they are a correction towards the
+    // level set, which is kept.
+    let mut owed = if drifted * added < 0.0 && (drifted + added) * drifted > 0.0 {
+        drifted + added
+    } else if drifted * added < 0.0 {
+        0.0
+    } else {
+        drifted
+    };
     (splits, restore::restore_volume(lm, ctx, &mut owed))
 }
 

@@ -16,6 +16,7 @@ use super::constraint::Constraint;
 use super::local::{LocalMesh, StarCorners};
 use super::smooth::{climb, move_vertex};
 use super::Ctx;
+use crate::geom::signed_volume;
 use crate::mesh::TetMesh;
 
 /// Rounds of reverting the moves that invert a tet, at most (then every move is reverted).
@@ -23,9 +24,10 @@ const REVERT_ROUNDS: usize = 8;
 
 /// Projects every level vertex of `mesh` at once (in parallel, independent of the thread
 /// count): all moves are computed from the old positions, then the moves of vertices of tets
-/// that would not stay positive are reverted until no tet is inverted. Returns, per point,
-/// whether it moved.
-pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> Vec<bool> {
+/// that would not stay positive are reverted until no tet is inverted. Adds to each moved
+/// vertex's `drift` the volume its move added (over its tets, the others where they were).
+/// Returns, per point, whether it moved.
+pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx, drift: &mut [f64]) -> Vec<bool> {
     let labels = mesh.vertex_label_bits();
     let dims = ctx.field.grid().dims;
     // Per point: where a level vertex off its level would go.
@@ -74,12 +76,43 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx) -> Vec<bool> {
             .filter(|&t| mesh.tets[t as usize].iter().any(|&v| reverted[v as usize]))
             .collect();
     }
+    add_moved_volume(mesh, &around_moved, &target, &moved, drift);
     for (v, t) in target.iter().enumerate() {
         if moved[v] {
             mesh.points[v] = t.expect("moved vertices have a target");
         }
     }
     moved
+}
+
+/// Adds to the `drift` of each `moved` corner of the tets `around` the volume its move to its
+/// `target` adds to them, the other corners where they are.
+fn add_moved_volume(
+    mesh: &TetMesh,
+    around: &[u32],
+    target: &[Option<[f64; 3]>],
+    moved: &[bool],
+    drift: &mut [f64],
+) {
+    let added: Vec<(u32, f64)> = around
+        .par_iter()
+        .flat_map_iter(|&t| {
+            let tet = mesh.tets[t as usize];
+            let old = tet.map(|v| mesh.points[v as usize]);
+            let v0 = signed_volume(old[0], old[1], old[2], old[3]);
+            (0..4)
+                .filter_map(move |i| Some((i, target[tet[i] as usize]?)))
+                .filter(move |&(i, _)| moved[tet[i] as usize])
+                .map(move |(i, x)| {
+                    let mut p = old;
+                    p[i] = x;
+                    (tet[i], signed_volume(p[0], p[1], p[2], p[3]) - v0)
+                })
+        })
+        .collect();
+    for (v, d) in added {
+        drift[v as usize] += d;
+    }
 }
 
 /// Per point: is it on an `alpha` (`beta`) face but farther than the tolerance from that

@@ -149,7 +149,7 @@ struct Candidate {
 
 /// Splits the boundary edges of the region whose chord sags by more than `min_sag` of their
 /// length, most sagging first, where that keeps every new tet above its floor, and only as far
-/// as the region's volume needs. Returns the splits.
+/// as the region's volume needs. Returns the splits and the volume they added.
 ///
 /// Which volume: had every such edge been split, the region would have gained the sum of
 /// their gains (a convex part gains, a concave one loses). Where a split's new tets would be
@@ -158,13 +158,13 @@ struct Candidate {
 /// noisy 256³ field gained 0.5 %, which its plain mesh did not lack). So only edges that add
 /// volume on the side of the sum are split, while each brings the region closer to it. The
 /// edges are those of the region as it was: the halves of a split edge are not split again.
-pub fn split_sagging_edges(lm: &mut LocalMesh, ctx: &Ctx, min_sag: f64) -> usize {
+pub fn split_sagging_edges(lm: &mut LocalMesh, ctx: &Ctx, min_sag: f64) -> (usize, f64) {
     let planned: Vec<Split> = candidates(lm, ctx, min_sag)
         .into_iter()
         .filter_map(|c| plan(lm, ctx, c.a, c.b))
         .collect();
     let mut owed: f64 = planned.iter().map(|s| s.gain).sum();
-    let mut n = 0;
+    let (mut n, mut added) = (0, 0.0);
     for (i, first) in planned.into_iter().enumerate() {
         if i % 64 == 63 && ctx.out_of_time() {
             break;
@@ -178,11 +178,12 @@ pub fn split_sagging_edges(lm: &mut LocalMesh, ctx: &Ctx, min_sag: f64) -> usize
         };
         if (owed - s.gain).abs() < owed.abs() && s.fits(lm, ctx) {
             owed -= s.gain;
+            added += s.gain;
             apply(lm, ctx, s);
             n += 1;
         }
     }
-    n
+    (n, added)
 }
 
 /// The boundary edges of the region on a level set with both ends movable on it and one end
@@ -381,7 +382,7 @@ mod tests {
                 .filter(|&t| lm.alive[t])
                 .map(|t| lm.q[t])
                 .fold(ctx.target, f64::min);
-            splits += split_sagging_edges(lm, &ctx, 0.03);
+            splits += split_sagging_edges(lm, &ctx, 0.03).0;
             let alive: Vec<usize> = (0..lm.tets.len()).filter(|&t| lm.alive[t]).collect();
             for &t in &alive {
                 let q = ctx.quality(lm.corners(lm.tets[t]));

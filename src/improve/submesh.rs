@@ -296,7 +296,7 @@ mod tests {
         for opts in [QualityOptions::default(), staged] {
             let run = |rings| {
                 let mut m = mesh.clone();
-                let r = improve_in(&mut m, &grid, [-10.0, 2.2], &opts, rings);
+                let r = improve_in(&mut m, &grid, [-10.0, 2.2], &opts, rings, &[]);
                 (m, r)
             };
             let (whole, report) = run(None);

@@ -9,11 +9,11 @@ use std::time::Duration;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tptd::facts::{FactsSink, Tee};
 use tptd::improve::forced::{classify_forced, ForcedReport};
-use tptd::improve::{improve, ImproveReport, QualityOptions};
+use tptd::improve::{improve_meshed, ImproveReport, QualityOptions};
 use tptd::io::SpilledMesh;
 use tptd::{
     mesh_interval_streamed, mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput,
-    MeshStats, ScalarGrid, TetMesh,
+    MeshStats, ScalarGrid,
 };
 
 use crate::run::Job;
@@ -81,11 +81,11 @@ pub(crate) fn mesh_streamed_with_progress(
     result
 }
 
-/// Runs the quality pass on `mesh` (in `job`'s thread pool), with a spinner on stderr unless
-/// `quiet` or stderr is not a terminal; then, if `classify`, lists the tets left below the
-/// floor with their reasons.
+/// Runs the quality pass on `out`'s mesh (in `job`'s thread pool), with a spinner on stderr
+/// unless `quiet` or stderr is not a terminal; then, if `classify`, lists the tets left below
+/// the floor with their reasons.
 pub(crate) fn improve_with_progress(
-    mesh: &mut TetMesh,
+    out: &mut MeshOutput,
     grid: &ScalarGrid,
     job: &Job,
     opts: &QualityOptions,
@@ -105,8 +105,9 @@ pub(crate) fn improve_with_progress(
         .opts
         .threads
         .and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
-    let work = |mesh: &mut TetMesh| {
-        let r = improve(mesh, grid, alpha, beta, opts);
+    let work = |out: &mut MeshOutput| {
+        let r = improve_meshed(out, grid, alpha, beta, opts);
+        let mesh = &out.mesh;
         pb.set_message(format!(
             "giving a reason for each element below {}°",
             opts.forced_floor
@@ -115,8 +116,8 @@ pub(crate) fn improve_with_progress(
         (r, f)
     };
     let report = match pool {
-        Some(pool) => pool.install(|| work(mesh)),
-        None => work(mesh),
+        Some(pool) => pool.install(|| work(out)),
+        None => work(out),
     };
     pb.finish_and_clear();
     report

@@ -507,8 +507,7 @@ fn improve_mesh(
     };
     let t = Instant::now();
     let classify = !cli.no_analysis;
-    let (pass, forced) =
-        improve_with_progress(&mut out.mesh, grid, job, &opts, cli.quiet, classify);
+    let (pass, forced) = improve_with_progress(out, grid, job, &opts, cli.quiet, classify);
     let section = QualitySection {
         target_degrees: [opts.min_angle, opts.max_angle],
         boundary_collapse_ratio: Some(opts.boundary_collapse_ratio).filter(|r| r.is_finite()),
