@@ -312,6 +312,8 @@ fn improve_in(
     let ladder = stage_targets(opts);
     let mut ctx = context(grid, alpha, beta, opts, start);
     warped::seed(mesh, &ctx.field, snapped, &mut state.drift);
+    // The volume of the mesh before warping, which the restoration aims at.
+    let plain = mesh.volume() - state.drift.iter().sum::<f64>();
     for (i, &[lo, hi]) in ladder.iter().enumerate() {
         let stage = QualityOptions {
             min_angle: lo,
@@ -353,6 +355,9 @@ fn improve_in(
             // the splits added).
             drift.iter_mut().for_each(|d| *d = 0.0);
             drift.resize(mesh.points.len(), 0.0);
+            if opts.restore_volume {
+                restore_residual(mesh, &ctx, opts, plain, &mut state, &mut report);
+            }
         }
     }
     // `ctx` is now at the requested targets (the last stage's).
@@ -730,6 +735,44 @@ fn finish_stage(
         }
     }
     lap(&mut report.stage_seconds.finish, &mut clock);
+}
+
+/// The share of the plain volume that the mesh may still be off by after the last stage
+/// before [`restore_residual`] spreads it over the whole boundary (half of what issue 6
+/// allows, 0.5 %).
+const RESIDUAL: f64 = 2.5e-3;
+
+/// Where the last stage left the mesh's volume off `plain` by more than [`RESIDUAL`] of it
+/// (the regions around the drift could not give it all back where it arose: their tets
+/// were at the target), books the rest evenly on every level vertex and restores once more,
+/// without splits, around all of them. The full-size volumes of the benchmarks end within
+/// 0.15 % and never get here; the small analytic domains (a boundary of a few thousand
+/// nodes) do.
+fn restore_residual(
+    mesh: &mut TetMesh,
+    ctx: &Ctx,
+    opts: &QualityOptions,
+    plain: f64,
+    state: &mut PassState,
+    report: &mut ImproveReport,
+) {
+    let residual = mesh.volume() - plain;
+    if residual.abs() <= RESIDUAL * plain.abs() || ctx.out_of_time() {
+        return;
+    }
+    let labels = mesh.vertex_label_bits();
+    let level = |v: usize| labels[v] & 3 != 0;
+    let n = (0..mesh.points.len()).filter(|&v| level(v)).count();
+    for (v, d) in state.drift.iter_mut().enumerate() {
+        *d = if level(v) { residual / n as f64 } else { 0.0 };
+    }
+    let no_splits = QualityOptions {
+        split_sag: f64::INFINITY,
+        ..opts.clone()
+    };
+    let PassState { quality, drift, .. } = state;
+    finish_stage(mesh, ctx, &no_splits, drift, quality, report);
+    drift.iter_mut().for_each(|d| *d = 0.0);
 }
 
 /// [`finish_stage`] in one region: returns its splits and its restoring moves.
