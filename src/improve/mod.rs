@@ -349,8 +349,15 @@ fn improve_in(
             break;
         }
         if opts.restore_volume || opts.split_sag.is_finite() {
+            // The drift is given back only where the mesh's volume is off the plain one by
+            // more than RESIDUAL: splits alone otherwise.
+            let off = (mesh.volume() - plain).abs() > RESIDUAL * plain.abs();
+            let finish = QualityOptions {
+                restore_volume: opts.restore_volume && off,
+                ..opts.clone()
+            };
             let PassState { quality, drift, .. } = &mut state;
-            finish_stage(mesh, &ctx, opts, drift, quality, &mut report);
+            finish_stage(mesh, &ctx, &finish, drift, quality, &mut report);
             // The drift is given back: the next stage starts from none (and from the points
             // the splits added).
             drift.iter_mut().for_each(|d| *d = 0.0);
@@ -737,17 +744,16 @@ fn finish_stage(
     lap(&mut report.stage_seconds.finish, &mut clock);
 }
 
-/// The share of the plain volume that the mesh may still be off by after the last stage
-/// before [`restore_residual`] spreads it over the whole boundary (half of what issue 6
+/// The share of the plain volume that the mesh may be off by without the restoration
+/// (before the last stage), or after it without [`restore_residual`] (half of what issue 6
 /// allows, 0.5 %).
 const RESIDUAL: f64 = 2.5e-3;
 
 /// Where the last stage left the mesh's volume off `plain` by more than [`RESIDUAL`] of it
 /// (the regions around the drift could not give it all back where it arose: their tets
 /// were at the target), books the rest evenly on every level vertex and restores once more,
-/// without splits, around all of them. The full-size volumes of the benchmarks end within
-/// 0.15 % and never get here; the small analytic domains (a boundary of a few thousand
-/// nodes) do.
+/// without splits, around all of them. The full-size volumes of the benchmarks never get
+/// here; small analytic domains (a boundary of a few thousand nodes) do.
 fn restore_residual(
     mesh: &mut TetMesh,
     ctx: &Ctx,
