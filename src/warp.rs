@@ -54,6 +54,16 @@ struct Node {
     val: f64,
 }
 
+impl Node {
+    /// Its snap in state `snaps` ([`SNAP_NONE`] for a node that is not a grid vertex).
+    fn state(&self, snaps: &[u8]) -> u8 {
+        match self.key & 7 == CORNER {
+            true => snaps[(self.key >> 3) as usize],
+            false => SNAP_NONE,
+        }
+    }
+}
+
 /// Rounds of snapping (each snaps an independent set of the vertices that pass).
 const ROUNDS: usize = 6;
 
@@ -384,15 +394,9 @@ impl Star {
         // The values the clipper cuts with (`clip::placed`): tied ones moved outward.
         let own = iv.effective(grid.values.get(self.v));
         let level = level_of(self.snap, iv);
-        let value = |n: &Node| {
-            let snap = match n.key & 7 == CORNER {
-                true => snaps[(n.key >> 3) as usize],
-                false => SNAP_NONE,
-            };
-            match snap {
-                SNAP_NONE => iv.effective(n.val),
-                _ => level_of(snap, iv),
-            }
+        let value = |n: &Node| match n.state(snaps) {
+            SNAP_NONE => iv.effective(n.val),
+            snap => level_of(snap, iv),
         };
         self.link
             .tris
@@ -513,11 +517,7 @@ impl Link {
         self.nodes
             .iter()
             .map(|n| {
-                let state = if n.key & 7 == CORNER {
-                    snaps[(n.key >> 3) as usize]
-                } else {
-                    SNAP_NONE
-                };
+                let state = n.state(snaps);
                 let beyond = match snap {
                     SNAP_ALPHA => n.val >= iv.beta,
                     _ => n.val <= iv.alpha,

@@ -127,6 +127,11 @@ fn improve_with_threads(
     pool.install(|| improve_meshed(out, grid, a, b, q));
 }
 
+/// The volume of `after` relative to that of `before`, less one.
+fn volume_change(before: &TetMesh, after: &TetMesh) -> f64 {
+    total_volume(after) / total_volume(before) - 1.0
+}
+
 fn mesh_and_improve(field: &Field, alpha: f64, beta: f64) -> Outcome {
     mesh_and_improve_with(field, alpha, beta, &QualityOptions::default())
 }
@@ -154,7 +159,7 @@ fn mesh_and_improve_with(field: &Field, alpha: f64, beta: f64, q: &QualityOption
         r.flips,
         r.smoothed,
         r.seconds,
-        100.0 * (total_volume(&after) / total_volume(&before) - 1.0)
+        100.0 * volume_change(&before, &after)
     );
     Outcome {
         before,
@@ -376,8 +381,7 @@ fn volume_restoration_moves_only_level_nodes_and_lowers_no_element() {
             mesh_and_improve_with(&f, a, b, &off),
             mesh_and_improve_with(&f, a, b, &on),
         );
-        let plain = total_volume(&with.before);
-        let change = |m: &TetMesh| (total_volume(m) / plain - 1.0).abs();
+        let change = |m: &TetMesh| volume_change(&with.before, m).abs();
         assert!(
             change(&with.after) < 0.6 * change(&without.after),
             "{name}: volume change {} with restoration, {} without",
@@ -632,8 +636,7 @@ fn the_volume_warping_moved_is_given_back() {
     assert!(!out.snapped.is_empty(), "nothing was snapped");
     let q = QualityOptions::default();
     tptd::improve::improve(&mut out.mesh, &grid, f64::NEG_INFINITY, 0.0, &q);
-    let plain = total_volume(&with.before);
-    let change = |m: &TetMesh| (total_volume(m) / plain - 1.0).abs();
+    let change = |m: &TetMesh| volume_change(&with.before, m).abs();
     assert!(
         change(&with.after) < 0.3 * change(&out.mesh),
         "volume change {} with the warping's volume owed, {} without",
@@ -651,7 +654,7 @@ fn volume_left_after_the_last_stage_is_spread_over_the_boundary() {
     // restored once more, -0.01 % (both measured with `tptd-mesh`).
     let f = genus3(20);
     let o = mesh_and_improve(&f, f64::NEG_INFINITY, 0.0);
-    let change = total_volume(&o.after) / total_volume(&o.before) - 1.0;
+    let change = volume_change(&o.before, &o.after);
     assert!(
         change.abs() < 2.5e-3,
         "genus 3, 20³: volume {:+.3} %",

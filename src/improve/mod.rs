@@ -804,12 +804,12 @@ fn finish_region(
     // Volume the splits added pays back volume the region lost, and volume they took pays
     // back volume it gained; beyond that (or the other way) they are a correction towards the
     // level set, which is kept.
-    let mut owed = if drifted * added < 0.0 && (drifted + added) * drifted > 0.0 {
-        drifted + added
-    } else if drifted * added < 0.0 {
-        0.0
-    } else {
+    let mut owed = if drifted * added >= 0.0 {
         drifted
+    } else if drifted < 0.0 {
+        (drifted + added).min(0.0)
+    } else {
+        (drifted + added).max(0.0)
     };
     (splits, restore::restore_volume(lm, ctx, &mut owed))
 }
