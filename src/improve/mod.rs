@@ -795,11 +795,15 @@ fn restore_residual(
     }
 }
 
-/// Books `residual` evenly on every level vertex of `mesh` (`drift`, per point).
+/// Books `residual` evenly on every level vertex of `mesh` (`drift`, per point; left as it
+/// is when there is none).
 fn spread_residual(mesh: &TetMesh, residual: f64, drift: &mut [f64]) {
     let labels = mesh.vertex_label_bits();
     let level = |v: usize| labels[v] & 3 != 0;
     let n = (0..mesh.points.len()).filter(|&v| level(v)).count();
+    if n == 0 {
+        return;
+    }
     for (v, d) in drift.iter_mut().enumerate() {
         *d = if level(v) { residual / n as f64 } else { 0.0 };
     }
