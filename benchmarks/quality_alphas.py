@@ -2,7 +2,7 @@
 """`tptd-mesh --quality` on the full MNI152 volumes at several isovalues, each checked
 against its plain mesh and independently of the mesher.
 
-  python3 benchmarks/quality_alphas.py                # all intervals (about 5 minutes)
+  python3 benchmarks/quality_alphas.py                # all intervals (about 3 minutes)
   python3 benchmarks/quality_alphas.py --only wm      # the white matter's only
 
 For each interval: the plain run and the `--quality` run (`-j 2 --no-critical-check`, each a

@@ -773,11 +773,13 @@ fn restore_residual(
     state: &mut PassState,
     report: &mut ImproveReport,
 ) {
-    for (i, rung) in RESIDUAL_RUNGS.into_iter().enumerate() {
+    let rungs = if last && opts.split_sag.is_finite() {
+        &RESIDUAL_RUNGS[..]
+    } else {
+        &RESIDUAL_RUNGS[..1]
+    };
+    for &rung in rungs {
         let split_sag = rung * opts.split_sag;
-        if i > 0 && (!last || split_sag.is_infinite()) {
-            return;
-        }
         let residual = mesh.volume() - plain;
         if residual.abs() <= RESIDUAL * plain.abs() || ctx.out_of_time() {
             return;

@@ -6,9 +6,9 @@
 //! moves the vertex from its grid position onto the trilinear level set, which gives some of
 //! it back. On the 20³ genus-3 solid of the benchmarks (tubes 1.2 voxels thick) the snaps
 //! took 4.8 % of the volume and the projection gave 0.7 % back; on the MNI white matter the
-//! two nearly cancel (−0.42 %, +0.42 %). Both are the warping's doing, not a correction of the boundary, so they
-//! are owed per snapped vertex like the volume its collapses and moves add
-//! ([`super::restore`] gives it back at the end where the quality allows).
+//! two nearly cancel (−0.42 %, +0.42 %). Both are the warping's doing, not a correction of
+//! the boundary, so they are owed per snapped vertex like the volume its collapses and moves
+//! add ([`super::restore`] gives it back at the end where the quality allows).
 
 use rayon::prelude::*;
 
