@@ -247,6 +247,7 @@ def tet_stats(P, T):
     below = dict.fromkeys(MIN_BELOW, 0)
     above = dict.fromkeys(MAX_ABOVE, 0)
     neg = zero = 0
+    vol = 0.0
     for s in range(0, len(T), CHUNK):
         t = T[s:s + CHUNK]
         ang = dihedral_angles(P, t)
@@ -260,13 +261,14 @@ def tet_stats(P, T):
         v = signed_volumes(P, t)
         neg += int((v < 0).sum())
         zero += int((v == 0).sum())
+        vol += float(v.sum()) / 6.0
     m = len(T)
     cum = np.cumsum(hist)
     pct = {f"p{q}": float(np.searchsorted(cum, q / 100.0 * cum[-1]) * HIST_BIN + HIST_BIN / 2) for q in PCTS} if m else {}
     return {"tets": m, "points": int(len(P)), "min": lo if m else None, "max": hi if m else None, **pct,
             **{f"pct_min_below_{b}": 100.0 * below[b] / max(m, 1) for b in MIN_BELOW},
             **{f"pct_max_above_{b}": 100.0 * above[b] / max(m, 1) for b in MAX_ABOVE},
-            "negative_volume": neg, "zero_volume": zero,
+            "negative_volume": neg, "zero_volume": zero, "volume": vol,
             "hist_1deg": hist.reshape(180, -1).sum(axis=1).tolist()}
 
 
@@ -553,6 +555,14 @@ def bench_interval(args, dom, k, iv, with_quality):
     return rows
 
 
+def add_volume_change(rows):
+    """Each successful row's total volume against our plain mesh of the same interval, in %."""
+    base = next((r for r in rows if r["tool"] == "ours" and r["status"] == "ok"), None)
+    for r in rows:
+        if base and r["status"] == "ok" and base.get("volume"):
+            r["volume_change_pct"] = 100.0 * (r["volume"] - base["volume"]) / abs(base["volume"])
+
+
 # ----------------------------------------------------------------------------
 # report
 # ----------------------------------------------------------------------------
@@ -586,6 +596,10 @@ def fmt(x, spec, dash="–"):
     return dash if x is None else format(x, spec)
 
 
+def pct(x):
+    return "–" if x is None else f"{x:+.2f} %"
+
+
 def render_md(p):
     m = p["machine"]
     L = ["# Element quality: tptd-mesh vs TetGen and fTetWild\n",
@@ -597,18 +611,20 @@ def render_md(p):
                  f"{m['loadavg_end'][0]:.1f} at end on {m['nproc']} CPUs; times are indicative only.\n")
     L.append("Dihedral angles in degrees over all six edges of every tet; `% <10°` / `% <15°` = share of tets "
              "whose smallest dihedral angle is below 10° / 15°, `% >155°` = share whose largest is above 155°. "
+             "`volume vs ours` = total volume against our plain mesh of the same interval. "
              "Time = wall seconds of a fresh process (ours: read + mesh + analysis + .msh write; TetGen: read "
              "+ mesh + write), for fTetWild the `tetrahedralize` call alone. TetGen and fTetWild mesh the "
              "boundary surface of *our* (baseline) mesh.\n")
-    L.append("| domain | interval | tool | tets | min° | max° | % <10° | % <15° | % >155° | time s | note |")
-    L.append("|---|---|---|--:|--:|--:|--:|--:|--:|--:|---|")
+    L.append("| domain | interval | tool | tets | min° | max° | % <10° | % <15° | % >155° | volume vs ours | time s | note |")
+    L.append("|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|")
     for r in p["rows"]:
         if r["status"] == "ok":
             L.append(f"| {r['domain']} | {r['interval']} | {r['tool']} | {r['tets']:,} | {r['min']:.2f} | "
                      f"{r['max']:.2f} | {r['pct_min_below_10']:.2f} | {r['pct_min_below_15']:.2f} | "
-                     f"{r['pct_max_above_155']:.2f} | {r['wall']:.2f} | {note(r)} |")
+                     f"{r['pct_max_above_155']:.2f} | {pct(r.get('volume_change_pct'))} | "
+                     f"{r['wall']:.2f} | {note(r)} |")
         else:
-            L.append(f"| {r['domain']} | {r['interval']} | {r['tool']} | **{r['status']}** | | | | | | "
+            L.append(f"| {r['domain']} | {r['interval']} | {r['tool']} | **{r['status']}** | | | | | | | "
                      f"{r['wall']:.2f} | {md_escape(r['detail'][:160])} |")
     L.append("\n## Domains\n")
     L.append("| domain | grid | intervals | ours: Betti (b0, b1, b2) | boundary triangles (cavities) | what |")
@@ -767,7 +783,9 @@ def main():
             continue
         domains.append(dom)
         for k, iv in enumerate(dom["intervals"]):
-            rows += bench_interval(args, dom, k, iv, with_quality)
+            iv_rows = bench_interval(args, dom, k, iv, with_quality)
+            add_volume_change(iv_rows)
+            rows += iv_rows
     machine["loadavg_end"] = os.getloadavg()
     edge = f"edge_length_abs={args.ftetwild_edge:g}" if args.ftetwild_edge > 0 else "edge_length_fac=0.05"
     payload = {"command": command, "machine": machine, "binary": args.bin, "has_quality": with_quality,
