@@ -32,10 +32,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 OUT = os.path.join(HERE, "out", "quality_alphas")
 sys.path.insert(0, HERE)
-from quality_full import nilearn_file  # noqa: E402
+from quality import signed_volumes  # noqa: E402
+from quality_full import T1_FILE as T1, WM_FILE as WM, nilearn_file  # noqa: E402
 
-WM = "mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz"
-T1 = "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz"
 # (key, file, alpha, beta); None is an open end.
 INTERVALS = [
     ("wm", WM, 63.5, None),
@@ -63,10 +62,7 @@ def run(binary, path, alpha, beta, tag, quality):
 
 def inverted(points, tets):
     """Tets whose signed volume is not positive."""
-    a = points[tets[:, 0]]
-    six_v = np.einsum("ij,ij->i", np.cross(points[tets[:, 1]] - a, points[tets[:, 2]] - a),
-                      points[tets[:, 3]] - a)
-    return int((six_v <= 0).sum())
+    return int((signed_volumes(points, tets) <= 0).sum())
 
 
 def off_level(path, points, f, levels):

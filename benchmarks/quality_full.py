@@ -37,12 +37,15 @@ def nilearn_file(name):
     return os.path.join(os.path.dirname(nilearn.__file__), "datasets", "data", name)
 
 
+# The MNI152 2009a volumes that nilearn ships.
+WM_FILE = "mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz"
+T1_FILE = "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz"
+
 VOLUMES = {
-    "wm": ("MNI152 white matter", lambda: nilearn_file(
-        "mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz"), ["--alpha", "127.5"], "[127.5, inf)"),
-    "t1": ("MNI152 T1", lambda: nilearn_file(
-        "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz"),
-        ["--alpha", "151.5", "--beta", "201.5"], "[151.5, 201.5]"),
+    "wm": ("MNI152 white matter", lambda: nilearn_file(WM_FILE), ["--alpha", "127.5"],
+           "[127.5, inf)"),
+    "t1": ("MNI152 T1", lambda: nilearn_file(T1_FILE),
+           ["--alpha", "151.5", "--beta", "201.5"], "[151.5, 201.5]"),
     "noisy": ("noisy distance field 256³", lambda: os.path.join(HERE, "data", "noisy_256.npy"),
               ["--alpha", "-2", "--beta", "2"], "[-2, 2]"),
 }
