@@ -5,8 +5,9 @@
 //!   to `axis` whose smallest corner is the grid vertex), or [`BODY`]` + n` (body saddle `n` of
 //!   the cell whose smallest corner is the grid vertex).
 //! * A [`PointKey`] names an output point: a decomposition vertex, or the cut of a
-//!   decomposition edge by level alpha (0) or beta (1). Its order (used to pick fan apexes)
-//!   is a function of the identity only, so every cell and thread agrees on it.
+//!   decomposition edge by level alpha (0) or beta (1). Its order (the clipper's last
+//!   tie-break when it picks cone and fan apexes) is a function of the identity only, so every
+//!   cell and thread agrees on it.
 
 /// Identity of a decomposition vertex.
 pub type VertexKey = u64;
