@@ -585,7 +585,7 @@ fn stuck_vertices_are_moved_by_compass_search() {
 fn every_target_stage_polishes_its_stuck_regions() {
     // Stages above the default do not retry stuck regions (that made them worse), but each
     // stage's last round polishes them with the compass search. The benchmark's 26³ shell at
-    // 25°/145° ended at 19.36° without it, 24.34° with it (measured).
+    // 25°/145° ended at 19.36° without it, 24.38° with it (measured).
     let f = benchmark_shell(26);
     let o = improve_at_targets("26³ shell at 25°/145°", &f, (-0.6, 0.6), (25.0, 145.0));
     assert!(
@@ -671,9 +671,9 @@ fn a_small_convex_part_gets_its_volume_back_by_splits() {
 fn volume_left_after_the_last_stage_is_spread_over_the_boundary() {
     // The benchmark's genus-3 solid at 23³ (tubes 1.4 voxels in radius): the regions around
     // where the volume was lost gave back all they could with their tets at the target and
-    // left the mesh 0.57 % short of its plain volume; spread over every boundary node and
+    // left the mesh 0.58 % short of its plain volume; spread over every boundary node and
     // restored once more, -0.17 % (both measured). At 20³ (tubes 1.2 voxels) the mesh still
-    // ends 0.62 % short (README, *Against the peers*).
+    // ends 0.41 % short (README, *The clipper's point order*).
     check_sublevel_volume("genus 3, 23³", &genus3(23), 2.5e-3);
 }
 

@@ -201,7 +201,7 @@ pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> VertexFaces {
 
 /// The face of `tet` opposite corner `skip` (unoriented).
 #[inline]
-pub(crate) fn face_without(tet: [u32; 4], skip: usize) -> [u32; 3] {
+fn face_without(tet: [u32; 4], skip: usize) -> [u32; 3] {
     let mut f = [0; 3];
     let mut n = 0;
     for (i, &v) in tet.iter().enumerate() {

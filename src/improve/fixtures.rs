@@ -46,26 +46,11 @@ pub fn wavy_torus_mesh(grid: &ScalarGrid) -> (TetMesh, Ctx<'_>) {
 /// in `phases`.
 pub fn wavy_torus_regions<'a>(grid: &'a ScalarGrid, phases: &[u32]) -> (Ctx<'a>, Vec<LocalMesh>) {
     let (mesh, ctx) = wavy_torus_mesh(grid);
-    let regions = regions_of(&mesh, &ctx, phases);
-    (ctx, regions)
-}
-
-/// The wavy torus improved with the default options, and its regions as in
-/// [`wavy_torus_regions`] (the pass's collapses and flips leave tets that its raw mesh has
-/// not, such as tets with two faces on one level set).
-pub fn improved_wavy_torus_regions(grid: &ScalarGrid, phases: &[u32]) -> Vec<LocalMesh> {
-    let (mut mesh, ctx) = wavy_torus_mesh(grid);
-    let (alpha, beta) = WAVY_TORUS_INTERVAL;
-    super::improve(&mut mesh, grid, alpha, beta, &QualityOptions::default());
-    regions_of(&mesh, &ctx, phases)
-}
-
-/// The regions of every vertex of `mesh` in the slabs of each phase in `phases`.
-fn regions_of(mesh: &TetMesh, ctx: &Ctx, phases: &[u32]) -> Vec<LocalMesh> {
     let work = vec![true; mesh.points.len()];
-    let quality = tet_qualities(mesh, ctx);
-    phases
+    let quality = tet_qualities(&mesh, &ctx);
+    let regions = phases
         .iter()
-        .flat_map(|&p| extract_regions(mesh, &work, &quality, ctx, p).0)
-        .collect()
+        .flat_map(|&p| extract_regions(&mesh, &work, &quality, &ctx, p).0)
+        .collect();
+    (ctx, regions)
 }

@@ -105,7 +105,7 @@ fn replace_if_better(lm: &mut LocalMesh, ctx: &Ctx, old: &[u32], new: &[[u32; 4]
 
 /// The face of `tet` opposite corner `i`, ordered so that `[tet[i], f0, f1, f2]` is an even
 /// permutation of `tet`.
-pub(crate) fn opposite_face(tet: [u32; 4], i: usize) -> [u32; 3] {
+fn opposite_face(tet: [u32; 4], i: usize) -> [u32; 3] {
     const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
     FACES[i].map(|k| tet[k])
 }

@@ -19,7 +19,6 @@ mod fixtures;
 pub(crate) mod flip;
 pub mod forced;
 pub(crate) mod local;
-pub(crate) mod peel;
 pub(crate) mod project;
 pub mod quality;
 pub(crate) mod restore;
@@ -135,8 +134,6 @@ pub struct ImproveReport {
     pub flips: usize,
     /// Edges removed (4 to 7 tets around an edge replaced; `edge_removal.rs`).
     pub edge_removals: usize,
-    /// Boundary tets peeled off (two faces on one level set; `peel.rs`).
-    pub peels: usize,
     /// Vertex moves by smoothing.
     pub smoothed: usize,
     /// Level-vertex moves that gave volume back ([`QualityOptions::restore_volume`]).
@@ -189,7 +186,6 @@ impl ImproveReport {
         self.collapses += o.collapses;
         self.flips += o.flips;
         self.edge_removals += o.edge_removals;
-        self.peels += o.peels;
         self.smoothed += o.smoothed;
         self.restored += o.restored;
         self.merged_off_level += o.merged_off_level;

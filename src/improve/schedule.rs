@@ -5,7 +5,6 @@ use super::collapse::{apply_collapse, best_collapse, evaluate_merge, star_floor}
 use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
 use super::local::{LocalMesh, TetOp};
-use super::peel::try_peel;
 use super::project::{project_levels, untangle_around};
 use super::search::search_vertex;
 use super::smooth::smooth_vertex;
@@ -254,22 +253,16 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
 /// 2-3 flips of the faces, 3-2 flips and removals of the edges of bad tets.
 fn flip_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usize {
     let mut removals = 0;
-    let mut peels = 0;
     let n = for_each_bad_tet(lm, ctx, TetOp::Flip, |lm, t| match flip_tet(lm, ctx, t) {
         Some(Flipped::EdgeRemoved) => {
             removals += 1;
             true
         }
-        Some(Flipped::Peeled) => {
-            peels += 1;
-            true
-        }
         Some(Flipped::Flip) => true,
         None => false,
     });
-    report.flips += n - removals - peels;
+    report.flips += n - removals;
     report.edge_removals += removals;
-    report.peels += peels;
     n
 }
 
@@ -279,12 +272,10 @@ enum Flipped {
     Flip,
     /// An edge removal.
     EdgeRemoved,
-    /// A boundary tet peeled off ([`try_peel`]).
-    Peeled,
 }
 
 /// The first improving 2-3 flip of a face of `t`, else 3-2 flip of an edge of `t`, else
-/// removal of an edge of `t` with 4 to 7 tets around it, else peeling `t` off the boundary.
+/// removal of an edge of `t` with 4 to 7 tets around it.
 fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
     let tet = lm.tets[t as usize];
     if (0..4).any(|i| try_flip23(lm, ctx, t, i)) {
@@ -294,13 +285,10 @@ fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
     if edges.iter().any(|&(p, q)| try_flip32(lm, ctx, t, p, q)) {
         return Some(Flipped::Flip);
     }
-    if edges
+    edges
         .iter()
         .any(|&(p, q)| try_remove_edge(lm, ctx, t, p, q))
-    {
-        return Some(Flipped::EdgeRemoved);
-    }
-    try_peel(lm, t).then_some(Flipped::Peeled)
+        .then_some(Flipped::EdgeRemoved)
 }
 
 /// The corners of the alive tets below the target, ascending.

@@ -133,15 +133,14 @@ fn quality_lines(s: &mut String, r: &Report) {
     let p = &q.pass;
     let _ = writeln!(
         s,
-        "  quality   target [{}, {}] deg: {} collapses, {} flips, {} edge removals, {} peels, \
-         {} edge splits, {} moves ({} giving volume back), {} nodes onto the level sets ({} left off) in \
+        "  quality   target [{}, {}] deg: {} collapses, {} flips, {} edge removals, {} edge \
+         splits, {} moves ({} giving volume back), {} nodes onto the level sets ({} left off) in \
          {} rounds{}",
         q.target_degrees[0],
         q.target_degrees[1],
         p.collapses,
         p.flips,
         p.edge_removals,
-        p.peels,
         p.splits,
         p.smoothed + p.restored,
         p.restored,
