@@ -13,8 +13,10 @@
 //! outward by a per-run constant ([`Interval`]): the field stays linear on every tet, so each
 //! clipped piece stays convex, no output point coincides with another and no tet is flat.
 
+use std::cmp::Reverse;
+
 use crate::geom::signed_volume;
-use crate::keys::{cut_point, vertex_point, PointKey, VertexKey};
+use crate::keys::{cut_point, split, vertex_point, PointKey, VertexKey};
 use crate::mesh::BoundaryLabel;
 
 /// Fraction of the smallest gap between a level and the data values by which tied values are
@@ -467,14 +469,15 @@ fn flat(pts: &[ClipPoint], iv: &Interval) -> bool {
 /// each face fanned from its own first point; boundary faces also go out as triangles.
 #[inline]
 fn cone_and_fan(pts: &[ClipPoint], faces: &[Poly], iv: &Interval, sink: &mut impl ClipSink) {
-    let v0 = (0..pts.len())
-        .min_by_key(|&i| rank(&pts[i], iv))
-        .unwrap_or(0);
+    // Each point is ranked once (a piece has at most 12).
+    let mut ranks = [(false, Reverse(0), 0); 12];
+    for (r, p) in ranks.iter_mut().zip(pts) {
+        *r = rank(p, iv);
+    }
+    let v0 = (0..pts.len()).min_by_key(|&i| ranks[i]).unwrap_or(0);
     for poly in faces {
         let verts = &poly.v[..poly.n];
-        let r = (0..poly.n)
-            .min_by_key(|&i| rank(&pts[verts[i]], iv))
-            .unwrap_or(0);
+        let r = (0..poly.n).min_by_key(|&i| ranks[verts[i]]).unwrap_or(0);
         let has_v0 = verts.contains(&v0);
         let inside_sign = poly.label.map(|_| inside_side(pts, verts));
         for s in 1..poly.n - 1 {
@@ -510,12 +513,12 @@ fn cone_and_fan(pts: &[ClipPoint], faces: &[Poly], iv: &Interval, sink: &mut imp
 /// level surface; it leaves about a quarter fewer tets below 15° than coning by key (noisy
 /// 256³ field, T1 band: README, *Where the bad tets come from*).
 #[inline]
-fn rank(p: &ClipPoint, iv: &Interval) -> (bool, std::cmp::Reverse<u64>, PointKey) {
-    let is_cut = crate::keys::split(p.key).1.is_some();
+fn rank(p: &ClipPoint, iv: &Interval) -> (bool, Reverse<u64>, PointKey) {
+    let is_cut = split(p.key).1.is_some();
     let depth = (p.val - iv.alpha).abs().min((p.val - iv.beta).abs());
     // Non-negative (or infinite, for a one-sided interval), so the bits order as the values.
     let depth = if depth.is_nan() { 0 } else { depth.to_bits() };
-    (is_cut, std::cmp::Reverse(depth), p.key)
+    (is_cut, Reverse(depth), p.key)
 }
 
 /// For a boundary face: the signed volume over the face's first three points of the piece's

@@ -333,7 +333,7 @@ fn a_boundary_collapse_limit_keeps_the_invariants_and_raises_the_shell() {
     // Unlimited, collapses leave long boundary edges across the 1.2-voxel layer; limited to
     // three times the mean edge at the removed node (the default) they do not. The shell of
     // the benchmarks at 31³, measured: 13.07° -> 15.00° (also 38³: 14.53° -> 15.00°; but
-    // 40³: 15.00° -> 13.61°, and most sizes from 20³ to 40³ end at 15.00° either way).
+    // 40³: 15.00° -> 13.61°; every other size from 20³ to 37³ ends at the same minimum).
     // Without the edge splits, which change the shell's last elements either way.
     let f = benchmark_shell(31);
     let unlimited = QualityOptions {

@@ -29,7 +29,11 @@ pub fn wavy_torus() -> ScalarGrid {
 
 /// The wavy torus meshed with warping (no pass) and its context with the default options.
 pub fn wavy_torus_mesh(grid: &ScalarGrid) -> (TetMesh, Ctx<'_>) {
-    let (alpha, beta) = WAVY_TORUS_INTERVAL;
+    wavy_torus_mesh_at(grid, WAVY_TORUS_INTERVAL)
+}
+
+/// The wavy torus's mesh of the interval `[alpha, beta]`, as in [`wavy_torus_mesh`].
+pub fn wavy_torus_mesh_at(grid: &ScalarGrid, (alpha, beta): (f64, f64)) -> (TetMesh, Ctx<'_>) {
     let opts = MeshOptions::new(alpha, beta, Method::Ctd).warp(DEFAULT_WARP);
     let mesh = mesh_interval(grid, &opts).unwrap().mesh;
     let ctx = context(

@@ -260,9 +260,8 @@ fn touches_copy(mesh: &TetMesh, t: u32, local: &[u32]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::improve::fixtures::{wavy_torus, wavy_torus_mesh};
-    use crate::improve::{improve_in, tet_qualities, QualityOptions, DEFAULT_WARP};
-    use crate::{MeshOptions, Method};
+    use crate::improve::fixtures::{wavy_torus, wavy_torus_mesh, wavy_torus_mesh_at};
+    use crate::improve::{improve_in, tet_qualities, QualityOptions};
 
     #[test]
     fn a_copy_written_back_unchanged_leaves_the_mesh_as_it_was() {
@@ -289,9 +288,8 @@ mod tests {
         // One ring makes the work reach the rim often: the copy is cut again each time. At
         // this interval the default pass needs a second round.
         let grid = wavy_torus();
-        let interval = [-10.0, 1.6];
-        let o = MeshOptions::new(interval[0], interval[1], Method::Ctd).warp(DEFAULT_WARP);
-        let mesh = crate::mesh_interval(&grid, &o).unwrap().mesh;
+        let (alpha, beta) = (-10.0, 1.6);
+        let (mesh, _) = wavy_torus_mesh_at(&grid, (alpha, beta));
         let staged = QualityOptions {
             min_angle: 25.0,
             max_angle: 145.0,
@@ -300,7 +298,7 @@ mod tests {
         for opts in [QualityOptions::default(), staged] {
             let run = |rings| {
                 let mut m = mesh.clone();
-                let r = improve_in(&mut m, &grid, interval, &opts, rings, &[]);
+                let r = improve_in(&mut m, &grid, [alpha, beta], &opts, rings, &[]);
                 (m, r)
             };
             let (whole, report) = run(None);
