@@ -511,7 +511,7 @@ fn cone_and_fan(pts: &[ClipPoint], faces: &[Poly], iv: &Interval, sink: &mut imp
 /// shared face fan it the same way. Coning from the vertex deepest inside the interval, and
 /// fanning from it, keeps the tets away from the flat ones whose four corners lie near the
 /// level surface; it leaves about a quarter fewer tets below 15° than coning by key (noisy
-/// 256³ field, T1 band: README, *Where the bad tets come from*).
+/// 256³ field, T1 band: docs/QUALITY-LOG.md, *Where the bad tets come from*).
 #[inline]
 fn rank(p: &ClipPoint, iv: &Interval) -> (bool, Reverse<u64>, PointKey) {
     let is_cut = split(p.key).1.is_some();

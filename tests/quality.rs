@@ -308,7 +308,7 @@ fn higher_targets_climb_in_stages_and_never_end_below_a_lower_one() {
     // 12.5° against 15.0°). In stages (15°, then 2.5° higher at a time), each higher target
     // ends at least where the lower one did. Higher targets coarsen more, and the splits and
     // the volume restoration may not take a tet below the target, so the volume may move by
-    // more than the default's 0.5 % (measured here: the shell -0.52 % at 20°; README).
+    // more than the default's 0.5 % (measured here: the shell -0.52 % at 20°; docs/QUALITY-LOG.md).
     for (name, f, alpha, beta) in [
         ("shell", sphere(26, 8.3), -0.6, 0.6),
         ("torus", torus(36, 10.0, 4.2), f64::NEG_INFINITY, 0.0),
@@ -413,7 +413,7 @@ fn boundary_splits_give_a_thin_tube_its_volume_back() {
     // which is within 0.1 % of the trilinear volume; with them 0.55 % below (measured). That
     // is still more than issue 6 allows (0.5 %): splits that would make poor tets are not
     // made. The benchmark's genus-3 solid (tubes of the same radius) goes from -1.08 % to
-    // -0.32 % (README).
+    // -0.32 % (docs/QUALITY-LOG.md).
     let f = torus(28, 8.0, 1.9);
     let truth = reference::sample(&f, 12, f64::NEG_INFINITY, 0.0).volume();
     let no_splits = QualityOptions {
@@ -673,7 +673,7 @@ fn volume_left_after_the_last_stage_is_spread_over_the_boundary() {
     // where the volume was lost gave back all they could with their tets at the target and
     // left the mesh 0.58 % short of its plain volume; spread over every boundary node and
     // restored once more, -0.17 % (both measured). At 20³ (tubes 1.2 voxels) the mesh still
-    // ends 0.41 % short (README, *The clipper's point order*).
+    // ends 0.41 % short (docs/QUALITY-LOG.md, *The clipper's point order*).
     check_sublevel_volume("genus 3, 23³", &genus3(23), 2.5e-3);
 }
 

@@ -71,12 +71,12 @@ pub struct QualityOptions {
     /// coarsen the boundary: a thin layer is left with long, flat elements, and a convex
     /// boundary shrinks (the surface is inscribed in the level set). The default, 3, brings
     /// the thin shell of the benchmarks from 14.2° to 15.0° and leaves no `unexplained`
-    /// element on the noisy 256³ field (README, *Element quality*).
+    /// element on the noisy 256³ field (docs/QUALITY-LOG.md).
     pub boundary_collapse_ratio: f64,
     /// Give back the volume that a region's collapses and moves added or took, by moving its
     /// level vertices along their level sets where no tet falls below the target
     /// (`improve/restore.rs`). Without it, the small analytic domains of `tests/quality.rs`
-    /// shrink or grow by up to 0.6 % (README, *Element quality*).
+    /// shrink or grow by up to 0.6 % (docs/QUALITY-LOG.md).
     pub restore_volume: bool,
     /// A boundary edge on a level set whose chord sags from the level set by more than this
     /// fraction of its length is split at the end, with the new node on the level set, where
@@ -326,7 +326,7 @@ fn improve_in(
         state.quality = tet_qualities(mesh, &ctx);
         // Stuck regions are retried in the single pass and in a ladder's first stage (the
         // same pass) only: in later stages, which regions end stuck at one stage changes
-        // where the next starts, and the stages got worse (README, *Element quality*).
+        // where the next starts, and the stages got worse (docs/QUALITY-LOG.md).
         let rounds = Rounds {
             max: opts.max_rounds,
             retry_last: i == 0,

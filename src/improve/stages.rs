@@ -8,7 +8,7 @@
 //! shell: 12.5° for `--min-angle 20`, against 15.0° by default). In stages, a ladder's first
 //! stages are those of every lower target on the same line and no stage lowers the worst tet
 //! in its own measure; a higher target ended at least where a lower one did on every domain
-//! measured (README, *Higher targets*). Giving the volume back after every stage, rather than
+//! measured (docs/QUALITY-LOG.md, *Higher targets*). Giving the volume back after every stage, rather than
 //! once after the last, gave the higher minimum on 35 and the lower one on 15 of 72 runs, and
 //! the smaller volume change on 56 and the larger on 9 (the domains of
 //! `benchmarks/quality.py` at N = 24, 28, 36, 40 and targets 20°, 25°, 30°;
