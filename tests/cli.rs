@@ -495,6 +495,27 @@ fn quality_output_is_identical_for_one_and_two_threads() {
 }
 
 #[test]
+fn quality_knobs_without_quality_are_refused() {
+    // A knob of the quality pass without --quality would be silently ignored: refused instead,
+    // naming the flag it needs, before anything is written.
+    let dir = tempfile::tempdir().unwrap();
+    for args in [
+        ["--min-angle", "20"],
+        ["--max-angle", "150"],
+        ["--quality-time", "5"],
+        ["--boundary-collapse-ratio", "2"],
+        ["--split-sag", "0.05"],
+    ] {
+        let mut all = vec!["--demo", "-o", "x.vtu"];
+        all.extend(args);
+        let o = run_in(dir.path(), &all);
+        assert_eq!(o.status.code(), Some(2), "{all:?}");
+        assert!(stderr(&o).contains("--quality"), "{}", stderr(&o));
+        assert!(listing(dir.path()).is_empty());
+    }
+}
+
+#[test]
 fn quality_rejects_impossible_angles() {
     let dir = tempfile::tempdir().unwrap();
     for args in [

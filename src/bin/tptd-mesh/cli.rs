@@ -95,30 +95,30 @@ pub(crate) struct Cli {
     /// Target smallest dihedral angle of --quality, in degrees. Targets above the defaults
     /// (15 and 155) are reached in stages of at most 2.5 degrees, each undone if it leaves the
     /// worst element worse; they take longer, coarsen the mesh and may move the volume more
-    #[arg(long, value_name = "DEG", default_value_t = 15.0, value_parser = parse_min_angle)]
+    #[arg(long, value_name = "DEG", default_value_t = 15.0, value_parser = parse_min_angle, requires = "quality")]
     pub(crate) min_angle: f64,
 
     /// Target largest dihedral angle of --quality, in degrees
-    #[arg(long, value_name = "DEG", default_value_t = 155.0, value_parser = parse_max_angle)]
+    #[arg(long, value_name = "DEG", default_value_t = 155.0, value_parser = parse_max_angle, requires = "quality")]
     pub(crate) max_angle: f64,
 
     /// Time budget of --quality in seconds: the pass stops when it runs out (the mesh is valid
     /// then, but how far it got depends on the machine)
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, requires = "quality")]
     pub(crate) quality_time: Option<f64>,
 
     /// With --quality, merge two boundary nodes only along an edge shorter than R times the
     /// mean edge length at the node removed, or `inf` for no limit. The limit keeps thin
     /// layers such as shells finer, so their elements stay better shaped; without it convex
     /// boundaries get coarser
-    #[arg(long, value_name = "R", default_value = "3", value_parser = parse_ratio)]
+    #[arg(long, value_name = "R", default_value = "3", value_parser = parse_ratio, requires = "quality")]
     pub(crate) boundary_collapse_ratio: f64,
 
     /// With --quality, split a boundary edge whose chord sags from the level set by more than
     /// S times its length, putting the new node on the level set (where no element gets worse
     /// than the target), or `inf` for never. Nodes on a curved level set inscribe the surface
     /// in it: thin tubes lose volume without the splits
-    #[arg(long, value_name = "S", default_value = "0.03", value_parser = parse_ratio)]
+    #[arg(long, value_name = "S", default_value = "0.03", value_parser = parse_ratio, requires = "quality")]
     pub(crate) split_sag: f64,
 
     /// Mesh a generated sample (two vessels a third of a voxel apart) with the interval
