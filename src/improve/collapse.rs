@@ -51,6 +51,15 @@ pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> 
     link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(new)
 }
 
+/// Whether the collapse of `a` into `b` is legal (the constraints, the link condition and
+/// [`QualityOptions::boundary_collapse_ratio`](super::QualityOptions)) and leaves every tet
+/// positive, whatever their quality: for operations that judge it after further moves
+/// ([`super::composite`]).
+pub fn legal_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> bool {
+    collapse_quality(lm, ctx, a, b, 0.0, ctx.boundary_collapse_ratio).is_some()
+        && link_condition(lm, a, b, &lm.edge_tets(a, b))
+}
+
 /// The worst quality in the star of `v` (at least 0): what a collapse of `v` must beat.
 pub fn star_floor(lm: &LocalMesh, v: u32) -> f64 {
     lm.star[v as usize]

@@ -11,6 +11,7 @@
 //! Everything runs in a fixed order, so the output does not depend on the number of threads.
 
 pub(crate) mod collapse;
+mod composite;
 pub(crate) mod constraint;
 pub(crate) mod edge_removal;
 pub mod field;

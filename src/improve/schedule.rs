@@ -2,6 +2,7 @@
 //! topology changes where moves are not enough, then smoothing again).
 
 use super::collapse::{apply_collapse, best_collapse, evaluate_merge, star_floor};
+use super::composite::{collapse_then_move, worst};
 use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
 use super::local::{LocalMesh, TetOp};
@@ -84,7 +85,47 @@ fn polish(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
         }
         sweeps(lm, ctx, report, SWEEPS_AFTER_UNTANGLING);
     }
+    if stuck(lm, ctx) {
+        composites(lm, ctx, report);
+    }
 }
+
+/// [`collapse_then_move`] on the tets below the target, worst first, while one is kept (at
+/// most [`COMPOSITE_TRIES`] tets), each kept one followed by short sweeps.
+fn composites(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
+    let mut tried = 0;
+    while tried < COMPOSITE_TRIES {
+        let bad: Vec<u32> = bad_tets(lm, ctx).collect();
+        let mut kept = false;
+        for t in bad {
+            if tried == COMPOSITE_TRIES || ctx.out_of_time() {
+                return;
+            }
+            tried += 1;
+            let settle = |trial: &mut LocalMesh| {
+                sweeps(
+                    trial,
+                    ctx,
+                    &mut ImproveReport::default(),
+                    SWEEPS_AFTER_UNTANGLING,
+                )
+            };
+            if lm.alive[t as usize] && collapse_then_move(lm, ctx, t, settle) {
+                report.collapses += 1;
+                sweeps(lm, ctx, report, SWEEPS_AFTER_UNTANGLING);
+                kept = true;
+                break;
+            }
+        }
+        if !kept {
+            return;
+        }
+    }
+}
+
+/// Bad tets a stuck region tries [`collapse_then_move`] on at most (each try copies the
+/// region).
+const COMPOSITE_TRIES: usize = 8;
 
 /// A region left with more tets below the target than this is not retried: its tets are
 /// stuck for reasons of their own (mostly near critical values, as on the noisy 256³ field
@@ -95,15 +136,6 @@ const RETRY_MAX_BELOW: usize = 16;
 /// The smoothing variants ([`Ctx::steepest`], [`Ctx::centroid`]) a stuck region is retried
 /// with, in order.
 const RETRIES: [(bool, bool); 2] = [(true, false), (true, true)];
-
-/// The worst quality of the region's alive tets, and how many are below `target`.
-fn worst(lm: &LocalMesh, target: f64) -> (f64, usize) {
-    (0..lm.tets.len())
-        .filter(|&t| lm.alive[t])
-        .fold((f64::INFINITY, 0), |(w, n), t| {
-            (w.min(lm.q[t]), n + usize::from(lm.q[t] < target))
-        })
-}
 
 /// [`improve_local`] once.
 fn improve_once(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
