@@ -592,7 +592,12 @@ fn run_round(
     lap(&mut p.report.stage_seconds.project, &mut clock);
     for phase in first_phase..2 {
         clock = Instant::now();
-        let work = needs_work(mesh, ctx, p.quality, round > 0);
+        let mut work = needs_work(mesh, ctx, p.quality, round > 0);
+        if ctx.polish {
+            // The polishing round frees the neighbours of the work too, so that its
+            // composite collapses may merge into them.
+            grow(mesh, &mut work);
+        }
         lap(&mut p.report.stage_seconds.mark, &mut clock);
         if ctx
             .pinned
@@ -864,6 +869,18 @@ fn refresh_quality(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], quality: &mut [f64
 
 /// Per point: is it a corner of a tet below the target (by `quality`), or a level vertex off
 /// its level (with `ring`, or a corner of a tet around one, so that its neighbours can move)?
+/// Marks every corner of a tet that has a marked corner.
+fn grow(mesh: &TetMesh, work: &mut [bool]) {
+    let seed = work.to_vec();
+    for t in &mesh.tets {
+        if t.iter().any(|&v| seed[v as usize]) {
+            for &v in t {
+                work[v as usize] = true;
+            }
+        }
+    }
+}
+
 fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<bool> {
     let off = project::off_level_points(mesh, ctx);
     let mut work = off.clone();
