@@ -506,12 +506,8 @@ fn quality_knobs_without_quality_are_refused() {
         ["--boundary-collapse-ratio", "2"],
         ["--split-sag", "0.05"],
     ] {
-        let mut all = vec!["--demo", "-o", "x.vtu"];
-        all.extend(args);
-        let o = run_in(dir.path(), &all);
-        assert_eq!(o.status.code(), Some(2), "{all:?}");
-        assert!(stderr(&o).contains("--quality"), "{}", stderr(&o));
-        assert!(listing(dir.path()).is_empty());
+        let all = [&["--demo", "-o", "x.vtu"][..], &args[..]].concat();
+        assert_refused(dir.path(), &all, "--quality");
     }
 }
 
@@ -525,11 +521,15 @@ fn quality_rejects_impossible_angles() {
         ["--boundary-collapse-ratio", "0"],
         ["--boundary-collapse-ratio", "nan"],
     ] {
-        let mut all = vec!["--demo", "-o", "x.vtu", "--quality"];
-        all.extend(args);
-        let o = run_in(dir.path(), &all);
-        assert_eq!(o.status.code(), Some(2), "{all:?}");
-        assert!(stderr(&o).contains(args[0]), "{}", stderr(&o));
-        assert!(listing(dir.path()).is_empty());
+        let all = [&["--demo", "-o", "x.vtu", "--quality"][..], &args[..]].concat();
+        assert_refused(dir.path(), &all, args[0]);
     }
+}
+
+/// `args` exit with status 2, an error naming `needle`, and nothing written in `dir`.
+fn assert_refused(dir: &Path, args: &[&str], needle: &str) {
+    let o = run_in(dir, args);
+    assert_eq!(o.status.code(), Some(2), "{args:?}");
+    assert!(stderr(&o).contains(needle), "{}", stderr(&o));
+    assert!(listing(dir).is_empty());
 }

@@ -560,10 +560,7 @@ fn regions_left_below_the_target_are_retried_with_other_smoothing() {
     // without the retries, 15.00° after the first; at 24³ 14.84° without, 14.84° after the
     // first, 15.00° after the second.
     for n in [36, 24] {
-        let f = benchmark_shell(n);
-        let o = mesh_and_improve(&f, -0.6, 0.6);
-        let name = format!("{n}³ shell");
-        check_invariants(&name, &f, -0.6, 0.6, &o);
+        let (name, o) = default_shell(n);
         assert!(o.min_angle >= 15.0 - 1e-6, "{name}: {}°", o.min_angle);
     }
 }
@@ -605,10 +602,7 @@ fn a_collapse_judged_after_its_moves_frees_stuck_caps() {
     // neighbour of its corners, which the polishing round's regions free (one ring more):
     // 13.61° without that ring, 15.00° with it (measured).
     for n in [30, 40] {
-        let f = benchmark_shell(n);
-        let o = mesh_and_improve(&f, -0.6, 0.6);
-        let name = format!("{n}³ shell");
-        check_invariants(&name, &f, -0.6, 0.6, &o);
+        let (name, o) = default_shell(n);
         check_angles(&name, &o, FLOOR);
     }
     let f = benchmark_shell(28);
@@ -618,6 +612,16 @@ fn a_collapse_judged_after_its_moves_frees_stuck_caps() {
         "28³ shell at 25°/145°: {}°",
         o.min_angle
     );
+}
+
+/// [`benchmark_shell`] at `n`³ through the default pass, its invariants checked; with its
+/// name.
+fn default_shell(n: usize) -> (String, Outcome) {
+    let f = benchmark_shell(n);
+    let o = mesh_and_improve(&f, -0.6, 0.6);
+    let name = format!("{n}³ shell");
+    check_invariants(&name, &f, -0.6, 0.6, &o);
+    (name, o)
 }
 
 /// The thin shell of the benchmarks (`benchmarks/data/quality/shell_N.npy`): a sphere of

@@ -6,7 +6,8 @@
 //! thin shell of the benchmark the worst tet is such a cap: no move of a corner frees it,
 //! and the collapse of its shortest edge alone leaves 10.5°; docs/QUALITY-LOG.md). Stellar
 //! judges such sequences as one; so does this: on a copy of the region, the collapse of an
-//! edge of the bad tet (either way; legal and positive, whatever its quality), then the
+//! edge at a corner of the bad tet (either way; legal and positive, whatever its quality;
+//! the polishing round frees the corners' neighbours for it, `improve::grow`), then the
 //! smoothing and the compass search of the survivor and of the corners of the tets below
 //! the target around it, kept only if the region's worst tet ends higher, or as high with
 //! fewer tets below the target. It copies the region per try, so it runs only where the
@@ -57,34 +58,25 @@ const EDGES: usize = 16;
 /// length (ties by ids), at most [`EDGES`].
 fn candidate_edges(lm: &LocalMesh, t: u32) -> Vec<(u32, u32)> {
     let tet = lm.tets[t as usize];
-    let len = |a: u32, b: u32| {
+    let mut pairs: Vec<(u32, u32)> = tet
+        .iter()
+        .flat_map(|&a| lm.star[a as usize].iter().map(move |&s| (a, s)))
+        .flat_map(|(a, s)| lm.tets[s as usize].map(|b| (a.min(b), a.max(b))))
+        .filter(|&(lo, hi)| lo != hi)
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    let len = |(a, b): (u32, u32)| {
         let d = sub(lm.x[a as usize], lm.x[b as usize]);
         dot(d, d)
     };
-    let mut edges: Vec<(bool, f64, u32, u32)> = Vec::new();
-    for &a in &tet {
-        for &s in &lm.star[a as usize] {
-            for b in lm.tets[s as usize] {
-                if b != a {
-                    let (lo, hi) = (a.min(b), a.max(b));
-                    let own = tet.contains(&b);
-                    edges.push((!own, len(lo, hi), lo, hi));
-                }
-            }
-        }
-    }
-    edges.sort_by(|x, y| {
-        (x.0, x.2, x.3)
-            .cmp(&(y.0, y.2, y.3))
-            .then(x.1.total_cmp(&y.1))
-    });
-    edges.dedup_by(|x, y| (x.2, x.3) == (y.2, y.3));
-    edges.sort_by(|x, y| {
-        x.0.cmp(&y.0)
-            .then(x.1.total_cmp(&y.1))
-            .then((x.2, x.3).cmp(&(y.2, y.3)))
-    });
-    edges.into_iter().take(EDGES).map(|e| (e.2, e.3)).collect()
+    // Not the tet's own edge first, then by length, then by ids.
+    let mut edges: Vec<(bool, f64, (u32, u32))> = pairs
+        .into_iter()
+        .map(|e| (!(tet.contains(&e.0) && tet.contains(&e.1)), len(e), e))
+        .collect();
+    edges.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)).then(x.2.cmp(&y.2)));
+    edges.into_iter().take(EDGES).map(|e| e.2).collect()
 }
 
 /// Whether `after` (worst quality, tets below the target) beats `before`.

@@ -869,18 +869,6 @@ fn refresh_quality(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], quality: &mut [f64
 
 /// Per point: is it a corner of a tet below the target (by `quality`), or a level vertex off
 /// its level (with `ring`, or a corner of a tet around one, so that its neighbours can move)?
-/// Marks every corner of a tet that has a marked corner.
-fn grow(mesh: &TetMesh, work: &mut [bool]) {
-    let seed = work.to_vec();
-    for t in &mesh.tets {
-        if t.iter().any(|&v| seed[v as usize]) {
-            for &v in t {
-                work[v as usize] = true;
-            }
-        }
-    }
-}
-
 fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<bool> {
     let off = project::off_level_points(mesh, ctx);
     let mut work = off.clone();
@@ -892,4 +880,16 @@ fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<boo
         }
     }
     work
+}
+
+/// Marks every corner of a tet that has a marked corner.
+fn grow(mesh: &TetMesh, work: &mut [bool]) {
+    let seed = work.to_vec();
+    for t in &mesh.tets {
+        if t.iter().any(|&v| seed[v as usize]) {
+            for &v in t {
+                work[v as usize] = true;
+            }
+        }
+    }
 }

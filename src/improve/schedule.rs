@@ -93,33 +93,28 @@ fn polish(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
 /// [`collapse_then_move`] on the tets below the target, worst first, while one is kept (at
 /// most [`COMPOSITE_TRIES`] tets), each kept one followed by short sweeps.
 fn composites(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
+    let settle = |trial: &mut LocalMesh| {
+        let mut ignored = ImproveReport::default();
+        sweeps(trial, ctx, &mut ignored, SWEEPS_AFTER_UNTANGLING)
+    };
     let mut tried = 0;
-    while tried < COMPOSITE_TRIES {
+    'next: while tried < COMPOSITE_TRIES {
         let bad: Vec<u32> = bad_tets(lm, ctx).collect();
-        let mut kept = false;
         for t in bad {
             if tried == COMPOSITE_TRIES || ctx.out_of_time() {
                 return;
             }
+            if !lm.alive[t as usize] {
+                continue;
+            }
             tried += 1;
-            let settle = |trial: &mut LocalMesh| {
-                sweeps(
-                    trial,
-                    ctx,
-                    &mut ImproveReport::default(),
-                    SWEEPS_AFTER_UNTANGLING,
-                )
-            };
-            if lm.alive[t as usize] && collapse_then_move(lm, ctx, t, settle) {
+            if collapse_then_move(lm, ctx, t, settle) {
                 report.collapses += 1;
                 sweeps(lm, ctx, report, SWEEPS_AFTER_UNTANGLING);
-                kept = true;
-                break;
+                continue 'next;
             }
         }
-        if !kept {
-            return;
-        }
+        return;
     }
 }
 
