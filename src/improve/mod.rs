@@ -328,9 +328,12 @@ fn improve_in(
         // Stuck regions are retried in the single pass and in a ladder's first stage (the
         // same pass) only: in later stages, which regions end stuck at one stage changes
         // where the next starts, and the stages got worse (docs/QUALITY-LOG.md).
+        // A second polishing round only in the stages above the default: on the default
+        // pass it cost the noisy field a tenth more time (docs/QUALITY-LOG.md).
         let rounds = Rounds {
             max: opts.max_rounds,
             retry_last: i == 0,
+            polish_twice: i > 0,
             rings,
         };
         if ladder.len() == 1 {
@@ -394,12 +397,14 @@ struct PassState {
 }
 
 /// How many rounds a pass (or a stage) runs at most, whether the last one retries its stuck
-/// regions ([`Ctx::retry_stuck`]), and within how many rings of their work the rounds after
-/// the first copy the mesh ([`submesh`]; `None`: they run on the whole mesh).
+/// regions ([`Ctx::retry_stuck`]), whether a second polishing round follows it with the slab
+/// boundaries back in place (`polish_twice`), and within how many rings of their work the
+/// rounds after the first copy the mesh ([`submesh`]; `None`: they run on the whole mesh).
 #[derive(Clone, Copy)]
 struct Rounds {
     max: usize,
     retry_last: bool,
+    polish_twice: bool,
     rings: Option<usize>,
 }
 
@@ -408,15 +413,18 @@ struct Rounds {
 /// The last round moves the slab boundaries by half a slab: what is still below the target
 /// or off its level then has mostly been stuck at a slab boundary, with corners across it
 /// frozen in every round; its stuck regions are retried (with `retry_last`), and the tets it
-/// leaves below the target polished ([`Ctx::polish`]). A level vertex still off its level after that gets one more round
-/// with the boundaries back where they were. The rounds after the first run on a copy of the
-/// part of the mesh they can reach ([`submesh`]).
+/// leaves below the target polished ([`Ctx::polish`]). With `polish_twice`, a second
+/// polishing round follows with the boundaries back where they were: a bad tet whose corners
+/// straddle a shifted boundary has them all free there. A level vertex still off its level
+/// after that gets one more round with the boundaries back where they were. The rounds after
+/// the first run on a copy of the part of the mesh they can reach ([`submesh`]).
 fn run_rounds(
     mesh: &mut TetMesh,
     ctx: &Ctx,
     Rounds {
         max: rounds,
         retry_last,
+        polish_twice,
         rings,
     }: Rounds,
     state: &mut PassState,
@@ -443,6 +451,13 @@ fn run_rounds(
         if !run_round_on(mesh, (&mut sub, rings), at, round, state, report) {
             break;
         }
+    }
+    if polish_twice && rounds > 1 && !ctx.out_of_time() {
+        let unshifted = Ctx {
+            slab_offset: 0.0,
+            ..shifted
+        };
+        run_round_on(mesh, (&mut sub, rings), &unshifted, rounds, state, report);
     }
     let off = match &sub {
         Some(s) => any_off_level(&s.mesh, ctx),
