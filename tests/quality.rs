@@ -572,10 +572,8 @@ fn stuck_vertices_are_moved_by_compass_search() {
     // ended at 13.82° (up to 155.5°) with smoothing, flips, collapses and the retries alone;
     // a compass search over the corners of the tets left below the target takes it to
     // 15.00° and 154.98° (measured).
-    let f = benchmark_shell(20);
-    let o = mesh_and_improve(&f, -0.6, 0.6);
-    check_invariants("20³ shell", &f, -0.6, 0.6, &o);
-    check_angles("20³ shell", &o, FLOOR);
+    let (name, o) = default_shell(20);
+    check_angles(&name, &o, FLOOR);
 }
 
 #[test]
@@ -583,13 +581,8 @@ fn every_target_stage_polishes_its_stuck_regions() {
     // Stages above the default do not retry stuck regions (that made them worse), but each
     // stage's last round polishes them with the compass search. The benchmark's 26³ shell at
     // 25°/145° ended at 19.36° without it, 24.38° with it (measured).
-    let f = benchmark_shell(26);
-    let o = improve_at_targets("26³ shell at 25°/145°", &f, (-0.6, 0.6), (25.0, 145.0));
-    assert!(
-        o.min_angle >= 23.0,
-        "26³ shell at 25°/145°: {}°",
-        o.min_angle
-    );
+    let (name, o) = shell_at_targets(26, (25.0, 145.0));
+    assert!(o.min_angle >= 23.0, "{name}: {}°", o.min_angle);
 }
 
 #[test]
@@ -605,13 +598,8 @@ fn a_collapse_judged_after_its_moves_frees_stuck_caps() {
         let (name, o) = default_shell(n);
         check_angles(&name, &o, FLOOR);
     }
-    let f = benchmark_shell(28);
-    let o = improve_at_targets("28³ shell at 25°/145°", &f, (-0.6, 0.6), (25.0, 145.0));
-    assert!(
-        o.min_angle >= 23.0,
-        "28³ shell at 25°/145°: {}°",
-        o.min_angle
-    );
+    let (name, o) = shell_at_targets(28, (25.0, 145.0));
+    assert!(o.min_angle >= 23.0, "{name}: {}°", o.min_angle);
 }
 
 #[test]
@@ -621,9 +609,16 @@ fn stages_above_the_default_polish_twice() {
     // default a second polishing round follows with the boundaries back in place. The
     // benchmark's 32³ shell at 20°/150° ended at 18.72° with one polishing round (one cap
     // left), 20.00° with two (measured).
-    let f = benchmark_shell(32);
-    let o = improve_at_targets("32³ shell at 20°/150°", &f, (-0.6, 0.6), (20.0, 150.0));
-    check_angles("32³ shell at 20°/150°", &o, (20.0 - 1e-9, 150.0 + 1e-9));
+    let (name, o) = shell_at_targets(32, (20.0, 150.0));
+    check_angles(&name, &o, (20.0 - 1e-9, 150.0 + 1e-9));
+}
+
+/// [`benchmark_shell`] at `n`³ through a pass at `targets` (degrees), its invariants checked
+/// ([`improve_at_targets`]); with its name.
+fn shell_at_targets(n: usize, (lo, hi): (f64, f64)) -> (String, Outcome) {
+    let name = format!("{n}³ shell at {lo}°/{hi}°");
+    let o = improve_at_targets(&name, &benchmark_shell(n), (-0.6, 0.6), (lo, hi));
+    (name, o)
 }
 
 /// [`benchmark_shell`] at `n`³ through the default pass, its invariants checked; with its
