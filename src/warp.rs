@@ -29,7 +29,7 @@
 //!    it), so both parts are still balls, bounded by the same pieces of that level (isotopic
 //!    rel the link), the same part of the link, and a disk of the snapped level with
 //!    boundary `∂S`: a homeomorphism of their boundaries fixing the link extends to the balls.
-//!    A link node snapped to the other level stops the test (no piece gets corners on both);
+//!    A link node snapped to the other level is up too (its value is that level's);
 //! 3. **in rounds:** each round snaps, among the vertices that pass in the current state
 //!    (earlier snaps are on-level nodes), those with the smallest `t` among the passing grid
 //!    vertices of their link (ties: smaller index). Vertices snapped in one round are never
@@ -517,23 +517,15 @@ impl Link {
         }
     }
 
-    /// Classes of the nodes for a snap to `snap` in state `snaps` (a node at or beyond the
-    /// interval's other level is up: on the domain side of `snap`); `None` when a node is
-    /// snapped to the other level.
-    fn classes(&self, snap: u8, snaps: &[u8], iv: &Interval) -> Option<Vec<u8>> {
+    /// Classes of the nodes for a snap to `snap` in state `snaps`: a node at, beyond or
+    /// snapped to the interval's other level is up (on the domain side of `snap`).
+    fn classes(&self, snap: u8, snaps: &[u8], iv: &Interval) -> Vec<u8> {
         self.nodes
             .iter()
-            .map(|n| {
-                let state = n.state(snaps);
-                if state == snap {
-                    Some(ON)
-                } else if state != SNAP_NONE {
-                    None
-                } else if domain_side(n.val, snap, iv) {
-                    Some(UP)
-                } else {
-                    Some(DOWN)
-                }
+            .map(|n| match n.state(snaps) {
+                s if s == snap => ON,
+                SNAP_NONE if !domain_side(n.val, snap, iv) => DOWN,
+                _ => UP,
             })
             .collect()
     }
@@ -542,9 +534,7 @@ impl Link {
     /// set `S` of the link where the field is at least the level (up nodes, and snapped
     /// nodes on the level) is a disk whose complement (down nodes) is connected.
     fn regular(&self, snap: u8, from_down: bool, snaps: &[u8], iv: &Interval) -> bool {
-        let Some(cls) = self.classes(snap, snaps, iv) else {
-            return false;
-        };
+        let cls = self.classes(snap, snaps, iv);
         let groups_ok = self.groups.iter().all(|g| {
             let c = cls[g[0]];
             c != ON && g.iter().all(|&i| cls[i] == c)
@@ -819,9 +809,10 @@ mod tests {
     #[test]
     fn vertices_whose_link_the_other_level_crosses_are_snapped() {
         // A thin interval: both levels cross most links. Counts the snaps of vertices with a
-        // neighbour of their star beyond the other level (none before such links were
-        // allowed), which must keep the Betti numbers and the manifold boundary.
-        let mut across = 0;
+        // neighbour beyond the other level and the neighbours snapped to different levels
+        // (few before such links were allowed), which must keep the Betti numbers and the
+        // manifold boundary.
+        let (mut across, mut both) = (0, 0);
         for seed in 0..40u64 {
             let g = noise([9, 8, 7], seed, 0.0);
             let o = MeshOptions::new(0.4, 0.6, Method::Ctd);
@@ -833,6 +824,7 @@ mod tests {
             };
             let iv = crate::clip::Interval::new(o.alpha, o.beta, &g.values);
             let warp = super::snap_vertices(&g, &planner, &iv, 0.3);
+            both += snapped_to_both(&g, &warp.snaps);
             across += warp
                 .snapped
                 .iter()
@@ -860,6 +852,28 @@ mod tests {
         }
         // 14 on the build before these snaps were allowed, 1 732 with them.
         assert!(across > 500, "{across} snaps next to the other level");
+        // Neighbours snapped to different levels: 843 before a link node snapped to the
+        // other level counted as up (those pairs were not joined in the complex), 3 862 after.
+        assert!(both > 2000, "{both} neighbours snapped to different levels");
+    }
+
+    /// Pairs of neighbouring interior grid vertices (26-neighbourhood) snapped to different
+    /// levels.
+    fn snapped_to_both(g: &ScalarGrid, snaps: &[u8]) -> usize {
+        let mut both = 0;
+        for (v, &s) in snaps.iter().enumerate() {
+            let ijk = g.vertex_ijk(v);
+            if s == super::SNAP_NONE || (0..3).any(|a| ijk[a] == 0 || ijk[a] + 1 == g.dims[a]) {
+                continue;
+            }
+            both += super::neighbours26()
+                .filter(|&d| {
+                    let n = snaps[super::neighbour(g, ijk, d)];
+                    n != super::SNAP_NONE && n != s
+                })
+                .count();
+        }
+        both / 2
     }
 
     #[test]
