@@ -331,12 +331,17 @@ fn higher_targets_climb_in_stages_and_never_end_below_a_lower_one() {
 #[test]
 fn a_boundary_collapse_limit_keeps_the_invariants_and_raises_the_shell() {
     // Unlimited, collapses leave long boundary edges across the 1.2-voxel layer; limited to
-    // three times the mean edge at the removed node (the default) they do not. The shell of
-    // the benchmarks at 31³, measured: 13.07° -> 15.00° (also 38³: 14.53° -> 15.00°; but
-    // 40³: 15.00° -> 13.61°; every other size from 20³ to 37³ ends at the same minimum).
-    // Without the edge splits, which change the shell's last elements either way.
-    let f = benchmark_shell(31);
+    // three times the mean edge at the removed node (the default) they do not. Since warping
+    // snaps vertices whose link the other level crosses (build eb4cfe0), the shell starts
+    // with far fewer slivers and the limit changes no run at the default target (162 runs,
+    // 20³-48³) nor at 20°/150° and 25°/145° on 9 sizes; at 30°/140° it cuts both ways. The
+    // shell of the benchmarks at 36³ and 30°/140°, measured: 27.32° -> 28.08° (but 30³:
+    // 28.49° -> 28.12°, 32³: 28.49° -> 28.97°). Without the edge splits, which change the
+    // shell's last elements either way.
+    let f = benchmark_shell(36);
     let unlimited = QualityOptions {
+        min_angle: 30.0,
+        max_angle: 140.0,
         boundary_collapse_ratio: f64::INFINITY,
         split_sag: f64::INFINITY,
         ..QualityOptions::default()
@@ -361,8 +366,8 @@ fn a_boundary_collapse_limit_keeps_the_invariants_and_raises_the_shell() {
 #[test]
 fn volume_restoration_moves_only_level_nodes_and_lowers_no_element() {
     // Restoration is the pass's last stage: the same pass without it is the mesh it starts
-    // from. It must give volume back (torus: -0.36 % -> -0.14 %, shell: -0.32 % -> -0.03 %,
-    // measured), keep every tet and every interior node, and take no element below the
+    // from. It must give volume back (torus: -0.36 % -> -0.14 %, shell: -0.51 % -> -0.07 %,
+    // measured on eb4cfe0), keep every tet and every interior node, and take no element below the
     // target that was not below it (nor lower one that was).
     for (name, f, a, b) in [
         ("torus", torus(36, 10.0, 4.2), f64::NEG_INFINITY, 0.0),
@@ -538,51 +543,31 @@ fn output_does_not_depend_on_the_thread_count() {
 }
 
 #[test]
-fn the_last_round_frees_tets_stuck_at_slab_boundaries() {
-    // The regions are cut into slabs 6 voxels thick; a bad tet across a slab boundary has
-    // corners frozen in every round that cuts there. On the benchmark's 48³ thin shell a tet
-    // at x = 18 (a boundary) stayed at 11.1° with every round cut alike (also with the
-    // stuck-region retries); with the last round cut half a slab further it ends at 14.3°,
-    // and at 15.0° with the retries (measured).
-    let f = sphere_at(48, 24.0, 16.8);
-    let o = mesh_and_improve(&f, -0.6, 0.6);
-    check_invariants("48³ shell", &f, -0.6, 0.6, &o);
-    assert!(o.min_angle >= 14.0, "48³ shell: {}°", o.min_angle);
-}
-
-#[test]
-fn regions_left_below_the_target_are_retried_with_other_smoothing() {
-    // Which tets stay stuck depends on small differences in the moves. The last round of a
-    // single pass improves a region left below the target once more from its start, smoothing
-    // along the steepest ascent first, then also with the neighbours' centroid where the line
-    // searches fail, and keeps the best end. The benchmark's thin shells
-    // (`benchmarks/data/quality/shell_N.npy`, samples in `f32`; measured): at 36³ 14.19°
-    // without the retries, 15.00° after the first; at 24³ 14.84° without, 14.84° after the
-    // first, 15.00° after the second.
-    for n in [36, 24] {
+fn thin_shells_reach_the_default_target() {
+    // The benchmark's thin shell (1.2 voxels) at sizes where, before warping snapped vertices
+    // whose link the other level crosses (eb4cfe0), the default pass needed one of three
+    // mechanisms to reach 15° (measured then): the last round's slab boundaries shifted by
+    // half a slab (48³: 11.1° with every round cut alike), stuck regions retried with other
+    // smoothing (36³: 14.19° without; 24³: 14.84° without, 15.00° after the second variant)
+    // and the compass search (20³: 13.82° without). With that warping the shell starts with
+    // a third of the slivers and every size from 20³ to 48³ reaches 15° with any one of the
+    // three turned off (measured), so this test now checks the outcome only; no benchmark
+    // domain shows those mechanisms at the default target today (docs/QUALITY-LOG.md,
+    // *Session 24*).
+    for n in [48, 36, 24, 20] {
         let (name, o) = default_shell(n);
-        assert!(o.min_angle >= 15.0 - 1e-6, "{name}: {}°", o.min_angle);
+        check_angles(&name, &o, FLOOR);
     }
-}
-
-#[test]
-fn stuck_vertices_are_moved_by_compass_search() {
-    // Where the worst tets' gradients oppose each other the smoothing finds no way up, though
-    // a better position may lie a fraction of an edge away. The benchmark's 20³ thin shell
-    // ended at 13.82° (up to 155.5°) with smoothing, flips, collapses and the retries alone;
-    // a compass search over the corners of the tets left below the target takes it to
-    // 15.00° and 154.98° (measured).
-    let (name, o) = default_shell(20);
-    check_angles(&name, &o, FLOOR);
 }
 
 #[test]
 fn every_target_stage_polishes_its_stuck_regions() {
     // Stages above the default do not retry stuck regions (that made them worse), but each
-    // stage's last round polishes them with the compass search. The benchmark's 26³ shell at
-    // 25°/145° ended at 19.36° without it, 24.38° with it (measured).
-    let (name, o) = shell_at_targets(26, (25.0, 145.0));
-    assert!(o.min_angle >= 23.0, "{name}: {}°", o.min_angle);
+    // stage's last round polishes them with the compass search. The benchmark's 36³ shell at
+    // 20°/150° ends at 16.93° without it, 20.00° with it (measured on eb4cfe0's warping;
+    // before it the 26³ shell at 25°/145° showed it, 19.36° -> 24.38°, and no longer does).
+    let (name, o) = shell_at_targets(36, (20.0, 150.0));
+    check_angles(&name, &o, (20.0 - 1e-9, 150.0 + 1e-9));
 }
 
 #[test]
@@ -590,16 +575,16 @@ fn a_collapse_judged_after_its_moves_frees_stuck_caps() {
     // Some tets left below the target need two steps: a collapse that alone leaves a poor
     // tet, then moves that lift it. The polish of a stuck region tries such collapses on a
     // copy and keeps one when the region's worst tet ends higher (src/improve/composite.rs).
-    // The benchmark's 30³ shell ended at 14.16° without it, 15.00° with it; the 28³ shell at
-    // 25°/145° at 20.39° without, 23.45° with. The 40³ shell's cap needs a collapse into a
-    // neighbour of its corners, which the polishing round's regions free (one ring more):
-    // 13.61° without that ring, 15.00° with it (measured).
-    for n in [30, 40] {
-        let (name, o) = default_shell(n);
-        check_angles(&name, &o, FLOOR);
-    }
-    let (name, o) = shell_at_targets(28, (25.0, 145.0));
-    assert!(o.min_angle >= 23.0, "{name}: {}°", o.min_angle);
+    // Measured on eb4cfe0's warping: the benchmark's genus-3 solid at 35³ ends at 13.68°
+    // without it, 15.00° with it; the 34³ shell at 25°/145° at 21.87° without, 25.00° with.
+    // (Before that warping the 30³ and 40³ shells and the 28³ shell at 25°/145° showed it;
+    // they reach their targets without it now.)
+    let f = genus3(35);
+    let o = mesh_and_improve(&f, f64::NEG_INFINITY, 0.0);
+    check_invariants("genus 3, 35³", &f, f64::NEG_INFINITY, 0.0, &o);
+    check_angles("genus 3, 35³", &o, FLOOR);
+    let (name, o) = shell_at_targets(34, (25.0, 145.0));
+    assert!(o.min_angle >= 24.0, "{name}: {}°", o.min_angle);
 }
 
 #[test]
@@ -607,10 +592,15 @@ fn stages_above_the_default_polish_twice() {
     // The polishing round shifts the slab boundaries by half a slab; a bad tet whose corners
     // straddle a shifted boundary is never whole in one region there. In the stages above the
     // default a second polishing round follows with the boundaries back in place. The
-    // benchmark's 32³ shell at 20°/150° ended at 18.72° with one polishing round (one cap
-    // left), 20.00° with two (measured).
-    let (name, o) = shell_at_targets(32, (20.0, 150.0));
-    check_angles(&name, &o, (20.0 - 1e-9, 150.0 + 1e-9));
+    // benchmark's genus-3 solid (`f32` samples) at 36³ and 25°/145° ends at 24.81° with one
+    // polishing round,
+    // 25.00° with two (measured on eb4cfe0's warping; before it the 32³ shell at 20°/150°
+    // showed it, 18.72° -> 20.00°, and no longer does).
+    let name = "genus 3, 36³, at 25°/145°";
+    let mut f = genus3(36);
+    f.values.iter_mut().for_each(|v| *v = *v as f32 as f64);
+    let o = improve_at_targets(name, &f, (f64::NEG_INFINITY, 0.0), (25.0, 145.0));
+    check_angles(name, &o, (25.0 - 1e-9, 145.0 + 1e-9));
 }
 
 /// [`benchmark_shell`] at `n`³ through a pass at `targets` (degrees), its invariants checked
@@ -645,7 +635,8 @@ fn benchmark_shell(n: usize) -> Field {
 fn a_higher_target_ends_at_least_where_the_default_pass_does() {
     // The first stage of a ladder is the default pass, stuck regions retried as in the
     // single pass. Without the retries there, the benchmark's 24³ shell ended at 14.84° at
-    // 20°/150° against 15.00° by default (measured; 20.00° with them).
+    // 20°/150° against 15.00° by default (measured before eb4cfe0; 20.00° with them; since
+    // that build's warping it starts better and ends at 20.02° either way).
     let f = benchmark_shell(24);
     let default = mesh_and_improve(&f, -0.6, 0.6);
     let higher = improve_at_targets("24³ shell at 20°/150°", &f, (-0.6, 0.6), (20.0, 150.0));
