@@ -333,8 +333,9 @@ fn a_boundary_collapse_limit_keeps_the_invariants_and_raises_the_shell() {
     // Unlimited, collapses leave long boundary edges across the 1.2-voxel layer; limited to
     // three times the mean edge at the removed node (the default) they do not. Since warping
     // snaps vertices whose link the other level crosses (build eb4cfe0), the shell starts
-    // with far fewer slivers and the limit changes no run at the default target (162 runs,
-    // 20³-48³) nor at 20°/150° and 25°/145° on 9 sizes; at 30°/140° it cuts both ways. The
+    // with far fewer slivers and the limit changes the smallest angle of no run at the
+    // default target (162 runs, 20³-48³) and of one of 108 at 20°/150° and 25°/145° (9
+    // sizes, by a hundredth of a degree); at 30°/140° it cuts both ways. The
     // shell of the benchmarks at 36³ and 30°/140°, measured: 27.32° -> 28.08° (but 30³:
     // 28.49° -> 28.12°, 32³: 28.49° -> 28.97°). Without the edge splits, which change the
     // shell's last elements either way.
@@ -594,12 +595,10 @@ fn stages_above_the_default_polish_twice() {
     // straddle a shifted boundary is never whole in one region there. In the stages above the
     // default a second polishing round follows with the boundaries back in place. The
     // benchmark's genus-3 solid (`f32` samples) at 36³ and 25°/145° ends at 24.81° with one
-    // polishing round,
-    // 25.00° with two (measured on eb4cfe0's warping; before it the 32³ shell at 20°/150°
-    // showed it, 18.72° -> 20.00°, and no longer does).
+    // polishing round, 25.00° with two (measured on eb4cfe0's warping; before it the 32³
+    // shell at 20°/150° showed it, 18.72° -> 20.00°, and no longer does).
     let name = "genus 3, 36³, at 25°/145°";
-    let mut f = genus3(36);
-    f.values.iter_mut().for_each(|v| *v = *v as f32 as f64);
+    let f = in_f32(genus3(36));
     let o = improve_at_targets(name, &f, (f64::NEG_INFINITY, 0.0), (25.0, 145.0));
     check_angles(name, &o, (25.0 - 1e-9, 145.0 + 1e-9));
 }
@@ -627,7 +626,11 @@ fn default_shell(n: usize) -> (String, Outcome) {
 /// `[-0.6, 0.6]`.
 fn benchmark_shell(n: usize) -> Field {
     let c = (n / 2) as f64;
-    let mut f = sphere_at(n, c, 0.35 * n as f64);
+    in_f32(sphere_at(n, c, 0.35 * n as f64))
+}
+
+/// `f` with its samples rounded to `f32`, as the benchmarks' `.npy` files hold them.
+fn in_f32(mut f: Field) -> Field {
     f.values.iter_mut().for_each(|v| *v = *v as f32 as f64);
     f
 }
