@@ -15,7 +15,7 @@
 
 use std::cmp::Reverse;
 
-use crate::geom::signed_volume;
+use crate::geom::{cross, dot, signed_volume, sub};
 use crate::keys::{cut_point, split, vertex_point, PointKey, VertexKey};
 use crate::mesh::BoundaryLabel;
 
@@ -306,6 +306,7 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
     let cuts = cut_points(tv, &cls, iv);
     // Only snapped vertices make a piece with every point on one level.
     if tv.iter().any(|v| v.snap != SNAP_NONE) && flat(&cuts.pts[..cuts.np], iv) {
+        snapped_face(tv, &cls, &cuts, sink);
         return;
     }
     let mut faces = Faces {
@@ -315,6 +316,35 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
     tet_faces(&cls, box_face, &cuts, &mut faces);
     level_faces(&cls, &cuts, &mut faces);
     cone_and_fan(&cuts.pts[..cuts.np], &faces.polys[..faces.n], iv, sink);
+}
+
+/// A flat piece of three corners snapped to one level and a fourth outside (beyond that
+/// level): their face is a boundary face of the domain, emitted here facing the outside
+/// corner. Warping lets three snapped corners share a face only where the tet across it has
+/// its fourth corner on the domain side (`crate::warp`, `Link::on_edge_ok`): that tet keeps
+/// the face as an inner face of its piece, which is whole, or cut only by the other level
+/// away from the face. Any other flat piece (fewer points) emits nothing.
+#[inline]
+fn snapped_face(tv: &[ClipVertex; 4], cls: &[u8; 4], cuts: &CutPoints, sink: &mut impl ClipSink) {
+    let Some(out) = (0..4).find(|&i| cls[i] != INSIDE) else {
+        return;
+    };
+    if cuts.np != 3 {
+        return;
+    }
+    let label = if cls[out] == BELOW {
+        BoundaryLabel::Alpha
+    } else {
+        BoundaryLabel::Beta
+    };
+    let p = &cuts.pts[..3];
+    let normal = cross(sub(p[1].pos, p[0].pos), sub(p[2].pos, p[0].pos));
+    // Outward: the domain (the tet across) on the side away from the outside corner.
+    if dot(normal, sub(tv[out].pos, p[0].pos)) > 0.0 {
+        sink.triangle(p, [0, 1, 2], label);
+    } else {
+        sink.triangle(p, [0, 2, 1], label);
+    }
 }
 
 /// A tet entirely inside: itself, plus its box faces.
@@ -739,6 +769,10 @@ mod tests {
         let mut rec = Record::default();
         // each tet face f is on box plane f, so every boundary triangle is emitted
         clip_tet(tv, iv, 0b1111, &mut rec);
+        if let Some(out) = snapped_face_corner(tv, iv) {
+            check_snapped_face(tv, out, &rec, case);
+            return;
+        }
         let pos = tv.map(|v| v.pos);
         let eff = tv.map(|v| placed(&v, iv));
         let want = sublevel_volume(&pos, &eff, iv.beta) - sublevel_volume(&pos, &eff, iv.alpha);
@@ -782,6 +816,45 @@ mod tests {
         assert!(
             edges.values().all(|&n| n == 2),
             "{case}: boundary not closed"
+        );
+    }
+
+    /// If three corners are snapped to one level and the fourth lies beyond it (the piece
+    /// is their face, with no volume): the fourth.
+    fn snapped_face_corner(tv: &[ClipVertex; 4], iv: &Interval) -> Option<usize> {
+        [(SNAP_ALPHA, BELOW), (SNAP_BETA, ABOVE)]
+            .into_iter()
+            .find_map(|(snap, side)| {
+                let snapped = tv.iter().filter(|v| v.snap == snap).count();
+                let out = (0..4).find(|&i| tv[i].snap != snap)?;
+                let beyond = classify(tv[out].val, iv.alpha, iv.beta) == side;
+                (snapped == 3 && tv[out].snap == SNAP_NONE && beyond).then_some(out)
+            })
+    }
+
+    /// The flat piece of three snapped corners: no tet, and their face as one boundary
+    /// triangle of their level whose normal points at the outside corner `out` (the domain
+    /// is the tet across the face).
+    fn check_snapped_face(tv: &[ClipVertex; 4], out: usize, rec: &Record, case: &str) {
+        assert!(rec.tets.is_empty(), "{case}: a flat piece made tets");
+        let [(t, label)] = rec.tris.as_slice() else {
+            panic!("{case}: {} triangles instead of one", rec.tris.len());
+        };
+        let want = match tv[(out + 1) % 4].snap {
+            SNAP_ALPHA => BoundaryLabel::Alpha,
+            _ => BoundaryLabel::Beta,
+        };
+        assert_eq!(*label, want, "{case}");
+        let corners = (0..4)
+            .filter(|&i| i != out)
+            .map(|i| vertex_point(tv[i].key));
+        let mut keys: Vec<PointKey> = corners.collect();
+        keys.sort_unstable();
+        assert_eq!(tri_key(t.map(|p| p.key)).to_vec(), keys, "{case}");
+        let normal = cross(sub(t[1].pos, t[0].pos), sub(t[2].pos, t[0].pos));
+        assert!(
+            dot(normal, sub(tv[out].pos, t[0].pos)) > 0.0,
+            "{case}: the face points away from the outside corner"
         );
     }
 
@@ -867,14 +940,11 @@ mod tests {
 
     /// A positively oriented random tet with vertex values of the given classes and shuffled
     /// keys.
-    /// Whether `warp` can make these classes: at most two snapped corners, all on one level,
-    /// and none at or beyond the other level.
+    /// Whether `warp` can make these classes: at most three corners snapped to one level
+    /// (`warp`'s `Link::on_edge_ok`: a fourth would be a tet with four corners on it).
     fn snaps_possible(cls: &[usize; 4]) -> bool {
         let count = |c: usize| cls.iter().filter(|&&x| x == c).count();
-        let (sa, sb) = (count(5), count(6));
-        sa + sb <= 2
-            && (sa == 0 || cls.iter().all(|&c| !matches!(c, 3 | 4 | 6)))
-            && (sb == 0 || cls.iter().all(|&c| !matches!(c, 0 | 1 | 5)))
+        count(5) <= 3 && count(6) <= 3
     }
 
     fn random_tet(seed: &mut u64, cls: [usize; 4], alpha: f64, beta: f64) -> [ClipVertex; 4] {
