@@ -511,9 +511,15 @@ fn run_round_on(
     let mut phase = 0;
     loop {
         if sub.is_none() {
-            let work = needs_work(mesh, ctx, &state.quality, true);
+            let mut work = needs_work(mesh, ctx, &state.quality, true);
             if phase == 0 && !work.iter().any(|&w| w) {
                 return false;
+            }
+            if ctx.polish {
+                // The copy holds the work as `run_round` marks it: with one ring, a copy cut
+                // around the ungrown work has the grown work on its rim at once, and cutting
+                // it again around the same work never ended.
+                grow(mesh, &mut work);
             }
             let mut clock = Instant::now();
             *sub = Some(SubMesh::cut(

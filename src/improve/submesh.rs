@@ -288,7 +288,7 @@ mod tests {
         // One ring makes the work reach the rim often: the copy is cut again each time. At
         // this interval the default pass needs a second round.
         let grid = wavy_torus();
-        let (alpha, beta) = (-10.0, 1.6);
+        let (alpha, beta) = (-10.0, 2.0);
         let (mesh, _) = wavy_torus_mesh_at(&grid, (alpha, beta));
         let staged = QualityOptions {
             min_angle: 25.0,
