@@ -6,7 +6,7 @@ use super::composite::{collapse_then_move, worst};
 use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
 use super::local::{LocalMesh, TetOp};
-use super::project::{project_levels, untangle_around};
+use super::project::{absorb_and_project, project_levels, untangle_around};
 use super::search::search_vertex;
 use super::smooth::smooth_vertex;
 use super::{Ctx, ImproveReport};
@@ -194,7 +194,7 @@ fn settle_off_level(lm: &mut LocalMesh, ctx: &Ctx) -> (usize, usize) {
         if let Some((_, b)) = best {
             apply_collapse(lm, v, b);
             merged += 1;
-        } else if untangle_around(lm, ctx, v) {
+        } else if untangle_around(lm, ctx, v) || absorb_and_project(lm, ctx, v) {
             untangled += 1;
         }
     }
