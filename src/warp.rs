@@ -31,13 +31,14 @@
 //!    must not lie in a grid plane of constant z, so that the tets on both sides of it are
 //!    in one layer of cells (the streamed mesh keeps each boundary triangle in its tet's
 //!    chunk). Vertices on the grid box (half-sphere links) are not snapped. The interval's
-//!    other level may cross the link: its nodes beyond it count as on the domain side of the
-//!    snapped level. The other level then cuts the star's part of the domain where rays from `v` reach it, at the same
-//!    edges and the same link points before and after the snap (`v`'s value stays short of
-//!    it), so both parts are still balls, bounded by the same pieces of that level (isotopic
-//!    rel the link), the same part of the link, and a disk of the snapped level with
-//!    boundary `∂S`: a homeomorphism of their boundaries fixing the link extends to the balls.
-//!    A link node snapped to the other level is up too (its value is that level's);
+//!    other level may cross the link: its nodes beyond it count as on the domain side of
+//!    the snapped level. The other level then cuts the star's part of the domain where rays
+//!    from `v` reach it, at the same edges and the same link points before and after the
+//!    snap (`v`'s value stays short of it), so both parts are still balls, bounded by the
+//!    same pieces of that level (isotopic rel the link), the same part of the link, and a
+//!    disk of the snapped level with boundary `∂S`: a homeomorphism of their boundaries
+//!    fixing the link extends to the balls. A link node snapped to the other level is up
+//!    too (its value is that level's);
 //! 3. **in rounds:** each round snaps, among the vertices that pass in the current state
 //!    (earlier snaps are on-level nodes), those with the smallest `t` among the passing grid
 //!    vertices of their link (ties: smaller index). Vertices snapped in one round are never
