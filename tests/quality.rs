@@ -565,11 +565,12 @@ fn thin_shells_reach_the_default_target() {
 #[test]
 fn every_target_stage_polishes_its_stuck_regions() {
     // Stages above the default do not retry stuck regions (that made them worse), but each
-    // stage's last round polishes them with the compass search. The benchmark's 36³ shell at
-    // 20°/150° ends at 16.93° without it, 20.00° with it (measured on eb4cfe0's warping;
-    // before it the 26³ shell at 25°/145° showed it, 19.36° -> 24.38°, and no longer does).
-    let (name, o) = shell_at_targets(36, (20.0, 150.0));
-    check_angles(&name, &o, (20.0 - 1e-9, 150.0 + 1e-9));
+    // stage's last round polishes them with the compass search. The benchmark's 24³ shell at
+    // 25°/145° ends at 21.82° without it, 25.00° with it (measured on build 879126a's
+    // warping, which joins snapped nodes; on eb4cfe0's the 36³ shell at 20°/150° showed it,
+    // 16.93° -> 20.00°, and no longer does).
+    let (name, o) = shell_at_targets(24, (25.0, 145.0));
+    check_angles(&name, &o, (25.0 - 1e-9, 145.0 + 1e-9));
 }
 
 #[test]
@@ -579,6 +580,8 @@ fn a_collapse_judged_after_its_moves_frees_stuck_caps() {
     // copy and keeps one when the region's worst tet ends higher (src/improve/composite.rs).
     // Measured on eb4cfe0's warping: the benchmark's genus-3 solid at 35³ ends at 13.68°
     // without it, 15.00° with it; the 34³ shell at 25°/145° at 21.87° without, 25.00° with.
+    // On build 879126a's warping the genus-3 solid reaches 15° without it too, and the shell
+    // ends at 22.13° without it (measured): the shell is what this test can fail on.
     // (Before that warping the 30³ and 40³ shells and the 28³ shell at 25°/145° showed it;
     // they reach their targets without it now.)
     let f = genus3(35);
@@ -594,13 +597,11 @@ fn stages_above_the_default_polish_twice() {
     // The polishing round shifts the slab boundaries by half a slab; a bad tet whose corners
     // straddle a shifted boundary is never whole in one region there. In the stages above the
     // default a second polishing round follows with the boundaries back in place. The
-    // benchmark's genus-3 solid (`f32` samples) at 36³ and 25°/145° ends at 24.81° with one
-    // polishing round, 25.00° with two (measured on eb4cfe0's warping; before it the 32³
-    // shell at 20°/150° showed it, 18.72° -> 20.00°, and no longer does).
-    let name = "genus 3, 36³, at 25°/145°";
-    let f = in_f32(genus3(36));
-    let o = improve_at_targets(name, &f, (f64::NEG_INFINITY, 0.0), (25.0, 145.0));
-    check_angles(name, &o, (25.0 - 1e-9, 145.0 + 1e-9));
+    // benchmark's 29³ shell at 30°/140° ends at 27.83° with one polishing round, 30.00° with
+    // two (measured on build 879126a's warping; on eb4cfe0's the genus-3 solid at 36³ and
+    // 25°/145° showed it, 24.81° -> 25.00°, and no longer does).
+    let (name, o) = shell_at_targets(29, (30.0, 140.0));
+    check_angles(&name, &o, (30.0 - 1e-9, 140.0 + 1e-9));
 }
 
 /// [`benchmark_shell`] at `n`³ through a pass at `targets` (degrees), its invariants checked

@@ -17,7 +17,7 @@ use super::constraint::Constraint;
 use super::local::{LocalMesh, StarCorners};
 use super::smooth::{climb, move_vertex};
 use super::Ctx;
-use crate::geom::signed_volume;
+use crate::geom::{dot, signed_volume, sub};
 use crate::mesh::TetMesh;
 
 /// Rounds of reverting the moves that invert a tet, at most (then every move is reverted).
@@ -263,8 +263,8 @@ pub fn absorb_and_project(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         .flat_map(|&t| lm.tets[t as usize])
         .filter(|&w| w != v && lm.con[w as usize].may_merge_into(&con))
         .map(|w| {
-            let d = crate::geom::sub(lm.x[w as usize], lm.x[v as usize]);
-            (crate::geom::dot(d, d), w)
+            let d = sub(lm.x[w as usize], lm.x[v as usize]);
+            (dot(d, d), w)
         })
         .collect();
     near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
