@@ -69,6 +69,18 @@ pub fn star_floor(lm: &LocalMesh, v: u32) -> f64 {
         .max(0.0)
 }
 
+/// Whether `a` may merge into `b` whatever the tets' signs afterwards: both free, the
+/// constraints allow it, `ab` is an edge and the link condition holds (for a merge whose
+/// inverted tets are then untangled, [`super::project::merge_and_untangle`]).
+pub fn topological_merge(lm: &LocalMesh, a: u32, b: u32) -> bool {
+    let edge = lm.edge_tets(a, b);
+    lm.is_free(a)
+        && lm.is_free(b)
+        && lm.con[a as usize].may_merge_into(&lm.con[b as usize])
+        && !edge.is_empty()
+        && link_condition(lm, a, b, &edge)
+}
+
 /// For a collapse of `a` into `b` along an edge of the mesh that the constraints allow and
 /// that leaves every changed tet above `floor`, along an edge shorter than `ratio` times the
 /// mean edge at `a` if `a` is a level vertex ([`short_edge`]): the smallest quality of the

@@ -7,12 +7,14 @@
 //! would invert a tet, the vertex tries other points of its level set (projections started
 //! halfway to its neighbours on the level) and, if each of them inverts a tet too, max–min
 //! steps on the level set from the least bad one until its star is positive again. The last
-//! resort, after the sweeps ([`untangle_around`]): the vertex goes onto its level and the
-//! free corners of the tets it inverts are moved out of the way, or nothing changes.
+//! resorts, after the sweeps: the vertex goes onto its level and the free corners of the
+//! tets it inverts are moved out of the way ([`untangle_around`]); a neighbour is merged into
+//! it first ([`absorb_and_project`]); it merges into a neighbour on its level and the tets
+//! this inverts are untangled ([`merge_and_untangle`]). Each changes nothing if it fails.
 
 use rayon::prelude::*;
 
-use super::collapse::{apply_collapse, legal_collapse};
+use super::collapse::{apply_collapse, legal_collapse, topological_merge};
 use super::constraint::Constraint;
 use super::local::{LocalMesh, StarCorners};
 use super::smooth::{climb, move_vertex};
@@ -219,10 +221,20 @@ pub fn untangle_around(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     let Some((p, _)) = best_on_level(lm, ctx, v, &star, (level, free), direct) else {
         return false;
     };
-    let mut undo = vec![(v, lm.u[v as usize])];
+    let from = lm.u[v as usize];
     lm.set_position(v, p, ctx);
+    untangle_corners(lm, ctx, v, vec![(v, from)])
+}
+
+/// Moves the free corners (other than `v`) of the tets left non-positive around `v` and the
+/// corners moved so far by max–min steps, [`NEIGHBOUR_ROUNDS`] times at most. `undo` holds the
+/// moved vertices with their old positions. Keeps the moves if every tet around the moved
+/// vertices and `v` ends positive, else undoes them all. Returns whether it kept them.
+fn untangle_corners(lm: &mut LocalMesh, ctx: &Ctx, v: u32, mut undo: Vec<(u32, [f64; 3])>) -> bool {
     for _ in 0..NEIGHBOUR_ROUNDS {
-        let moved: Vec<u32> = undo.iter().map(|&(w, _)| w).collect();
+        let moved: Vec<u32> = std::iter::once(v)
+            .chain(undo.iter().map(|&(w, _)| w))
+            .collect();
         let tangled = tangled_corners(lm, &moved);
         if tangled.is_empty() {
             break;
@@ -233,9 +245,9 @@ pub fn untangle_around(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
             }
         }
     }
-    let positive = undo
-        .iter()
-        .all(|&(w, _)| lm.star[w as usize].iter().all(|&t| lm.q[t as usize] > 0.0));
+    let positive = std::iter::once(v)
+        .chain(undo.iter().map(|&(w, _)| w))
+        .all(|w| lm.star[w as usize].iter().all(|&t| lm.q[t as usize] > 0.0));
     if !positive {
         for &(w, u) in undo.iter().rev() {
             lm.set_position(w, u, ctx);
@@ -276,6 +288,43 @@ pub fn absorb_and_project(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         let mut trial = lm.clone();
         apply_collapse(&mut trial, w, v);
         if project_vertex(&mut trial, ctx, v) || untangle_around(&mut trial, ctx, v) {
+            *lm = trial;
+            return true;
+        }
+    }
+    false
+}
+
+/// The last resort after [`absorb_and_project`]: `v` merges into a neighbour `b` on its
+/// level where the link condition allows, whatever the signs of the tets it leaves, and the
+/// free corners of the non-positive ones are moved out of the way ([`untangle_corners`]).
+/// Tried on a copy of the region, nearest neighbours first, and kept only if every tet ends
+/// positive. A level vertex is blocked this way where its linear cut is far from the trilinear
+/// level set of its own sheet and near another sheet's (the MNI white matter at 63.5: a cut
+/// 1/14 along a cell's body diagonal, where the trilinear value is 66.9 and the diagonal
+/// crosses 63.5 near its far end; projecting it lands on the sheet across the grid vertex).
+/// The merge removes the spike of its sheet, and the link condition keeps the topology.
+/// Returns whether `v` was merged.
+pub fn merge_and_untangle(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
+    let level = lm.con[v as usize].level;
+    let mut near: Vec<(f64, u32)> = lm.star[v as usize]
+        .iter()
+        .flat_map(|&t| lm.tets[t as usize])
+        .filter(|&w| w != v && lm.con[w as usize].level == level && !lm.off_its_level(w, ctx))
+        .map(|w| {
+            let d = sub(lm.x[w as usize], lm.x[v as usize]);
+            (dot(d, d), w)
+        })
+        .collect();
+    near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    near.dedup_by_key(|x| x.1);
+    for (_, b) in near.into_iter().take(ABSORB_TRIES) {
+        if !topological_merge(lm, v, b) {
+            continue;
+        }
+        let mut trial = lm.clone();
+        apply_collapse(&mut trial, v, b);
+        if untangle_corners(&mut trial, ctx, b, Vec::new()) {
             *lm = trial;
             return true;
         }
@@ -499,6 +548,72 @@ mod tests {
         assert!(
             blocked >= 30 && stuck >= 5 && untangled > stuck / 2 && absorbed > blocked / 2,
             "{untangled} of {stuck} stuck of {blocked} blocked, {absorbed} absorbed"
+        );
+    }
+
+    /// Moves level vertex `v` inward along the gradient by the largest of a few depths that
+    /// keeps its star positive (a spike of its sheet, as a linear cut far from its trilinear
+    /// level set makes). Returns whether it moved.
+    fn push_inward(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
+        let Some(level) = lm.con[v as usize].level else {
+            return false;
+        };
+        let p = lm.u[v as usize];
+        let (_, g) = ctx.field.value_gradient(p);
+        let sign = if level as usize == 0 { 1.0 } else { -1.0 };
+        for depth in [0.6, 0.45, 0.3] {
+            let s = sign * depth / crate::geom::norm(g);
+            let to: [f64; 3] = std::array::from_fn(|a| p[a] + s * g[a]);
+            if ctx.inside_interval(to) && lm.star_above_at(v, to, ctx, 0.0) {
+                lm.set_position(v, to, ctx);
+                return true;
+            }
+        }
+        false
+    }
+
+    #[test]
+    fn a_level_vertex_far_off_its_level_merges_into_its_sheet_or_is_left_as_it_was() {
+        let grid = wavy_torus();
+        let (ctx, mut regions) = wavy_torus_regions(&grid, &[0, 1]);
+        let (mut pushed, mut merged) = (0, 0);
+        for lm in &mut regions {
+            project_levels(lm, &ctx);
+            for v in (0..lm.u.len() as u32).step_by(7) {
+                let c = lm.con[v as usize];
+                if !lm.is_free(v) || c.pinned || c.freedom() != 2 || !push_inward(lm, &ctx, v) {
+                    continue;
+                }
+                pushed += 1;
+                let mut trial = lm.clone();
+                if !merge_and_untangle(&mut trial, &ctx, v) {
+                    assert_eq!(
+                        trial.tets, lm.tets,
+                        "{v}: a failed merge changed the region"
+                    );
+                    assert_eq!(trial.u, lm.u, "{v}: a failed merge moved a vertex");
+                    continue;
+                }
+                merged += 1;
+                assert!(trial.removed[v as usize] && trial.star[v as usize].is_empty());
+                // One surface edge collapsed: two faces fewer, none at `v` (the Euler
+                // characteristic of the level surface kept).
+                assert_eq!(
+                    trial.faces.len() + 2,
+                    lm.faces.len(),
+                    "faces after merging {v}"
+                );
+                assert!(trial.faces.keys().all(|f| !f.contains(&v)));
+                for t in (0..trial.tets.len()).filter(|&t| trial.alive[t]) {
+                    let q = ctx.quality(trial.corners(trial.tets[t]));
+                    assert!(q > 0.0 && q == trial.q[t], "tet {t} after merging {v}: {q}");
+                    assert!(!trial.tets[t].contains(&v));
+                }
+            }
+        }
+        assert!(
+            pushed >= 30 && merged > pushed / 2,
+            "{merged} of {pushed} pushed vertices merged"
         );
     }
 }

@@ -6,7 +6,7 @@ use super::composite::{collapse_then_move, worst};
 use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
 use super::local::{LocalMesh, TetOp};
-use super::project::{absorb_and_project, project_levels, untangle_around};
+use super::project::{absorb_and_project, merge_and_untangle, project_levels, untangle_around};
 use super::search::search_vertex;
 use super::smooth::smooth_vertex;
 use super::{Ctx, ImproveReport};
@@ -172,8 +172,10 @@ fn sweeps(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport, n: usize) {
 /// Level vertices that could not be moved onto their level (a tet around them would invert)
 /// are merged into a neighbour on the same surfaces, when the link condition allows and every
 /// remaining tet stays positive; failing that, put on their level with their neighbours moved
-/// out of the way ([`untangle_around`]). So every boundary node ends on its level set where
-/// the region allows. Returns how many were merged and how many untangled.
+/// out of the way ([`untangle_around`]), after absorbing a neighbour
+/// ([`absorb_and_project`]), or merged into a neighbour on its level with the tets this
+/// inverts untangled ([`merge_and_untangle`]). So every boundary node ends on its level set
+/// where the region allows. Returns how many were merged and how many untangled.
 fn settle_off_level(lm: &mut LocalMesh, ctx: &Ctx) -> (usize, usize) {
     let (mut merged, mut untangled) = (0, 0);
     for v in 0..lm.u.len() as u32 {
@@ -196,6 +198,8 @@ fn settle_off_level(lm: &mut LocalMesh, ctx: &Ctx) -> (usize, usize) {
             merged += 1;
         } else if untangle_around(lm, ctx, v) || absorb_and_project(lm, ctx, v) {
             untangled += 1;
+        } else if merge_and_untangle(lm, ctx, v) {
+            merged += 1;
         }
     }
     (merged, untangled)
