@@ -743,11 +743,12 @@ fn finish_stage(
 ) {
     let mut clock = Instant::now();
     let split = opts.split_sag.is_finite();
-    let mut work = if split {
+    let sagging = if split {
         split::sagging_points(mesh, ctx, opts.split_sag)
     } else {
         vec![false; mesh.points.len()]
     };
+    let mut work = sagging.clone();
     if opts.restore_volume {
         for (w, &d) in work.iter_mut().zip(drift) {
             *w |= d != 0.0;
@@ -759,7 +760,7 @@ fn finish_stage(
         let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, quality, ctx, phase);
         let (splits, moves) = regions
             .par_iter_mut()
-            .map(|lm| finish_region(lm, ctx, opts, drift))
+            .map(|lm| finish_region(lm, ctx, opts, (drift, &sagging)))
             .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
         report.splits += splits;
         report.restored += moves;
@@ -838,15 +839,16 @@ fn spread_residual(mesh: &TetMesh, residual: f64, drift: &mut [f64]) {
     }
 }
 
-/// [`finish_stage`] in one region: returns its splits and its restoring moves.
+/// [`finish_stage`] in one region (`drift` and the [`split::sagging_points`] per point of the
+/// mesh): returns its splits and its restoring moves.
 fn finish_region(
     lm: &mut LocalMesh,
     ctx: &Ctx,
     opts: &QualityOptions,
-    drift: &[f64],
+    (drift, sagging): (&[f64], &[bool]),
 ) -> (usize, usize) {
     let (splits, added) = if opts.split_sag.is_finite() {
-        split::split_sagging_edges(lm, ctx, opts.split_sag)
+        split::split_sagging_edges(lm, ctx, opts.split_sag, Some(sagging))
     } else {
         (0, 0.0)
     };

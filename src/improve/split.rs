@@ -158,8 +158,13 @@ struct Candidate {
 /// noisy 256³ field gained 0.5 %, which its plain mesh did not lack). So only edges that add
 /// volume on the side of the sum are split, while each brings the region closer to it. The
 /// edges are those of the region as it was: the halves of a split edge are not split again.
-pub fn split_sagging_edges(lm: &mut LocalMesh, ctx: &Ctx, min_sag: f64) -> (usize, f64) {
-    let planned: Vec<Split> = candidates(lm, ctx, min_sag)
+pub fn split_sagging_edges(
+    lm: &mut LocalMesh,
+    ctx: &Ctx,
+    min_sag: f64,
+    sagging: Option<&[bool]>,
+) -> (usize, f64) {
+    let planned: Vec<Split> = candidates(lm, ctx, min_sag, sagging)
         .into_iter()
         .filter_map(|c| plan(lm, ctx, c.a, c.b))
         .collect();
@@ -188,19 +193,25 @@ pub fn split_sagging_edges(lm: &mut LocalMesh, ctx: &Ctx, min_sag: f64) -> (usiz
 
 /// The boundary edges of the region on a level set with both ends movable on it and one end
 /// free (so that every tet around the edge is in the region), sagging by more than
-/// `min_sag`; most sagging first (ties by ids).
+/// `min_sag`, with both ends marked in `sagging` (per point of the mesh, from
+/// [`sagging_points`]; `None`: every edge); most sagging first (ties by ids). The region may
+/// reach beyond the sagging points (the volume restoration's work is every point with drift),
+/// and its other edges lie where the chords' errors cancel.
 ///
 /// Only where the boundary bends one way: an edge is a candidate when no boundary edge at
 /// either end sags by more than `min_sag` the other way. Where it bends both ways (a saddle,
 /// or noise), the faces' errors cancel, and splitting the edges that sag most would not (the
 /// noisy 256³ field lost 0.4 % that way; with this rule it stays within 0.1 %).
-fn candidates(lm: &LocalMesh, ctx: &Ctx, min_sag: f64) -> Vec<Candidate> {
+fn candidates(lm: &LocalMesh, ctx: &Ctx, min_sag: f64, sagging: Option<&[bool]>) -> Vec<Candidate> {
+    let marked =
+        |v: u32| sagging.is_none_or(|s| s.get(lm.global[v as usize] as usize) == Some(&true));
     let mut edges: Vec<(u32, u32, usize)> = lm
         .faces
         .values()
         .filter(|f| f.label != BoundaryLabel::Box)
         .flat_map(|f| (0..3).map(move |i| (f.tri[i], f.tri[(i + 1) % 3], f.label as usize)))
         .map(|(a, b, l)| (a.min(b), a.max(b), l))
+        .filter(|&(a, b, _)| marked(a) && marked(b))
         .collect();
     edges.sort_unstable();
     edges.dedup();
@@ -382,7 +393,7 @@ mod tests {
                 .filter(|&t| lm.alive[t])
                 .map(|t| lm.q[t])
                 .fold(ctx.target, f64::min);
-            splits += split_sagging_edges(lm, &ctx, 0.03).0;
+            splits += split_sagging_edges(lm, &ctx, 0.03, None).0;
             let alive: Vec<usize> = (0..lm.tets.len()).filter(|&t| lm.alive[t]).collect();
             for &t in &alive {
                 let q = ctx.quality(lm.corners(lm.tets[t]));
@@ -426,5 +437,54 @@ mod tests {
             );
         }
         assert!(splits > 10, "{splits} splits");
+    }
+
+    #[test]
+    fn only_edges_with_both_ends_marked_sagging_are_split() {
+        let grid = wavy_torus();
+        let (ctx, mut regions) = wavy_torus_regions(&grid, &[0, 1]);
+        let points = regions
+            .iter()
+            .flat_map(|lm| lm.global.iter())
+            .filter(|&&g| g != NEW_POINT)
+            .max()
+            .map_or(0, |&g| g as usize + 1);
+        // Every other point of the mesh marked.
+        let marks: Vec<bool> = (0..points).map(|g| g % 2 == 0).collect();
+        let marked = |lm: &LocalMesh, v: u32| {
+            lm.global[v as usize] != NEW_POINT && marks[lm.global[v as usize] as usize]
+        };
+        let (mut unrestricted, mut restricted) = (0, 0);
+        for lm in regions.iter_mut() {
+            project_levels(lm, &ctx);
+            unrestricted += split_sagging_edges(&mut lm.clone(), &ctx, 0.03, None).0;
+            let before = lm.u.len();
+            restricted += split_sagging_edges(lm, &ctx, 0.03, Some(&marks)).0;
+            for m in before..lm.u.len() {
+                // The new node lies near the midpoint of two marked neighbours: the ends of
+                // the edge it split.
+                let mut nbrs: Vec<u32> = lm.star[m]
+                    .iter()
+                    .flat_map(|&t| lm.tets[t as usize])
+                    .filter(|&w| w as usize != m && marked(lm, w))
+                    .collect();
+                nbrs.sort_unstable();
+                nbrs.dedup();
+                let um = lm.u[m];
+                let split_of = |a: u32, b: u32| {
+                    let (ua, ub) = (lm.u[a as usize], lm.u[b as usize]);
+                    norm(sub(um, midpoint(ua, ub))) <= REACH * norm(sub(ub, ua))
+                };
+                let found = nbrs
+                    .iter()
+                    .enumerate()
+                    .any(|(i, &a)| nbrs[i + 1..].iter().any(|&b| split_of(a, b)));
+                assert!(found, "new node {m} splits no edge between marked points");
+            }
+        }
+        assert!(
+            restricted > 0 && restricted < unrestricted,
+            "{restricted} splits with half the points marked, {unrestricted} with all"
+        );
     }
 }
