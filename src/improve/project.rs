@@ -263,25 +263,14 @@ const ABSORB_TRIES: usize = 8;
 /// (an interior vertex, or one on every surface `v` lies on) is collapsed into `v` (legal,
 /// every tet positive), then `v` is projected, or untangled, onto its level. Tried on a copy
 /// of the region, nearest neighbours first, and kept only if `v` reaches its level with every
-/// tet positive. A level vertex is blocked where its cut lies right next to a grid vertex that
-/// was not snapped (the MNI white matter at 63.5: a cut 0.07 along a body diagonal from one,
-/// the level set 0.08 away across it): removing that vertex clears the way. The collapse is a
-/// move of the complex like any other (link condition, constraints, positive tets), so the
-/// topology stays. Returns whether `v` reached its level.
+/// tet positive. A level vertex is blocked where a neighbour stands between it and its level
+/// set (the noisy 256³ field at `[-2, 2]` left one such node off before this): removing that
+/// neighbour clears the way. The collapse is a move of the complex like any other (link
+/// condition, constraints, positive tets), so the topology stays. Returns whether `v` reached
+/// its level.
 pub fn absorb_and_project(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     let con = lm.con[v as usize];
-    let mut near: Vec<(f64, u32)> = lm.star[v as usize]
-        .iter()
-        .flat_map(|&t| lm.tets[t as usize])
-        .filter(|&w| w != v && lm.con[w as usize].may_merge_into(&con))
-        .map(|w| {
-            let d = sub(lm.x[w as usize], lm.x[v as usize]);
-            (dot(d, d), w)
-        })
-        .collect();
-    near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    near.dedup_by_key(|x| x.1);
-    for (_, w) in near.into_iter().take(ABSORB_TRIES) {
+    for w in nearest(lm, v, |w| lm.con[w as usize].may_merge_into(&con)) {
         if !legal_collapse(lm, ctx, w, v) {
             continue;
         }
@@ -307,18 +296,8 @@ pub fn absorb_and_project(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
 /// Returns whether `v` was merged.
 pub fn merge_and_untangle(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     let level = lm.con[v as usize].level;
-    let mut near: Vec<(f64, u32)> = lm.star[v as usize]
-        .iter()
-        .flat_map(|&t| lm.tets[t as usize])
-        .filter(|&w| w != v && lm.con[w as usize].level == level && !lm.off_its_level(w, ctx))
-        .map(|w| {
-            let d = sub(lm.x[w as usize], lm.x[v as usize]);
-            (dot(d, d), w)
-        })
-        .collect();
-    near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    near.dedup_by_key(|x| x.1);
-    for (_, b) in near.into_iter().take(ABSORB_TRIES) {
+    let on_level = |w: u32| lm.con[w as usize].level == level && !lm.off_its_level(w, ctx);
+    for b in nearest(lm, v, on_level) {
         if !topological_merge(lm, v, b) {
             continue;
         }
@@ -330,6 +309,26 @@ pub fn merge_and_untangle(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
         }
     }
     false
+}
+
+/// The neighbours `w` of `v` with `keep(w)`, nearest first (ties by id), [`ABSORB_TRIES`] at
+/// most: the candidates of [`absorb_and_project`] and [`merge_and_untangle`].
+fn nearest(lm: &LocalMesh, v: u32, keep: impl Fn(u32) -> bool) -> Vec<u32> {
+    let mut near: Vec<(f64, u32)> = lm.star[v as usize]
+        .iter()
+        .flat_map(|&t| lm.tets[t as usize])
+        .filter(|&w| w != v && keep(w))
+        .map(|w| {
+            let d = sub(lm.x[w as usize], lm.x[v as usize]);
+            (dot(d, d), w)
+        })
+        .collect();
+    near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    near.dedup_by_key(|x| x.1);
+    near.into_iter()
+        .take(ABSORB_TRIES)
+        .map(|(_, w)| w)
+        .collect()
 }
 
 /// The free corners other than `moved[0]` (the level vertex) of the non-positive tets
