@@ -166,6 +166,14 @@ fn quality_lines(s: &mut String, r: &Report) {
             .collect();
         let _ = writeln!(s, "            in stages: {}", stages.join(", "));
     }
+    if p.volume_retries > 0 {
+        let _ = writeln!(
+            s,
+            "            ran again from the start {}× with shorter boundary collapses, \
+             to keep the volume",
+            p.volume_retries
+        );
+    }
     if let (Some(b), Some(a)) = (&q.before, &q.after) {
         for (label, summary) in [("before:", b), ("after: ", a)] {
             let _ = writeln!(
