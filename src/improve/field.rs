@@ -58,12 +58,15 @@ impl<'a> Field<'a> {
     }
 
     /// The cell holding `u` (clamped to the grid) and `u`'s cell-local coordinates.
+    #[inline]
     fn locate(&self, u: [f64; 3]) -> ([usize; 3], [f64; 3]) {
         let mut cell = [0usize; 3];
         let mut t = [0.0; 3];
         for a in 0..3 {
             let hi = self.grid.dims[a] - 2;
-            let c = (u[a].floor().max(0.0) as usize).min(hi);
+            // Truncation is the floor once negatives are clamped to 0 (and `floor` is a call
+            // into libm on baseline x86-64).
+            let c = (u[a].max(0.0) as usize).min(hi);
             cell[a] = c;
             t[a] = u[a] - c as f64;
         }
@@ -78,8 +81,13 @@ impl<'a> Field<'a> {
 
     /// Value and index-space gradient of the interpolant at `u`.
     pub fn value_gradient(&self, u: [f64; 3]) -> (f64, [f64; 3]) {
-        let (c, [x, y, z]) = self.locate(u);
-        let v = self.grid.cell_values(c[0], c[1], c[2]);
+        let (c, t) = self.locate(u);
+        Self::value_gradient_in(&self.grid.cell_values(c[0], c[1], c[2]), t)
+    }
+
+    /// Value and gradient in a cell with corner values `v` at cell-local point `[x, y, z]`.
+    #[inline]
+    fn value_gradient_in(v: &[f64; 8], [x, y, z]: [f64; 3]) -> (f64, [f64; 3]) {
         let lerp = |a: f64, b: f64, s: f64| a + (b - a) * s;
         // Along x on the four x-edges, then the rest.
         let e = [0, 2, 4, 6].map(|i| (lerp(v[i], v[i + 1], x), v[i + 1] - v[i]));
@@ -123,8 +131,24 @@ impl<'a> Field<'a> {
     /// projected point when `|f - level| <= tol` was reached, `None` otherwise.
     pub fn project(&self, u: [f64; 3], level: f64, free_axes: u8, tol: f64) -> Option<[f64; 3]> {
         let mut p = u;
+        // The corner values of the cell the last step ended in: most steps stay in it.
+        let mut cell: Option<([usize; 3], [f64; 8])> = None;
         for _ in 0..NEWTON_STEPS {
-            let (f, g) = self.value_gradient_on(p, free_axes);
+            let (c, t) = self.locate(p);
+            let v = match cell {
+                Some((at, v)) if at == c => v,
+                _ => {
+                    let v = self.grid.cell_values(c[0], c[1], c[2]);
+                    cell = Some((c, v));
+                    v
+                }
+            };
+            let (f, mut g) = Self::value_gradient_in(&v, t);
+            for (a, ga) in g.iter_mut().enumerate() {
+                if free_axes & (1 << a) == 0 {
+                    *ga = 0.0;
+                }
+            }
             let r = f - level;
             if r.abs() <= tol {
                 return Some(p);
