@@ -5,9 +5,6 @@
 //! incomplete, so it neither moves nor is merged; every vertex that needs work has its whole
 //! star in the region and is free.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
-
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use smallvec::SmallVec;
@@ -68,38 +65,6 @@ pub struct LocalMesh {
     /// (physical units; projections onto the level sets are corrections and do not count).
     /// The pass gives it back at the end where it can ([`super::restore`]).
     pub drift: Vec<f64>,
-}
-
-/// `f` on every region, in parallel, the regions with the most tets first; the results in
-/// region order. A phase has a region per slab (a few dozen of very different sizes), so
-/// handing them out largest first keeps every thread busy to the end (in the order of the
-/// slabs, a large slab could start last and run alone). Each region's work depends on the
-/// region only, so the results do not depend on which thread ran it.
-pub fn par_regions_largest_first<R: Send>(
-    regions: &mut [LocalMesh],
-    f: impl Fn(&mut LocalMesh) -> R + Sync,
-) -> Vec<R> {
-    let mut order: Vec<usize> = (0..regions.len()).collect();
-    order.sort_by_key(|&i| (std::cmp::Reverse(regions[i].tets.len()), i));
-    let slots: Vec<Mutex<&mut LocalMesh>> = regions.iter_mut().map(Mutex::new).collect();
-    let next = AtomicUsize::new(0);
-    let worker = |_| {
-        let mut done = Vec::new();
-        loop {
-            let k = next.fetch_add(1, Ordering::Relaxed);
-            let Some(&i) = order.get(k) else {
-                return done;
-            };
-            let mut lm = slots[i].lock().unwrap_or_else(|e| e.into_inner());
-            done.push((i, f(&mut lm)));
-        }
-    };
-    let mut results: Vec<(usize, R)> = (0..rayon::current_num_threads().min(order.len()))
-        .into_par_iter()
-        .flat_map_iter(worker)
-        .collect();
-    results.sort_unstable_by_key(|r| r.0);
-    results.into_iter().map(|r| r.1).collect()
 }
 
 /// When the neighbourhoods changed and when operations on them last failed, on one clock.

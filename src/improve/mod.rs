@@ -762,14 +762,17 @@ fn improve_phase(
     let mut clock = Instant::now();
     let (mut regions, bookkeeping) = local::extract_regions(mesh, work, quality, ctx, phase);
     lap(&mut report.stage_seconds.extract, &mut clock);
-    let counts = local::par_regions_largest_first(&mut regions, |lm| {
-        let mut r = ImproveReport {
-            region_tets: lm.tets.len(),
-            ..Default::default()
-        };
-        schedule::improve_local(lm, ctx, &mut r);
-        r
-    });
+    let counts: Vec<ImproveReport> = regions
+        .par_iter_mut()
+        .map(|lm| {
+            let mut r = ImproveReport {
+                region_tets: lm.tets.len(),
+                ..Default::default()
+            };
+            schedule::improve_local(lm, ctx, &mut r);
+            r
+        })
+        .collect();
     for c in counts {
         report.add(&c);
     }
@@ -842,11 +845,10 @@ fn finish_stage(
         // The points the first phase added need nothing.
         work.resize(mesh.points.len(), false);
         let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, quality, ctx, phase);
-        let (splits, moves) = local::par_regions_largest_first(&mut regions, |lm| {
-            finish_region(lm, ctx, opts, (&owed, &sagging))
-        })
-        .into_iter()
-        .fold((0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
+        let (splits, moves) = regions
+            .par_iter_mut()
+            .map(|lm| finish_region(lm, ctx, opts, (&owed, &sagging)))
+            .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
         report.splits += splits;
         report.restored += moves;
         if splits > 0 {
