@@ -267,7 +267,8 @@ impl Ctx<'_> {
 ///
 /// Targets above the default ([`QualityOptions::default`]: 15° and 155°) are climbed to in
 /// stages ([`stages`]); each ends with the splits and the volume restoration at its targets
-/// ([`finish_stage`]).
+/// ([`finish_stage`]). A small mesh left off its plain volume by more than 0.4 % is improved
+/// again from the start with shorter boundary collapses ([`ImproveReport::volume_retries`]).
 pub fn improve(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,

@@ -74,7 +74,7 @@ pub fn tet_dihedral_range(p: [[f64; 3]; 4]) -> (f64, f64) {
 /// corners); since `|n_k|² |n_l|² = P / (|n_i|² |n_j|²)` with `P` the product of all four,
 /// the smallest of `|e_ij|² |n_i|² |n_j|²` over `P` is found with one division. Where `P`
 /// is zero or leaves the normal range (a flat face, or lengths far from 1), the same measure
-/// is taken edge by edge ([`biased_min_sine_by_edge`]).
+/// is taken edge by edge (`biased_min_sine_by_edge`).
 #[inline]
 pub fn biased_min_sine(p: [[f64; 3]; 4], obtuse_weight: f64) -> f64 {
     let (a, b, c) = (sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0]));
