@@ -337,7 +337,8 @@ fn improve_keeping_volume(
             .into_iter()
             .fold(f64::INFINITY, f64::min)
     };
-    let floor = worst(mesh).min(ctx.target);
+    // The first run's worst tet (or the target), found only if a run again is needed.
+    let mut floor = None;
     let mut best = off(mesh);
     for ratio in VOLUME_RETRY_RATIOS {
         let left = opts.time_budget.map(|b| b.saturating_sub(start.elapsed()));
@@ -354,6 +355,7 @@ fn improve_keeping_volume(
             time_budget: left,
             ..opts.clone()
         };
+        let floor = *floor.get_or_insert_with(|| worst(mesh).min(ctx.target));
         let mut other = copy.clone();
         let (r, _) = improve_in(&mut other, grid, levels, &again, rings, snapped);
         report.volume_retries += 1;
