@@ -14,6 +14,16 @@ pub struct Field<'a> {
     inverse: [[f64; 3]; 3],
 }
 
+/// `g` with the components of the axes whose bit is not set in `free_axes` zeroed.
+fn on_axes(mut g: [f64; 3], free_axes: u8) -> [f64; 3] {
+    for (a, ga) in g.iter_mut().enumerate() {
+        if free_axes & (1 << a) == 0 {
+            *ga = 0.0;
+        }
+    }
+    g
+}
+
 /// Newton steps tried by [`Field::project`] before giving up.
 const NEWTON_STEPS: usize = 30;
 
@@ -103,13 +113,8 @@ impl<'a> Field<'a> {
     /// Value and index-space gradient at `u`, the gradient restricted to the axes whose bit is
     /// set in `free_axes` (the others zeroed).
     pub fn value_gradient_on(&self, u: [f64; 3], free_axes: u8) -> (f64, [f64; 3]) {
-        let (f, mut g) = self.value_gradient(u);
-        for (a, ga) in g.iter_mut().enumerate() {
-            if free_axes & (1 << a) == 0 {
-                *ga = 0.0;
-            }
-        }
-        (f, g)
+        let (f, g) = self.value_gradient(u);
+        (f, on_axes(g, free_axes))
     }
 
     /// `d` without its component along the gradient at `u` (over `free_axes`): the part of
@@ -143,12 +148,8 @@ impl<'a> Field<'a> {
                     v
                 }
             };
-            let (f, mut g) = Self::value_gradient_in(&v, t);
-            for (a, ga) in g.iter_mut().enumerate() {
-                if free_axes & (1 << a) == 0 {
-                    *ga = 0.0;
-                }
-            }
+            let (f, g) = Self::value_gradient_in(&v, t);
+            let g = on_axes(g, free_axes);
             let r = f - level;
             if r.abs() <= tol {
                 return Some(p);

@@ -838,7 +838,7 @@ fn finish_stage(
     // boundary was restored again by `restore_residual`).
     let mut work: Vec<bool> = owed.iter().map(|&d| d != 0.0).collect();
     work.resize(mesh.points.len(), false);
-    if owed.iter().any(|&d| d != 0.0) {
+    if work.contains(&true) {
         grow(mesh, &mut work);
     }
     for (w, &s) in work.iter_mut().zip(&sagging) {

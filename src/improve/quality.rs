@@ -500,7 +500,7 @@ mod tests {
             flat += usize::from(fast.abs() < 1e-6);
             inverted += usize::from(fast < 0.0);
         }
-        // Both branches and both signs were exercised.
+        // Flat and inverted tets were both among them.
         assert!(
             flat > 1000 && inverted > 5000,
             "{flat} flat, {inverted} inverted"
