@@ -267,7 +267,7 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
         .collect();
     ring.sort_unstable();
     ring.dedup();
-    if !common_vertices_are(&link_vertices(lm, a), &link_vertices(lm, b), &ring, [a, b]) {
+    if shares_off_ring(lm, &link_vertices(lm, a), b, &ring, a) {
         return false;
     }
     let on_ring = |w: u32| ring.binary_search(&w).is_ok();
@@ -290,27 +290,17 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
     boundary_link_condition(lm, a, b)
 }
 
-/// Whether the sorted `la` and `lb` (vertex lists) share exactly the vertices `ring` (sorted),
-/// apart from `skip`.
-fn common_vertices_are(la: &[u32], lb: &[u32], ring: &[u32], skip: [u32; 2]) -> bool {
-    let (mut i, mut j, mut k) = (0, 0, 0);
-    while i < la.len() && j < lb.len() {
-        match la[i].cmp(&lb[j]) {
-            std::cmp::Ordering::Less => i += 1,
-            std::cmp::Ordering::Greater => j += 1,
-            std::cmp::Ordering::Equal => {
-                if !skip.contains(&la[i]) {
-                    if ring.get(k) != Some(&la[i]) {
-                        return false;
-                    }
-                    k += 1;
-                }
-                i += 1;
-                j += 1;
-            }
-        }
-    }
-    k == ring.len()
+/// Whether a corner of the tets around `b` (other than `a` and `b`) is in the sorted link
+/// vertices `la` of `a` but not on the sorted `ring`: the links of `a` and `b` then share a
+/// vertex that the link of `ab` lacks. (Every ring vertex is in both links: the ring is
+/// made of corners of tets around `ab`.)
+fn shares_off_ring(lm: &LocalMesh, la: &[u32], b: u32, ring: &[u32], a: u32) -> bool {
+    lm.star[b as usize]
+        .iter()
+        .flat_map(|&t| lm.tets[t as usize])
+        .any(|w| {
+            w != a && w != b && la.binary_search(&w).is_ok() && ring.binary_search(&w).is_err()
+        })
 }
 
 /// For an edge `vw` (no end `a` or `b`) of the link of `a`: it is also in the link of `b`

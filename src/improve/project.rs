@@ -97,24 +97,31 @@ fn add_moved_volume(
     moved: &[bool],
     drift: &mut [f64],
 ) {
-    let added: Vec<(u32, f64)> = around
+    // Per tet of `around`: what the move of each moved corner adds (summed below in the
+    // order of `around`, then of the corners: the same sums for any thread count).
+    let added: Vec<[f64; 4]> = around
         .par_iter()
-        .flat_map_iter(|&t| {
+        .map(|&t| {
             let tet = mesh.tets[t as usize];
             let old = tet.map(|v| mesh.points[v as usize]);
             let v0 = signed_volume(old[0], old[1], old[2], old[3]);
-            (0..4)
-                .filter_map(move |i| Some((i, target[tet[i] as usize]?)))
-                .filter(move |&(i, _)| moved[tet[i] as usize])
-                .map(move |(i, x)| {
+            let mut out = [0.0; 4];
+            for (i, o) in out.iter_mut().enumerate() {
+                if let (true, Some(x)) = (moved[tet[i] as usize], target[tet[i] as usize]) {
                     let mut p = old;
                     p[i] = x;
-                    (tet[i], signed_volume(p[0], p[1], p[2], p[3]) - v0)
-                })
+                    *o = signed_volume(p[0], p[1], p[2], p[3]) - v0;
+                }
+            }
+            out
         })
         .collect();
-    for (v, d) in added {
-        drift[v as usize] += d;
+    for (&t, d) in around.iter().zip(&added) {
+        for (&v, &d) in mesh.tets[t as usize].iter().zip(d) {
+            if moved[v as usize] {
+                drift[v as usize] += d;
+            }
+        }
     }
 }
 
