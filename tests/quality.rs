@@ -329,16 +329,15 @@ fn higher_targets_climb_in_stages_and_never_end_below_a_lower_one() {
 }
 
 #[test]
-fn a_boundary_collapse_limit_keeps_the_invariants_and_raises_the_shell() {
-    // Unlimited, collapses leave long boundary edges across the 1.2-voxel layer; limited to
-    // three times the mean edge at the removed node (the default) they do not. Since warping
-    // snaps vertices whose link the other level crosses (build eb4cfe0), the shell starts
-    // with far fewer slivers and the limit changes the smallest angle of no run at the
-    // default target (162 runs, 20³-48³) and of one of 108 at 20°/150° and 25°/145° (9
-    // sizes, by a hundredth of a degree); at 30°/140° it cuts both ways. The
-    // shell of the benchmarks at 36³ and 30°/140°, measured: 27.32° -> 28.08° (but 30³:
-    // 28.49° -> 28.12°, 32³: 28.49° -> 28.97°). Without the edge splits, which change the
-    // shell's last elements either way.
+fn a_boundary_collapse_limit_keeps_the_invariants_and_the_shell_at_its_target() {
+    // Boundary collapses limited to three times the mean edge at the removed node (the
+    // default) keep the invariants on a 1.2-voxel layer and end no worse than unlimited
+    // ones. The limit used to raise this shell's smallest angle (27.32° -> 28.08° at
+    // 30°/140°); since warping snaps vertices whose link the other level crosses (build
+    // eb4cfe0) and the smoothing takes one step a call (session 28), both end at the target
+    // here, and on no benchmark shell at 24³-40³ does the limit change the angles
+    // (docs/QUALITY-LOG.md, *Session 28*). Without the edge splits, which change the shell's
+    // last elements either way.
     let f = benchmark_shell(36);
     let unlimited = QualityOptions {
         min_angle: 30.0,
@@ -355,7 +354,9 @@ fn a_boundary_collapse_limit_keeps_the_invariants_and_raises_the_shell() {
     let limited = mesh_and_improve_with(&f, -0.6, 0.6, &opts);
     check_invariants("shell, limited collapses", &f, -0.6, 0.6, &limited);
     assert!(
-        limited.min_angle > free.min_angle && limited.max_angle <= free.max_angle + 1e-9,
+        limited.min_angle >= free.min_angle - 1e-9
+            && limited.min_angle >= 30.0 - 1e-6
+            && limited.max_angle <= free.max_angle + 1e-9,
         "limited [{}, {}] vs unlimited [{}, {}]",
         limited.min_angle,
         limited.max_angle,
