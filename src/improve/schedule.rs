@@ -212,14 +212,20 @@ fn off_level(lm: &LocalMesh, ctx: &Ctx, v: u32) -> bool {
 
 /// Alive tets below the target, worst first (ties by id).
 fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> impl Iterator<Item = u32> {
-    let mut bad: Vec<(f64, u32)> = (0..lm.tets.len() as u32)
-        .filter(|&t| lm.alive[t as usize])
-        .map(|t| (lm.q[t as usize], t))
-        .filter(|&(q, _)| q < ctx.target)
+    let mut bad: Vec<(i64, u32)> = (0..lm.tets.len() as u32)
+        .filter(|&t| lm.alive[t as usize] && lm.q[t as usize] < ctx.target)
+        .map(|t| (total_order(lm.q[t as usize]), t))
         .collect();
     // The keys are distinct (tet ids are), so an unstable sort gives the one order.
-    bad.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    bad.sort_unstable();
     bad.into_iter().map(|(_, t)| t)
+}
+
+/// `x` as an integer in the order of [`f64::total_cmp`] (its definition), so that sorting
+/// by it is sorting integers.
+fn total_order(x: f64) -> i64 {
+    let b = x.to_bits() as i64;
+    b ^ (((b >> 63) as u64) >> 1) as i64
 }
 
 /// Calls `op` (of kind `kind`) on every alive bad tet (worst first) until the time budget
@@ -350,4 +356,42 @@ fn smooth_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usi
     }
     report.smoothed += n;
     n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::total_order;
+
+    #[test]
+    fn total_order_sorts_as_total_cmp() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            5e-324,
+            -5e-324,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            0.258,
+            0.2580000000000001,
+            -3.5e300,
+        ];
+        let mut seed = 7u64;
+        for _ in 0..500 {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            xs.push(f64::from_bits(seed));
+        }
+        let mut by_cmp = xs.clone();
+        by_cmp.sort_by(f64::total_cmp);
+        xs.sort_by_key(|&x| total_order(x));
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&xs), bits(&by_cmp));
+    }
 }
