@@ -267,7 +267,7 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
         .collect();
     ring.sort_unstable();
     ring.dedup();
-    if shares_off_ring(lm, &link_vertices(lm, a), b, &ring, a) {
+    if shares_off_ring(lm, [a, b], &link_vertices(lm, a), &ring) {
         return false;
     }
     let on_ring = |w: u32| ring.binary_search(&w).is_ok();
@@ -294,7 +294,7 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
 /// vertices `la` of `a` but not on the sorted `ring`: the links of `a` and `b` then share a
 /// vertex that the link of `ab` lacks. (Every ring vertex is in both links: the ring is
 /// made of corners of tets around `ab`.)
-fn shares_off_ring(lm: &LocalMesh, la: &[u32], b: u32, ring: &[u32], a: u32) -> bool {
+fn shares_off_ring(lm: &LocalMesh, [a, b]: [u32; 2], la: &[u32], ring: &[u32]) -> bool {
     lm.star[b as usize]
         .iter()
         .flat_map(|&t| lm.tets[t as usize])
