@@ -359,8 +359,9 @@ fn improve_keeping_volume(
         let mut other = copy.clone();
         let (r, _) = improve_in(&mut other, grid, levels, &again, rings, snapped);
         report.volume_retries += 1;
-        if off(&other) < best && worst(&other) >= floor && !r.out_of_time {
-            best = off(&other);
+        let now = off(&other);
+        if now < best && worst(&other) >= floor && !r.out_of_time {
+            best = now;
             *mesh = other;
             report = ImproveReport {
                 volume_retries: report.volume_retries,
