@@ -21,19 +21,19 @@ type LinkVertices = SmallVec<[u32; 96]>;
 
 /// The better legal and improving collapse of edge `ab` (either way), as
 /// `(smallest quality of the changed tets afterwards, from, to)`; `a` into `b` on a tie.
-/// `floors` are [`star_floor`] of `a` and `b`: a collapse must do better than the worst tet
-/// of the star it removes. The link condition is symmetric in `a` and `b`, so it is checked
-/// once.
+/// `floor(v)` is [`star_floor`] of `v` (asked only for a direction that passes the cheap
+/// tests): a collapse must do better than the worst tet of the star it removes. The link
+/// condition is symmetric in `a` and `b`, so it is checked once.
 pub fn best_collapse(
     lm: &LocalMesh,
     ctx: &Ctx,
     a: u32,
     b: u32,
-    floors: [f64; 2],
+    floor: impl Fn(u32) -> f64,
 ) -> Option<(f64, u32, u32)> {
     let ratio = ctx.boundary_collapse_ratio;
-    let ab = collapse_quality(lm, ctx, a, b, floors[0], ratio);
-    let ba = collapse_quality(lm, ctx, b, a, floors[1], ratio);
+    let ab = collapse_quality(lm, ctx, a, b, || floor(a), ratio);
+    let ba = collapse_quality(lm, ctx, b, a, || floor(b), ratio);
     let best = match (ab, ba) {
         (Some(x), Some(y)) if y > x => (y, b, a),
         (Some(x), _) => (x, a, b),
@@ -47,7 +47,7 @@ pub fn best_collapse(
 /// needed, and no [`QualityOptions::boundary_collapse_ratio`](super::QualityOptions) limit:
 /// used to remove vertices that cannot reach their level set).
 pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
-    let new = collapse_quality(lm, ctx, a, b, 0.0, f64::INFINITY)?;
+    let new = collapse_quality(lm, ctx, a, b, || 0.0, f64::INFINITY)?;
     link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(new)
 }
 
@@ -56,7 +56,7 @@ pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> 
 /// positive, whatever their quality: for operations that judge it after further moves
 /// ([`super::composite`]).
 pub fn legal_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> bool {
-    collapse_quality(lm, ctx, a, b, 0.0, ctx.boundary_collapse_ratio).is_some()
+    collapse_quality(lm, ctx, a, b, || 0.0, ctx.boundary_collapse_ratio).is_some()
         && link_condition(lm, a, b, &lm.edge_tets(a, b))
 }
 
@@ -82,7 +82,7 @@ pub fn topological_merge(lm: &LocalMesh, a: u32, b: u32) -> bool {
 }
 
 /// For a collapse of `a` into `b` along an edge of the mesh that the constraints allow and
-/// that leaves every changed tet above `floor`, along an edge shorter than `ratio` times the
+/// that leaves every changed tet above `floor()` (asked after the cheap tests), along an edge shorter than `ratio` times the
 /// mean edge at `a` if `a` is a level vertex ([`short_edge`]): the smallest quality of the
 /// changed tets after. Stops at the first changed tet that fails.
 fn collapse_quality(
@@ -90,7 +90,7 @@ fn collapse_quality(
     ctx: &Ctx,
     a: u32,
     b: u32,
-    floor: f64,
+    floor: impl FnOnce() -> f64,
     ratio: f64,
 ) -> Option<f64> {
     if !lm.is_free(a) || !lm.is_free(b) {
@@ -105,6 +105,7 @@ fn collapse_quality(
         return None;
     }
     // The quality first: most attempts fail there, at the first tet.
+    let floor = floor();
     let mut new = f64::INFINITY;
     let xb = lm.x[b as usize];
     for &t in star.iter().filter(|t| !around_edge(t)) {
@@ -203,15 +204,22 @@ pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> VertexFaces {
     let all = lm.boundary_faces_of(v);
     for &t in &lm.star[v as usize] {
         let tet = lm.tets[t as usize];
+        // A face at `v` has all its corners on the boundary: the other three corners decide.
+        let off = tet.map(|w| w != v && !lm.on_boundary(w));
+        if off.iter().filter(|&&o| o).count() > 1 {
+            continue;
+        }
         for skip in 0..4 {
-            let tri = face_without(tet, skip);
-            if tri.contains(&v) && tri.iter().all(|&w| lm.on_boundary(w)) {
-                if let Some(f) = lm.faces.get(&face_key(tri)) {
-                    if !out.contains(f) {
-                        out.push(*f);
-                        if out.len() == all {
-                            return out;
-                        }
+            // The face opposite `v` is not at `v`; the one opposite an off corner is the one
+            // face that may be on the boundary.
+            if tet[skip] == v || off.iter().enumerate().any(|(i, &o)| o && i != skip) {
+                continue;
+            }
+            if let Some(f) = lm.faces.get(&face_key(face_without(tet, skip))) {
+                if !out.contains(f) {
+                    out.push(*f);
+                    if out.len() == all {
+                        return out;
                     }
                 }
             }
@@ -488,7 +496,7 @@ mod tests {
                     continue;
                 }
                 while let Some(a) = positive_merge_into(lm, &ctx, b) {
-                    let q = collapse_quality(lm, &ctx, a, b, 0.0, f64::INFINITY);
+                    let q = collapse_quality(lm, &ctx, a, b, || 0.0, f64::INFINITY);
                     if lm.star[a as usize].len() + lm.star[b as usize].len() > HUB_TETS {
                         assert!(q.is_none(), "{a} into {b}");
                         refused += 1;

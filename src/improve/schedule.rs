@@ -271,15 +271,18 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
         (crate::geom::dot(d, d), tet[i], tet[j])
     });
     edges.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
-    // Each corner's floor is found when an edge at it is first tried.
-    let mut floors = [None; 4];
-    let mut floor = |v: u32| {
+    // Each corner's floor is found when a collapse from it first passes the cheap tests.
+    let floors = [const { std::cell::Cell::new(None) }; 4];
+    let floor = |v: u32| {
         let i = tet.iter().position(|&w| w == v).unwrap_or(0);
-        *floors[i].get_or_insert_with(|| star_floor(lm, v))
+        floors[i].get().unwrap_or_else(|| {
+            let f = star_floor(lm, v);
+            floors[i].set(Some(f));
+            f
+        })
     };
     for (_, a, b) in edges {
-        let f = [floor(a), floor(b)];
-        if let Some((_, from, to)) = best_collapse(lm, ctx, a, b, f) {
+        if let Some((_, from, to)) = best_collapse(lm, ctx, a, b, floor) {
             apply_collapse(lm, from, to);
             return true;
         }
