@@ -187,9 +187,13 @@ fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     if !lm.is_free(v) || c.pinned {
         return false;
     }
+    if lm.known_on_level(v) {
+        return false;
+    }
     let target = ctx.levels[level as usize];
     let u = lm.u[v as usize];
     if (ctx.field.value(u) - target).abs() <= ctx.tol {
+        lm.found_on_level(v);
         return false;
     }
     let free = c.free_axes();
