@@ -85,10 +85,6 @@ struct Memo {
     tet_failed: Vec<[u64; 2]>,
     /// Per vertex: when smoothing it last failed (0: never).
     vertex_failed: Vec<u64>,
-    /// The last answer of [`LocalMesh::bad_tets`] (its target and tets), and the tets
-    /// touched since: every tet below that target is in one of the two lists.
-    bad: Option<(f64, Vec<u32>)>,
-    touched: Vec<u32>,
 }
 
 /// The operations on a tet whose failures are memoised separately.
@@ -374,8 +370,6 @@ impl LocalMesh {
                 stamp: vec![1; n],
                 tet_failed: Vec::new(),
                 vertex_failed: vec![0; n],
-                bad: None,
-                touched: Vec::new(),
             },
         }
     }
@@ -444,39 +438,10 @@ impl LocalMesh {
     /// Records a change to tet `t` (created, removed, or a corner moved).
     #[inline]
     fn touch(&mut self, t: u32) {
-        if self.memo.bad.is_some() {
-            self.memo.touched.push(t);
-        }
         self.memo.clock += 1;
         for v in self.tets[t as usize] {
             self.memo.stamp[v as usize] = self.memo.clock;
         }
-    }
-
-    /// The alive tets below `target`, worst first (ties by id). Only the first call (or one
-    /// with a new target) scans every tet: a tet's quality changes only where it is touched,
-    /// so the others below the target are those of the last answer.
-    pub fn bad_tets(&mut self, target: f64) -> Vec<u32> {
-        let candidates: Vec<u32> = match self.memo.bad.take() {
-            Some((at, mut last)) if at == target => {
-                last.append(&mut self.memo.touched);
-                last.sort_unstable();
-                last.dedup();
-                last
-            }
-            _ => (0..self.tets.len() as u32).collect(),
-        };
-        self.memo.touched.clear();
-        let mut bad: Vec<(i64, u32)> = candidates
-            .into_iter()
-            .filter(|&t| self.alive[t as usize] && self.q[t as usize] < target)
-            .map(|t| (total_order(self.q[t as usize]), t))
-            .collect();
-        // The keys are distinct (tet ids are), so an unstable sort gives the one order.
-        bad.sort_unstable();
-        let bad: Vec<u32> = bad.into_iter().map(|(_, t)| t).collect();
-        self.memo.bad = Some((target, bad.clone()));
-        bad
     }
 
     /// Whether operation `op` on tet `t` failed after the last change around its corners.
@@ -693,13 +658,6 @@ impl LocalMesh {
             (ctx.field.value(self.u[v as usize]) - ctx.levels[l as usize]).abs() > ctx.tol
         })
     }
-}
-
-/// `x` as an integer in the order of [`f64::total_cmp`] (its definition), so that sorting
-/// by it is sorting integers.
-fn total_order(x: f64) -> i64 {
-    let b = x.to_bits() as i64;
-    b ^ (((b >> 63) as u64) >> 1) as i64
 }
 
 /// Tets of a star that a [`StarVec`] holds inline (on the stack); a larger star's list
@@ -1043,38 +1001,5 @@ mod tests {
                 }
             }
         }
-    }
-
-    #[test]
-    fn total_order_sorts_as_total_cmp() {
-        let mut xs = vec![
-            0.0,
-            -0.0,
-            1.0,
-            -1.0,
-            f64::MIN_POSITIVE,
-            -f64::MIN_POSITIVE,
-            5e-324,
-            -5e-324,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NAN,
-            -f64::NAN,
-            0.258,
-            0.2580000000000001,
-            -3.5e300,
-        ];
-        let mut seed = 7u64;
-        for _ in 0..500 {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            xs.push(f64::from_bits(seed));
-        }
-        let mut by_cmp = xs.clone();
-        by_cmp.sort_by(f64::total_cmp);
-        xs.sort_by_key(|&x| total_order(x));
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&xs), bits(&by_cmp));
     }
 }

@@ -211,8 +211,21 @@ fn off_level(lm: &LocalMesh, ctx: &Ctx, v: u32) -> bool {
 }
 
 /// Alive tets below the target, worst first (ties by id).
-fn bad_tets(lm: &mut LocalMesh, ctx: &Ctx) -> impl Iterator<Item = u32> {
-    lm.bad_tets(ctx.target).into_iter()
+fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> impl Iterator<Item = u32> {
+    let mut bad: Vec<(i64, u32)> = (0..lm.tets.len() as u32)
+        .filter(|&t| lm.alive[t as usize] && lm.q[t as usize] < ctx.target)
+        .map(|t| (total_order(lm.q[t as usize]), t))
+        .collect();
+    // The keys are distinct (tet ids are), so an unstable sort gives the one order.
+    bad.sort_unstable();
+    bad.into_iter().map(|(_, t)| t)
+}
+
+/// `x` as an integer in the order of [`f64::total_cmp`] (its definition), so that sorting
+/// by it is sorting integers.
+fn total_order(x: f64) -> i64 {
+    let b = x.to_bits() as i64;
+    b ^ (((b >> 63) as u64) >> 1) as i64
 }
 
 /// Calls `op` (of kind `kind`) on every alive bad tet (worst first) until the time budget
@@ -319,7 +332,7 @@ fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
 }
 
 /// The corners of the alive tets below the target, ascending.
-fn bad_corners(lm: &mut LocalMesh, ctx: &Ctx) -> Vec<u32> {
+fn bad_corners(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
     let mut verts: Vec<u32> = bad_tets(lm, ctx)
         .flat_map(|t| lm.tets[t as usize])
         .collect();
@@ -346,4 +359,42 @@ fn smooth_pass(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) -> usi
     }
     report.smoothed += n;
     n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::total_order;
+
+    #[test]
+    fn total_order_sorts_as_total_cmp() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            5e-324,
+            -5e-324,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            0.258,
+            0.2580000000000001,
+            -3.5e300,
+        ];
+        let mut seed = 7u64;
+        for _ in 0..500 {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            xs.push(f64::from_bits(seed));
+        }
+        let mut by_cmp = xs.clone();
+        by_cmp.sort_by(f64::total_cmp);
+        xs.sort_by_key(|&x| total_order(x));
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&xs), bits(&by_cmp));
+    }
 }
