@@ -404,8 +404,14 @@ fn improve_in(
         };
         ctx = context(grid, alpha, beta, &stage, start);
         // Per tet: its quality. Kept up to date through projections and splices, so that
-        // each round evaluates only the tets that changed, and the regions copy it out.
-        state.quality = tet_qualities(mesh, &ctx);
+        // each round evaluates only the tets that changed, and the regions copy it out. In a
+        // single stage the first round evaluates it, after its projection has moved most
+        // tets' corners (`ensure_quality`).
+        state.quality = if ladder.len() == 1 {
+            Vec::new()
+        } else {
+            tet_qualities(mesh, &ctx)
+        };
         // Stuck regions are retried in the single pass and in a ladder's first stage (the
         // same pass) only: in later stages, which regions end stuck at one stage changes
         // where the next starts, and the stages got worse (docs/QUALITY-LOG.md).
@@ -419,6 +425,8 @@ fn improve_in(
         };
         if ladder.len() == 1 {
             run_rounds(mesh, &ctx, rounds, &mut state, &mut report);
+            // No round ran (out of time, or no rounds asked for).
+            ensure_quality(mesh, &ctx, &mut state.quality);
         } else {
             let stage = run_stage(
                 mesh,
@@ -689,7 +697,11 @@ fn run_round(
     if round == 0 {
         let moved = project::project_mesh(mesh, ctx, p.drift);
         p.report.projected += moved.iter().filter(|&&m| m).count();
-        refresh_quality(mesh, ctx, &moved, p.quality);
+        if p.quality.len() == mesh.tets.len() {
+            refresh_quality(mesh, ctx, &moved, p.quality);
+        } else {
+            ensure_quality(mesh, ctx, p.quality);
+        }
     }
     lap(&mut p.report.stage_seconds.project, &mut clock);
     for phase in first_phase..2 {
@@ -970,6 +982,13 @@ fn tet_qualities(mesh: &TetMesh, ctx: &Ctx) -> Vec<f64> {
         .par_iter()
         .map(|t| ctx.quality(t.map(|v| mesh.points[v as usize])))
         .collect()
+}
+
+/// Evaluates `quality` for every tet unless it is already there.
+fn ensure_quality(mesh: &TetMesh, ctx: &Ctx, quality: &mut Vec<f64>) {
+    if quality.len() != mesh.tets.len() {
+        *quality = tet_qualities(mesh, ctx);
+    }
 }
 
 /// Re-evaluates `quality` for the tets with a corner in `moved`.
