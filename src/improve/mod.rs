@@ -1005,24 +1005,30 @@ fn refresh_quality(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], quality: &mut [f64
 fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<bool> {
     let off = project::off_level_points(mesh, ctx);
     let mut work = off.clone();
-    for (t, &q) in mesh.tets.iter().zip(quality) {
-        if q < ctx.target || (ring && t.iter().any(|&v| off[v as usize])) {
-            for &v in t {
-                work[v as usize] = true;
-            }
+    mark_corners(mesh, &mut work, |t| {
+        quality[t] < ctx.target || (ring && mesh.tets[t].iter().any(|&v| off[v as usize]))
+    });
+    work
+}
+
+/// Sets `work` at the corners of every tet `t` for which `marks(t)` holds (tested in
+/// parallel).
+fn mark_corners(mesh: &TetMesh, work: &mut [bool], marks: impl Fn(usize) -> bool + Sync) {
+    let marked: Vec<usize> = (0..mesh.tets.len())
+        .into_par_iter()
+        .filter(|&t| marks(t))
+        .collect();
+    for t in marked {
+        for v in mesh.tets[t] {
+            work[v as usize] = true;
         }
     }
-    work
 }
 
 /// Marks every corner of a tet that has a marked corner.
 fn grow(mesh: &TetMesh, work: &mut [bool]) {
     let seed = work.to_vec();
-    for t in &mesh.tets {
-        if t.iter().any(|&v| seed[v as usize]) {
-            for &v in t {
-                work[v as usize] = true;
-            }
-        }
-    }
+    mark_corners(mesh, work, |t| {
+        mesh.tets[t].iter().any(|&v| seed[v as usize])
+    });
 }

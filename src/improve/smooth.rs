@@ -61,7 +61,8 @@ pub(crate) fn move_by(
     let u = search(lm, &star, &mut qs)?;
     if c.level.is_some() {
         let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
-        lm.drift[v as usize] += star.volume(x1) - star.volume(x0);
+        let (v0, v1) = star.volumes(x0, x1);
+        lm.drift[v as usize] += v1 - v0;
     }
     lm.set_position_with(v, u, ctx, &qs);
     Some(from)
