@@ -104,13 +104,22 @@ fn collapse_quality(
     if !star.iter().any(around_edge) {
         return None;
     }
-    // The quality first: most attempts fail there, at the first tet.
+    // The quality first: most attempts fail there. The tet that stopped the last collapse
+    // from `a` goes first; the order does not change the answer (any tet at or below the
+    // floor stops it, and the smallest quality is the same).
     let floor = floor();
     let mut new = f64::INFINITY;
     let xb = lm.x[b as usize];
-    for &t in star.iter().filter(|t| !around_edge(t)) {
+    let hint = lm.collapse_hint(a).filter(|t| !around_edge(t));
+    let first = hint.into_iter();
+    for t in first.chain(
+        star.iter()
+            .copied()
+            .filter(|t| !around_edge(t) && Some(*t) != hint),
+    ) {
         new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
         if new <= floor {
+            lm.set_collapse_hint(a, t);
             return None;
         }
     }

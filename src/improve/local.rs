@@ -5,6 +5,8 @@
 //! incomplete, so it neither moves nor is merged; every vertex that needs work has its whole
 //! star in the region and is free.
 
+use std::cell::Cell;
+
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use smallvec::SmallVec;
@@ -68,6 +70,10 @@ pub struct LocalMesh {
     /// Per vertex: found within the tolerance of its level set since it last moved (so the
     /// projections need not evaluate the field there again).
     on_level: Vec<bool>,
+    /// Per vertex: the tet of its star that last stopped a collapse from it (`NONE`: none
+    /// yet). The next collapse test from it looks at that tet first: the test asks whether
+    /// every changed tet stays above a floor, which any order of the tets answers the same.
+    collapse_hint: Vec<Cell<u32>>,
 }
 
 /// When the neighbourhoods changed and when operations on them last failed, on one clock.
@@ -365,6 +371,7 @@ impl LocalMesh {
             volume: 0.0,
             drift: vec![0.0; n],
             on_level: vec![false; n],
+            collapse_hint: vec![Cell::new(NONE); n],
             memo: Memo {
                 clock: 1,
                 stamp: vec![1; n],
@@ -508,6 +515,7 @@ impl LocalMesh {
         self.face_count.push(0);
         self.drift.push(0.0);
         self.on_level.push(false);
+        self.collapse_hint.push(Cell::new(NONE));
         self.memo.stamp.push(self.memo.clock);
         self.memo.vertex_failed.push(0);
         id
@@ -650,6 +658,19 @@ impl LocalMesh {
     #[inline]
     pub fn found_on_level(&mut self, v: u32) {
         self.on_level[v as usize] = true;
+    }
+
+    /// The tet that last stopped a collapse from `v`, if it is still alive and around `v`.
+    #[inline]
+    pub fn collapse_hint(&self, v: u32) -> Option<u32> {
+        let t = self.collapse_hint[v as usize].get();
+        (t != NONE && self.alive[t as usize] && self.tets[t as usize].contains(&v)).then_some(t)
+    }
+
+    /// Records that tet `t` stopped a collapse from `v`.
+    #[inline]
+    pub fn set_collapse_hint(&self, v: u32, t: u32) {
+        self.collapse_hint[v as usize].set(t);
     }
 
     /// Whether `v` is a level vertex farther than the tolerance from its level set.
