@@ -82,9 +82,10 @@ pub fn topological_merge(lm: &LocalMesh, a: u32, b: u32) -> bool {
 }
 
 /// For a collapse of `a` into `b` along an edge of the mesh that the constraints allow and
-/// that leaves every changed tet above `floor()` (asked after the cheap tests), along an edge shorter than `ratio` times the
-/// mean edge at `a` if `a` is a level vertex ([`short_edge`]): the smallest quality of the
-/// changed tets after. Stops at the first changed tet that fails.
+/// that leaves every changed tet above `floor()` (asked after the cheap tests), along an
+/// edge shorter than `ratio` times the mean edge at `a` if `a` is a level vertex
+/// ([`short_edge`]): the smallest quality of the changed tets after. Stops at the first
+/// changed tet that fails.
 fn collapse_quality(
     lm: &LocalMesh,
     ctx: &Ctx,
