@@ -112,12 +112,11 @@ fn collapse_quality(
     let mut new = f64::INFINITY;
     let xb = lm.x[b as usize];
     let hint = lm.collapse_hint(a).filter(|t| !around_edge(t));
-    let first = hint.into_iter();
-    for t in first.chain(
-        star.iter()
-            .copied()
-            .filter(|t| !around_edge(t) && Some(*t) != hint),
-    ) {
+    let rest = star
+        .iter()
+        .copied()
+        .filter(|t| !around_edge(t) && Some(*t) != hint);
+    for t in hint.into_iter().chain(rest) {
         new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
         if new <= floor {
             lm.set_collapse_hint(a, t);
@@ -214,17 +213,16 @@ pub fn boundary_faces_at(lm: &LocalMesh, v: u32) -> VertexFaces {
     let all = lm.boundary_faces_of(v);
     for &t in &lm.star[v as usize] {
         let tet = lm.tets[t as usize];
-        // A face at `v` has all its corners on the boundary: the other three corners decide.
-        let off = tet.map(|w| w != v && !lm.on_boundary(w));
-        if off.iter().filter(|&&o| o).count() > 1 {
-            continue;
-        }
-        for skip in 0..4 {
-            // The face opposite `v` is not at `v`; the one opposite an off corner is the one
-            // face that may be on the boundary.
-            if tet[skip] == v || off.iter().enumerate().any(|(i, &o)| o && i != skip) {
-                continue;
-            }
+        // A face at `v` (the face opposite a corner other than `v`) is on the boundary only if
+        // its corners are: with one corner off the boundary only the face opposite it may be,
+        // with two or more none.
+        let mut off = (0..4).filter(|&i| tet[i] != v && !lm.on_boundary(tet[i]));
+        let only = match (off.next(), off.next()) {
+            (None, _) => None,
+            (Some(k), None) => Some(k),
+            _ => continue,
+        };
+        for skip in (0..4).filter(|&s| tet[s] != v && only.is_none_or(|k| k == s)) {
             if let Some(f) = lm.faces.get(&face_key(face_without(tet, skip))) {
                 if !out.contains(f) {
                     out.push(*f);

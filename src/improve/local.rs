@@ -720,26 +720,22 @@ impl StarCorners {
     /// [`StarCorners::volume`] at `x0` and at `x1`, in one pass over the tets (each sum in
     /// the same order as `volume`'s, so the same numbers).
     pub fn volumes(&self, x0: [f64; 3], x1: [f64; 3]) -> (f64, f64) {
-        let (mut s0, mut s1) = (0.0, 0.0);
-        for (c, &s) in self.corners.iter().zip(&self.slot) {
-            let mut p = *c;
-            p[s] = x0;
-            s0 += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
-            p[s] = x1;
-            s1 += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
-        }
-        (s0, s1)
+        (0..self.corners.len()).fold((0.0, 0.0), |(s0, s1), i| {
+            (s0 + self.tet_volume(i, x0), s1 + self.tet_volume(i, x1))
+        })
     }
 
     /// Summed signed volume of the tets with the vertex at physical point `x` (affine in `x`).
     pub fn volume(&self, x: [f64; 3]) -> f64 {
-        let mut sum = 0.0;
-        for (c, &s) in self.corners.iter().zip(&self.slot) {
-            let mut p = *c;
-            p[s] = x;
-            sum += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
-        }
-        sum
+        (0..self.corners.len()).fold(0.0, |sum, i| sum + self.tet_volume(i, x))
+    }
+
+    /// Signed volume of the `i`-th tet with the vertex at physical point `x`.
+    #[inline]
+    fn tet_volume(&self, i: usize, x: [f64; 3]) -> f64 {
+        let mut p = self.corners[i];
+        p[self.slot[i]] = x;
+        crate::geom::signed_volume(p[0], p[1], p[2], p[3])
     }
 
     /// Quality of the `i`-th tet with the vertex at physical point `x`.

@@ -700,7 +700,7 @@ fn run_round(
         if p.quality.len() == mesh.tets.len() {
             refresh_quality(mesh, ctx, &moved, p.quality);
         } else {
-            ensure_quality(mesh, ctx, p.quality);
+            *p.quality = tet_qualities(mesh, ctx);
         }
     }
     lap(&mut p.report.stage_seconds.project, &mut clock);
