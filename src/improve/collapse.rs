@@ -100,28 +100,37 @@ fn collapse_quality(
     if !lm.con[a as usize].may_merge_into(&lm.con[b as usize]) {
         return None;
     }
-    let star = &lm.star[a as usize];
-    let around_edge = |t: &u32| lm.tets[*t as usize].contains(&b);
-    if !star.iter().any(around_edge) {
-        return None;
-    }
     // The quality first: most attempts fail there. The tet that stopped the last collapse
     // from `a` goes first; the order does not change the answer (any tet at or below the
-    // floor stops it, and the smallest quality is the same).
+    // floor stops it, and the smallest quality is the same). Whether `ab` is an edge at all
+    // is seen on the way (it is, for an edge of a tet): a collapse along a non-edge fails
+    // either way.
     let floor = floor();
     let mut new = f64::INFINITY;
     let xb = lm.x[b as usize];
-    let hint = lm.collapse_hint(a).filter(|t| !around_edge(t));
-    let rest = star
-        .iter()
-        .copied()
-        .filter(|t| !around_edge(t) && Some(*t) != hint);
-    for t in hint.into_iter().chain(rest) {
+    let around_edge = |t: u32| lm.tets[t as usize].contains(&b);
+    let hint = lm.collapse_hint(a).filter(|&t| !around_edge(t));
+    let mut stops = |t: u32| {
         new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
-        if new <= floor {
+        let stop = new <= floor;
+        if stop {
             lm.set_collapse_hint(a, t);
+        }
+        stop
+    };
+    if hint.is_some_and(&mut stops) {
+        return None;
+    }
+    let mut edge = false;
+    for &t in &lm.star[a as usize] {
+        if around_edge(t) {
+            edge = true;
+        } else if Some(t) != hint && stops(t) {
             return None;
         }
+    }
+    if !edge {
+        return None;
     }
     if lm.con[a as usize].level.is_some() && !short_edge(lm, a, b, ratio) {
         return None;

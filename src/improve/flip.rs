@@ -24,15 +24,15 @@ pub fn try_flip23(lm: &mut LocalMesh, ctx: &Ctx, t: u32, i: usize) -> bool {
         .into_iter()
         .find(|v| ![b, c, d].contains(v))
         .expect("a tet has a fourth vertex");
-    if lm.star[p as usize]
-        .iter()
-        .any(|&u| lm.tets[u as usize].contains(&q))
-    {
-        return false; // edge pq exists already
-    }
     let new = [[p, b, c, q], [p, q, c, d], [p, b, q, d]];
     let old = [t, s];
-    replace_if_better(lm, ctx, &old, &new)
+    // Not when the edge pq exists already.
+    let legal = |lm: &LocalMesh| {
+        !lm.star[p as usize]
+            .iter()
+            .any(|&u| lm.tets[u as usize].contains(&q))
+    };
+    replace_if_better(lm, ctx, &old, &new, legal)
 }
 
 /// Tries the 3-2 flip of the edge `(p, q)` of tet `t`. Returns whether it flipped.
@@ -70,16 +70,20 @@ pub fn try_flip32(lm: &mut LocalMesh, ctx: &Ctx, t: u32, p: u32, q: u32) -> bool
     // Orient from tet t: [p, b, c, q] even permutation of it; d is the third ring vertex.
     let (b, c) = even_completion(lm.tets[t as usize], p, q);
     let d = ring.into_iter().find(|&v| v != b && v != c).unwrap_or(b);
-    if face_exists(lm, [b, c, d]) {
-        return false;
-    }
     let new = [[p, b, c, d], [q, b, d, c]];
-    replace_if_better(lm, ctx, &around, &new)
+    replace_if_better(lm, ctx, &around, &new, |lm| !face_exists(lm, [b, c, d]))
 }
 
-/// Replaces the tets `old` by `new` when every new tet is positive and the worst of them is
-/// better than the worst old one.
-fn replace_if_better(lm: &mut LocalMesh, ctx: &Ctx, old: &[u32], new: &[[u32; 4]]) -> bool {
+/// Replaces the tets `old` by `new` when every new tet is positive, the worst of them is
+/// better than the worst old one and `legal` holds (asked after the qualities: nearly every
+/// attempt fails on them, and the order does not change the answer).
+fn replace_if_better(
+    lm: &mut LocalMesh,
+    ctx: &Ctx,
+    old: &[u32],
+    new: &[[u32; 4]],
+    legal: impl FnOnce(&LocalMesh) -> bool,
+) -> bool {
     // The old tets' qualities are kept up to date in `lm.q`; the first new tet that is not
     // better decides.
     let q_old = old
@@ -93,6 +97,9 @@ fn replace_if_better(lm: &mut LocalMesh, ctx: &Ctx, old: &[u32], new: &[[u32; 4]
         if *q <= floor {
             return false;
         }
+    }
+    if !legal(lm) {
+        return false;
     }
     for &t in old {
         lm.kill_tet(t);
