@@ -19,35 +19,61 @@ pub type VertexFaces = SmallVec<[BoundaryFace; 16]>;
 /// per tet of a star of 32).
 type LinkVertices = SmallVec<[u32; 96]>;
 
-/// The better legal and improving collapse of edge `ab` (either way), as
-/// `(smallest quality of the changed tets afterwards, from, to)`; `a` into `b` on a tie.
-/// `floor(v)` is [`star_floor`] of `v` (asked only for a direction that passes the cheap
-/// tests): a collapse must do better than the worst tet of the star it removes. The link
-/// condition is symmetric in `a` and `b`, so it is checked once.
+/// The qualities of the tets a collapse changes, by tet id, as its test evaluated them
+/// ([`collapse_quality`]; inline up to 32).
+pub type Evaluated = SmallVec<[(u32, f64); 32]>;
+
+/// A legal and improving collapse found by [`best_collapse`].
+pub struct Collapse {
+    /// The vertex merged away.
+    pub from: u32,
+    /// The vertex it merges into.
+    pub to: u32,
+    /// The qualities of the changed tets afterwards ([`apply_evaluated`] keeps them).
+    pub evaluated: Evaluated,
+}
+
+/// The better legal and improving collapse of edge `ab` (either way: the one whose worst
+/// changed tet is better afterwards); `a` into `b` on a tie. `floor(v)` is [`star_floor`] of
+/// `v` (asked only for a direction that passes the cheap tests): a collapse must do better
+/// than the worst tet of the star it removes. The link condition is symmetric in `a` and
+/// `b`, so it is checked once.
 pub fn best_collapse(
     lm: &LocalMesh,
     ctx: &Ctx,
     a: u32,
     b: u32,
     floor: impl Fn(u32) -> f64,
-) -> Option<(f64, u32, u32)> {
+) -> Option<Collapse> {
     let ratio = ctx.boundary_collapse_ratio;
-    let ab = collapse_quality(lm, ctx, a, b, || floor(a), ratio);
-    let ba = collapse_quality(lm, ctx, b, a, || floor(b), ratio);
-    let best = match (ab, ba) {
-        (Some(x), Some(y)) if y > x => (y, b, a),
-        (Some(x), _) => (x, a, b),
-        (None, Some(y)) => (y, b, a),
+    let (mut at_ab, mut at_ba) = (Evaluated::new(), Evaluated::new());
+    let ab = collapse_quality(lm, ctx, (a, b), || floor(a), ratio, &mut at_ab);
+    let ba = collapse_quality(lm, ctx, (b, a), || floor(b), ratio, &mut at_ba);
+    let (from, to, evaluated) = match (ab, ba) {
+        (Some(x), Some(y)) if y > x => (b, a, at_ba),
+        (Some(_), _) => (a, b, at_ab),
+        (None, Some(_)) => (b, a, at_ba),
         (None, None) => return None,
     };
-    link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(best)
+    link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(Collapse {
+        from,
+        to,
+        evaluated,
+    })
 }
 
 /// The collapse of `a` into `b`, if legal and every remaining tet stays positive (no gain
 /// needed, and no [`QualityOptions::boundary_collapse_ratio`](super::QualityOptions) limit:
 /// used to remove vertices that cannot reach their level set).
 pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> {
-    let new = collapse_quality(lm, ctx, a, b, || 0.0, f64::INFINITY)?;
+    let new = collapse_quality(
+        lm,
+        ctx,
+        (a, b),
+        || 0.0,
+        f64::INFINITY,
+        &mut Evaluated::new(),
+    )?;
     link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(new)
 }
 
@@ -56,7 +82,8 @@ pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> 
 /// positive, whatever their quality: for operations that judge it after further moves
 /// ([`super::composite`]).
 pub fn legal_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> bool {
-    collapse_quality(lm, ctx, a, b, || 0.0, ctx.boundary_collapse_ratio).is_some()
+    let ratio = ctx.boundary_collapse_ratio;
+    collapse_quality(lm, ctx, (a, b), || 0.0, ratio, &mut Evaluated::new()).is_some()
         && link_condition(lm, a, b, &lm.edge_tets(a, b))
 }
 
@@ -84,15 +111,15 @@ pub fn topological_merge(lm: &LocalMesh, a: u32, b: u32) -> bool {
 /// For a collapse of `a` into `b` along an edge of the mesh that the constraints allow and
 /// that leaves every changed tet above `floor()` (asked after the cheap tests), along an
 /// edge shorter than `ratio` times the mean edge at `a` if `a` is a level vertex
-/// ([`short_edge`]): the smallest quality of the changed tets after. Stops at the first
-/// changed tet that fails.
+/// ([`short_edge`]): the smallest quality of the changed tets after, with the quality of each
+/// changed tet evaluated in `evaluated`. Stops at the first changed tet that fails.
 fn collapse_quality(
     lm: &LocalMesh,
     ctx: &Ctx,
-    a: u32,
-    b: u32,
+    (a, b): (u32, u32),
     floor: impl FnOnce() -> f64,
     ratio: f64,
+    evaluated: &mut Evaluated,
 ) -> Option<f64> {
     if !lm.is_free(a) || !lm.is_free(b) {
         return None;
@@ -111,7 +138,9 @@ fn collapse_quality(
     let around_edge = |t: u32| lm.tets[t as usize].contains(&b);
     let hint = lm.collapse_hint(a).filter(|&t| !around_edge(t));
     let mut stops = |t: u32| {
-        new = new.min(ctx.quality(lm.corners_with(t, a, xb)));
+        let q = ctx.quality(lm.corners_with(t, a, xb));
+        evaluated.push((t, q));
+        new = new.min(q);
         let stop = new <= floor;
         if stop {
             lm.set_collapse_hint(a, t);
@@ -175,8 +204,19 @@ fn short_edge(lm: &LocalMesh, a: u32, b: u32, ratio: f64) -> bool {
     n > 0 && len(b) < ratio * sum / n as f64
 }
 
-/// Merges `a` into `b` (legality and gain checked by [`best_collapse`]).
+/// Applies the collapse `c`, keeping the qualities its test evaluated.
+pub fn apply_evaluated(lm: &mut LocalMesh, c: &Collapse) {
+    merge(lm, c.from, c.to, &c.evaluated);
+}
+
+/// Merges `a` into `b` (legality and gain checked by the caller).
 pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
+    merge(lm, a, b, &[]);
+}
+
+/// Merges `a` into `b`; a changed tet listed in `known` takes the quality given there (the
+/// collapse test's, evaluated at the same corners), the others are evaluated.
+fn merge(lm: &mut LocalMesh, a: u32, b: u32, known: &[(u32, f64)]) {
     // Only a level vertex's star changes the domain: the tets left still fill an interior
     // vertex's star.
     let level = lm.con[a as usize].level.is_some();
@@ -204,7 +244,10 @@ pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
             }
         }
         lm.star[b as usize].push(t);
-        lm.update_quality(t);
+        match known.iter().find(|k| k.0 == t) {
+            Some(&(_, q)) => lm.set_quality(t, q),
+            None => lm.update_quality(t),
+        }
         if level {
             added += lm.volume_of(t);
         }
@@ -513,7 +556,9 @@ mod tests {
                     continue;
                 }
                 while let Some(a) = positive_merge_into(lm, &ctx, b) {
-                    let q = collapse_quality(lm, &ctx, a, b, || 0.0, f64::INFINITY);
+                    let mut evaluated = Evaluated::new();
+                    let q =
+                        collapse_quality(lm, &ctx, (a, b), || 0.0, f64::INFINITY, &mut evaluated);
                     if lm.star[a as usize].len() + lm.star[b as usize].len() > HUB_TETS {
                         assert!(q.is_none(), "{a} into {b}");
                         refused += 1;

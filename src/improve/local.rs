@@ -620,6 +620,12 @@ impl LocalMesh {
         }
     }
 
+    /// Sets the quality of tet `t` to `q`, evaluated at its corners as they are now.
+    pub fn set_quality(&mut self, t: u32, q: f64) {
+        self.touch(t);
+        self.q[t as usize] = q;
+    }
+
     /// Recomputes the quality of tet `t` (after its corners changed).
     pub fn update_quality(&mut self, t: u32) {
         self.touch(t);

@@ -1,7 +1,7 @@
 //! The order in which the operations run on a region (after Stellar: cheap, safe moves first,
 //! topology changes where moves are not enough, then smoothing again).
 
-use super::collapse::{apply_collapse, best_collapse, evaluate_merge, star_floor};
+use super::collapse::{apply_collapse, apply_evaluated, best_collapse, evaluate_merge, star_floor};
 use super::composite::{collapse_then_move, worst};
 use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
@@ -282,8 +282,8 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
         })
     };
     for (_, a, b) in edges {
-        if let Some((_, from, to)) = best_collapse(lm, ctx, a, b, floor) {
-            apply_collapse(lm, from, to);
+        if let Some(c) = best_collapse(lm, ctx, a, b, floor) {
+            apply_evaluated(lm, &c);
             return true;
         }
     }
