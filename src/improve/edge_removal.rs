@@ -25,13 +25,19 @@ pub const MAX_RING: usize = 7;
 /// Up to [`MAX_RING`] items (ring vertices or tets around an edge), inline.
 type RingVec<T> = SmallVec<[T; MAX_RING]>;
 
-/// Tries to remove the edge `(a, b)` of tet `t` when 4 to [`MAX_RING`] tets surround it.
-/// Returns whether it did.
-pub fn try_remove_edge(lm: &mut LocalMesh, ctx: &Ctx, t: u32, a: u32, b: u32) -> bool {
+/// Tries to remove the edge `(a, b)` of tet `t`, whose tets are `edge_tets`
+/// ([`LocalMesh::edge_tets`]), when 4 to [`MAX_RING`] tets surround it. Returns whether it
+/// did.
+pub fn try_remove_edge(
+    lm: &mut LocalMesh,
+    ctx: &Ctx,
+    (t, a, b): (u32, u32, u32),
+    edge_tets: &[u32],
+) -> bool {
     if !lm.is_free(a) && !lm.is_free(b) {
         return false; // then the tets around the edge may reach out of the region
     }
-    let Some((ring, around)) = ring_around(lm, t, a, b) else {
+    let Some((ring, around)) = ring_around(lm, (t, a, b), edge_tets) else {
         return false;
     };
     let k = ring.len();
@@ -69,11 +75,15 @@ fn cone(a: u32, b: u32, ring: &[u32], [i, j, l]: [usize; 3]) -> [[u32; 4]; 2] {
     ]
 }
 
-/// The ring of edge `(a, b)` around from tet `t`, ordered so that `[a, b, r_i, r_{i+1}]` is
-/// positive, and the tets around the edge (`[a, b, r_i, r_{i+1}]` at `i`); `None` when the ring
-/// is open (the edge is on the boundary or leaves the region) or longer than [`MAX_RING`].
-fn ring_around(lm: &LocalMesh, t: u32, a: u32, b: u32) -> Option<(RingVec<u32>, RingVec<u32>)> {
-    let edge_tets = lm.edge_tets(a, b);
+/// The ring of edge `(a, b)` (whose tets are `edge_tets`) around from tet `t`, ordered so
+/// that `[a, b, r_i, r_{i+1}]` is positive, and the tets around the edge
+/// (`[a, b, r_i, r_{i+1}]` at `i`); `None` when the ring is open (the edge is on the boundary
+/// or leaves the region) or longer than [`MAX_RING`].
+fn ring_around(
+    lm: &LocalMesh,
+    (t, a, b): (u32, u32, u32),
+    edge_tets: &[u32],
+) -> Option<(RingVec<u32>, RingVec<u32>)> {
     if edge_tets.len() > MAX_RING {
         return None;
     }
@@ -227,13 +237,14 @@ mod tests {
                     }
                     let tet = lm.tets[t as usize];
                     let (a, b) = (tet[i], tet[j]);
-                    let Some((ring, around)) = ring_around(lm, t, a, b) else {
+                    let edge_tets = lm.edge_tets(a, b);
+                    let Some((ring, around)) = ring_around(lm, (t, a, b), &edge_tets) else {
                         continue;
                     };
                     let worst = around.iter().map(|&u| lm.q[u as usize]).fold(1.0, f64::min);
                     let (outer, (n, volume)) = (outer_faces(lm), alive_volume(lm));
                     let first_new = lm.tets.len();
-                    if !try_remove_edge(lm, &ctx, t, a, b) {
+                    if !try_remove_edge(lm, &ctx, (t, a, b), &edge_tets) {
                         continue;
                     }
                     let k = ring.len();

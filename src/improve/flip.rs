@@ -35,25 +35,22 @@ pub fn try_flip23(lm: &mut LocalMesh, ctx: &Ctx, t: u32, i: usize) -> bool {
     replace_if_better(lm, ctx, &old, &new, legal)
 }
 
-/// Tries the 3-2 flip of the edge `(p, q)` of tet `t`. Returns whether it flipped.
-pub fn try_flip32(lm: &mut LocalMesh, ctx: &Ctx, t: u32, p: u32, q: u32) -> bool {
+/// Tries the 3-2 flip of the edge `(p, q)` of tet `t`, whose tets are `edge_tets`
+/// ([`LocalMesh::edge_tets`]). Returns whether it flipped.
+pub fn try_flip32(
+    lm: &mut LocalMesh,
+    ctx: &Ctx,
+    (t, p, q): (u32, u32, u32),
+    edge_tets: &[u32],
+) -> bool {
     if !lm.is_free(p) && !lm.is_free(q) {
         return false;
     }
     // The tets around the edge, and the vertices of its ring: three each, or no 3-2 flip.
-    let (mut around, mut n) = ([0u32; 3], 0);
-    for &u in lm.star[p as usize].iter() {
-        if lm.tets[u as usize].contains(&q) {
-            if n == 3 {
-                return false;
-            }
-            around[n] = u;
-            n += 1;
-        }
-    }
-    if n != 3 {
+    let &[u0, u1, u2] = edge_tets else {
         return false;
-    }
+    };
+    let around = [u0, u1, u2];
     let (mut ring, mut m) = ([0u32; 3], 0);
     for w in around.iter().flat_map(|&u| lm.tets[u as usize]) {
         if w != p && w != q && !ring[..m].contains(&w) {
