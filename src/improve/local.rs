@@ -344,6 +344,8 @@ impl LocalMesh {
         for (t, &g) in local_tets.into_iter().zip(tets) {
             lm.push_tet(t, copy.quality[g as usize]);
         }
+        // Sized once (the map's order is never used: it is read in key order or summed).
+        lm.faces.reserve(faces.len());
         for f in faces {
             lm.insert_face(f);
         }
