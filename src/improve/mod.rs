@@ -695,12 +695,14 @@ fn run_round(
     // Later rounds find few vertices off their level, all marked as work: the regions
     // project them, so the whole-mesh scan runs once.
     if round == 0 {
-        let moved = project::project_mesh(mesh, ctx, p.drift);
+        // Qualities kept from an earlier stage are refreshed where corners moved; otherwise
+        // the projection gives them all.
+        let kept = p.quality.len() == mesh.tets.len();
+        let fill = (!kept).then_some(&mut *p.quality);
+        let moved = project::project_mesh(mesh, ctx, p.drift, fill);
         p.report.projected += moved.iter().filter(|&&m| m).count();
-        if p.quality.len() == mesh.tets.len() {
+        if kept {
             refresh_quality(mesh, ctx, &moved, p.quality);
-        } else {
-            *p.quality = tet_qualities(mesh, ctx);
         }
     }
     lap(&mut p.report.stage_seconds.project, &mut clock);

@@ -29,8 +29,15 @@ const REVERT_ROUNDS: usize = 8;
 /// count): all moves are computed from the old positions, then the moves of vertices of tets
 /// that would not stay positive are reverted until no tet is inverted. Adds to each moved
 /// vertex's `drift` the volume its move added (over its tets, the others where they were).
-/// Returns, per point, whether it moved.
-pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx, drift: &mut [f64]) -> Vec<bool> {
+/// Returns, per point, whether it moved. With `quality`, fills it with every tet's quality
+/// ([`Ctx::quality`]) after the moves, reusing those the first inversion check evaluated at
+/// the same corners.
+pub fn project_mesh(
+    mesh: &mut TetMesh,
+    ctx: &Ctx,
+    drift: &mut [f64],
+    quality: Option<&mut Vec<f64>>,
+) -> Vec<bool> {
     let labels = mesh.vertex_label_bits();
     let dims = ctx.field.grid().dims;
     // Per point: where a level vertex off its level would go.
@@ -57,9 +64,13 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx, drift: &mut [f64]) -> Vec<boo
         .into_par_iter()
         .filter(|&t| mesh.tets[t as usize].iter().any(|&v| moved[v as usize]))
         .collect();
-    let mut check = around_moved.clone();
+    // The first check evaluates every tet with every move made (those around no move as
+    // they stay), which is each tet's quality after the projection unless a move around it
+    // is reverted.
+    let all = (0..mesh.tets.len() as u32).into_par_iter();
+    let first = qualities_at_targets(mesh, (&target, &moved), all.clone(), ctx);
+    let mut bad = inverted_moves(mesh, &moved, all, &first);
     for round in 0..=REVERT_ROUNDS {
-        let bad = inverted_moves(mesh, &target, &moved, &check, ctx);
         if bad.is_empty() {
             break;
         }
@@ -73,11 +84,13 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx, drift: &mut [f64]) -> Vec<boo
         for &v in &bad {
             reverted[v as usize] = true;
         }
-        check = around_moved
+        let check: Vec<u32> = around_moved
             .par_iter()
             .copied()
             .filter(|&t| mesh.tets[t as usize].iter().any(|&v| reverted[v as usize]))
             .collect();
+        let q = qualities_at_targets(mesh, (&target, &moved), check.par_iter().copied(), ctx);
+        bad = inverted_moves(mesh, &moved, check.par_iter().copied(), &q);
     }
     add_moved_volume(mesh, &around_moved, &target, &moved, drift);
     for (v, t) in target.iter().enumerate() {
@@ -85,7 +98,27 @@ pub fn project_mesh(mesh: &mut TetMesh, ctx: &Ctx, drift: &mut [f64]) -> Vec<boo
             mesh.points[v] = t.expect("moved vertices have a target");
         }
     }
+    if let Some(quality) = quality {
+        *quality = qualities_after(mesh, ctx, first, (&target, &moved));
+    }
     moved
+}
+
+/// Every tet's quality after the projection: `first` (per tet, with every targeted corner at
+/// its target) where no corner's move was reverted, else evaluated.
+fn qualities_after(
+    mesh: &TetMesh,
+    ctx: &Ctx,
+    mut first: Vec<f64>,
+    (target, moved): (&[Option<[f64; 3]>], &[bool]),
+) -> Vec<f64> {
+    let reverted = |v: u32| target[v as usize].is_some() && !moved[v as usize];
+    mesh.tets.par_iter().zip(&mut first).for_each(|(tet, q)| {
+        if tet.iter().any(|&v| reverted(v)) {
+            *q = ctx.quality(tet.map(|v| mesh.points[v as usize]));
+        }
+    });
+    first
 }
 
 /// Adds to the `drift` of each `moved` corner of the tets `around` the volume its move to its
@@ -142,26 +175,37 @@ pub fn off_level_points(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
         .collect()
 }
 
-/// The moved vertices of the tets among `check` that the moves would leave non-positive,
-/// sorted.
-fn inverted_moves(
+/// The quality of each tet of `check` with its `moved` corners at their `target`.
+fn qualities_at_targets(
     mesh: &TetMesh,
-    target: &[Option<[f64; 3]>],
-    moved: &[bool],
-    check: &[u32],
+    (target, moved): (&[Option<[f64; 3]>], &[bool]),
+    check: impl IndexedParallelIterator<Item = u32>,
     ctx: &Ctx,
-) -> Vec<u32> {
-    let mut bad: Vec<u32> = check
-        .par_iter()
-        .map(|&t| mesh.tets[t as usize])
-        .filter(|t| t.iter().any(|&v| moved[v as usize]))
-        .filter(|t| {
-            let p = t.map(|v| match (moved[v as usize], target[v as usize]) {
+) -> Vec<f64> {
+    check
+        .map(|t| {
+            let tet = mesh.tets[t as usize];
+            let p = tet.map(|v| match (moved[v as usize], target[v as usize]) {
                 (true, Some(x)) => x,
                 _ => mesh.points[v as usize],
             });
-            ctx.quality(p) <= 0.0
+            ctx.quality(p)
         })
+        .collect()
+}
+
+/// The moved vertices of the tets among `check` whose qualities with the moves made, `q`
+/// ([`qualities_at_targets`]), are not positive, sorted.
+fn inverted_moves(
+    mesh: &TetMesh,
+    moved: &[bool],
+    check: impl IndexedParallelIterator<Item = u32>,
+    q: &[f64],
+) -> Vec<u32> {
+    let mut bad: Vec<u32> = check
+        .zip(q)
+        .filter(|(_, &q)| q <= 0.0)
+        .map(|(t, _)| mesh.tets[t as usize])
         .flat_map_iter(|t| t.into_iter().filter(|&v| moved[v as usize]))
         .collect();
     bad.par_sort_unstable();
