@@ -31,6 +31,7 @@ pub mod stages;
 pub(crate) mod submesh;
 pub(crate) mod warped;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
@@ -1013,18 +1014,20 @@ fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<boo
     work
 }
 
-/// Sets `work` at the corners of every tet `t` for which `marks(t)` holds (tested in
-/// parallel).
+/// Sets `work` at the corners of every tet `t` for which `marks(t)` holds (in parallel:
+/// setting a flag twice, in any order, sets it).
 fn mark_corners(mesh: &TetMesh, work: &mut [bool], marks: impl Fn(usize) -> bool + Sync) {
-    let marked: Vec<usize> = (0..mesh.tets.len())
-        .into_par_iter()
-        .filter(|&t| marks(t))
-        .collect();
-    for t in marked {
-        for v in mesh.tets[t] {
-            work[v as usize] = true;
+    let flags: Vec<AtomicBool> = work.par_iter().map(|&w| AtomicBool::new(w)).collect();
+    (0..mesh.tets.len()).into_par_iter().for_each(|t| {
+        if marks(t) {
+            for v in mesh.tets[t] {
+                flags[v as usize].store(true, Ordering::Relaxed);
+            }
         }
-    }
+    });
+    work.par_iter_mut()
+        .zip(flags)
+        .for_each(|(w, f)| *w = f.into_inner());
 }
 
 /// Marks every corner of a tet that has a marked corner.

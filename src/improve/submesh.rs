@@ -76,23 +76,20 @@ impl SubMesh {
     ) -> SubMesh {
         let mut near = work.to_vec();
         for _ in 1..rings {
-            near = grow(mesh, &near);
+            super::grow(mesh, &mut near);
         }
         let tets = touching(mesh, &near);
+        let mut in_copy = vec![false; mesh.points.len()];
+        super::mark_corners(mesh, &mut in_copy, |t| touches(mesh, t as u32, &near));
         let mut local = vec![NONE; mesh.points.len()];
-        for &t in &tets {
-            for v in mesh.tets[t as usize] {
-                local[v as usize] = 0;
-            }
-        }
         let mut points = Vec::new();
         for (v, id) in local.iter_mut().enumerate() {
-            if *id == 0 {
+            if in_copy[v] {
                 *id = points.len() as u32;
                 points.push(v as u32);
             }
         }
-        let rim = rim_of(mesh, &near, &local, points.len());
+        let rim = rim_of(mesh, &near, &local, &points);
         let faces: Vec<u32> = (0..mesh.boundary.len() as u32)
             .into_par_iter()
             .filter(|&f| {
@@ -103,25 +100,31 @@ impl SubMesh {
             .collect();
         let to_local = |v: &u32| local[*v as usize];
         let sub = TetMesh {
-            points: points.iter().map(|&v| mesh.points[v as usize]).collect(),
-            values: points.iter().map(|&v| mesh.values[v as usize]).collect(),
+            points: points
+                .par_iter()
+                .map(|&v| mesh.points[v as usize])
+                .collect(),
+            values: points
+                .par_iter()
+                .map(|&v| mesh.values[v as usize])
+                .collect(),
             tets: tets
-                .iter()
+                .par_iter()
                 .map(|&t| mesh.tets[t as usize].each_ref().map(to_local))
                 .collect(),
             boundary: faces
-                .iter()
+                .par_iter()
                 .map(|&f| mesh.boundary[f as usize].each_ref().map(to_local))
                 .collect(),
             boundary_labels: faces
-                .iter()
+                .par_iter()
                 .map(|&f| mesh.boundary_labels[f as usize])
                 .collect(),
         };
         SubMesh {
             mesh: sub,
-            quality: tets.iter().map(|&t| quality[t as usize]).collect(),
-            drift: points.iter().map(|&v| drift[v as usize]).collect(),
+            quality: tets.par_iter().map(|&t| quality[t as usize]).collect(),
+            drift: points.par_iter().map(|&v| drift[v as usize]).collect(),
             rim,
             removed: Vec::new(),
             untouched: Untouched {
@@ -221,33 +224,19 @@ fn touches(mesh: &TetMesh, t: u32, near: &[bool]) -> bool {
     mesh.tets[t as usize].iter().any(|&v| near[v as usize])
 }
 
-/// `near` and the corners of every tet with a corner in it.
-fn grow(mesh: &TetMesh, near: &[bool]) -> Vec<bool> {
-    let mut out = near.to_vec();
-    for t in touching(mesh, near) {
-        for v in mesh.tets[t as usize] {
-            out[v as usize] = true;
-        }
-    }
-    out
-}
-
-/// Per point of the copy (`local`: copy id per mesh point, `NONE` outside; the copy's tets
-/// are those with a corner in `near`): whether a tet outside the copy uses it.
-fn rim_of(mesh: &TetMesh, near: &[bool], local: &[u32], n: usize) -> Vec<bool> {
-    let outside: Vec<u32> = (0..mesh.tets.len() as u32)
-        .into_par_iter()
-        .filter(|&t| !touches(mesh, t, near) && touches_copy(mesh, t, local))
-        .collect();
-    let mut rim = vec![false; n];
-    for t in outside {
-        for v in mesh.tets[t as usize] {
-            if local[v as usize] != NONE {
-                rim[local[v as usize] as usize] = true;
-            }
-        }
-    }
-    rim
+/// Per point of the copy (`local`: copy id per mesh point, `NONE` outside; `points`: the
+/// copy's points in copy order; the copy's tets are those with a corner in `near`): whether a
+/// tet outside the copy uses it.
+fn rim_of(mesh: &TetMesh, near: &[bool], local: &[u32], points: &[u32]) -> Vec<bool> {
+    let mut used_outside = vec![false; mesh.points.len()];
+    super::mark_corners(mesh, &mut used_outside, |t| {
+        let t = t as u32;
+        !touches(mesh, t, near) && touches_copy(mesh, t, local)
+    });
+    points
+        .par_iter()
+        .map(|&v| used_outside[v as usize])
+        .collect()
 }
 
 /// Whether tet `t` has a corner in the copy.
