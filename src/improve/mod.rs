@@ -406,8 +406,9 @@ fn improve_in(
         ctx = context(grid, alpha, beta, &stage, start);
         // Per tet: its quality. Kept up to date through projections and splices, so that
         // each round evaluates only the tets that changed, and the regions copy it out. In a
-        // single stage the first round evaluates it, after its projection has moved most
-        // tets' corners (`ensure_quality`).
+        // single stage the first round's projection fills it (its inversion check evaluates
+        // every tet with the moves made); `ensure_quality` covers a pass in which no round
+        // ran.
         state.quality = if ladder.len() == 1 {
             Vec::new()
         } else {
