@@ -355,7 +355,7 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
             return false;
         }
     }
-    boundary_link_condition(lm, a, b)
+    boundary_link_condition(lm, a, b, &ring)
 }
 
 /// Whether a corner of the tets around `b` (other than `a` and `b`) is in the sorted link
@@ -383,52 +383,61 @@ fn edge_allowed(lm: &LocalMesh, a: u32, b: u32, shared: &[u32], e: [u32; 2]) -> 
     in_shared || !star_has(lm, b, &e)
 }
 
-/// The part of the link condition that involves the virtual vertex coning the boundary.
-fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
+/// The part of the link condition that involves the virtual vertex coning the boundary, once
+/// the links of `a` and `b` are known to share no vertex off the sorted `ring`
+/// ([`shares_off_ring`]).
+///
+/// The virtual vertex is in both links when `a` and `b` are on the boundary, and then must be
+/// in the link of `ab`: `ab` is a boundary edge. Its edge to `v` is in the link of `a` when
+/// `av` is a boundary edge: with `bv` one too, `abv` must be a boundary face. Its triangle
+/// with `vw` is in the link of `a` when `avw` is a boundary face, and never in the link of
+/// `ab`: `bvw` must not be one. A vertex `v` of both of these is in both links, so on the
+/// ring, and only the boundary faces at `a` are gathered; those at `b` are looked up.
+fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32, ring: &[u32]) -> bool {
     if !lm.on_boundary(a) || !lm.on_boundary(b) {
         return true;
     }
-    let (fa, fb) = (boundary_faces_at(lm, a), boundary_faces_at(lm, b));
-    if fa.is_empty() || fb.is_empty() {
-        return true;
-    }
-    let on_edge = |f: &BoundaryFace| f.tri.contains(&a) && f.tri.contains(&b);
-    let ab_faces: SmallVec<[[u32; 3]; 4]> = fa
+    let fa = boundary_faces_at(lm, a);
+    let opposite = |f: &BoundaryFace| {
+        let i = f.tri.iter().position(|&w| w == a).unwrap_or(0);
+        [f.tri[(i + 1) % 3], f.tri[(i + 2) % 3]]
+    };
+    // The third corners of the boundary faces at `ab`.
+    let closing: SmallVec<[u32; 4]> = fa
         .iter()
-        .filter(|f| on_edge(f))
-        .map(|f| face_key(f.tri))
+        .map(opposite)
+        .filter(|o| o.contains(&b))
+        .map(|o| if o[0] == b { o[1] } else { o[0] })
         .collect();
-    if ab_faces.is_empty() {
+    if closing.is_empty() {
         // Both ends on the boundary but the edge is not: collapsing would pinch the boundary.
         return false;
     }
-    let others = |faces: &[BoundaryFace], v: u32| {
-        let mut verts: SmallVec<[u32; 32]> = SmallVec::new();
-        let mut edges: SmallVec<[[u32; 2]; 16]> = SmallVec::new();
-        for f in faces {
-            let i = f.tri.iter().position(|&w| w == v).unwrap_or(0);
-            let o = [f.tri[(i + 1) % 3], f.tri[(i + 2) % 3]];
-            verts.extend_from_slice(&o);
-            edges.push([o[0].min(o[1]), o[0].max(o[1])]);
+    let on_ring = |w: u32| ring.binary_search(&w).is_ok();
+    for o in fa.iter().map(opposite).filter(|o| !o.contains(&b)) {
+        let open = |v: u32| on_ring(v) && !closing.contains(&v) && boundary_edge(lm, b, v);
+        if open(o[0]) || open(o[1]) {
+            return false;
         }
-        verts.sort_unstable();
-        verts.dedup();
-        edges.sort_unstable();
-        (verts, edges)
-    };
-    let (va, ea) = others(&fa, a);
-    let (vb, eb) = others(&fb, b);
-    let outside = |x: &u32| *x != a && *x != b;
-    // Boundary edges av and bv: abv must be a boundary face.
-    let verts_ok = va
-        .iter()
-        .filter(|v| outside(v) && vb.binary_search(v).is_ok())
-        .all(|&v| ab_faces.contains(&face_key([a, b, v])));
-    // Boundary faces avw and bvw both present: the virtual tets would clash.
-    let faces_ok = !ea
-        .iter()
-        .any(|e| outside(&e[0]) && outside(&e[1]) && eb.binary_search(e).is_ok());
-    verts_ok && faces_ok
+        if on_ring(o[0]) && on_ring(o[1]) && lm.faces.contains_key(&face_key([b, o[0], o[1]])) {
+            return false;
+        }
+    }
+    true
+}
+
+/// Whether `bv` is an edge of a boundary face (`b` free, so its whole star is in the region).
+fn boundary_edge(lm: &LocalMesh, b: u32, v: u32) -> bool {
+    if !lm.on_boundary(v) {
+        return false;
+    }
+    lm.star[b as usize].iter().any(|&t| {
+        let tet = lm.tets[t as usize];
+        tet.contains(&v)
+            && (0..4)
+                .filter(|&s| tet[s] != b && tet[s] != v)
+                .any(|s| lm.faces.contains_key(&face_key(face_without(tet, s))))
+    })
 }
 
 #[cfg(test)]
@@ -503,7 +512,56 @@ mod tests {
             .tris
             .iter()
             .any(|t| t.iter().all(outside) && lb.tris.binary_search(t).is_ok());
-        edge_ok && !tri_clash && boundary_link_condition(lm, a, b)
+        edge_ok && !tri_clash && reference_boundary_link_condition(lm, a, b)
+    }
+
+    /// The part of the link condition that involves the virtual vertex coning the boundary,
+    /// from the boundary faces at both ends (the first implementation).
+    fn reference_boundary_link_condition(lm: &LocalMesh, a: u32, b: u32) -> bool {
+        if !lm.on_boundary(a) || !lm.on_boundary(b) {
+            return true;
+        }
+        let (fa, fb) = (boundary_faces_at(lm, a), boundary_faces_at(lm, b));
+        if fa.is_empty() || fb.is_empty() {
+            return true;
+        }
+        let on_edge = |f: &BoundaryFace| f.tri.contains(&a) && f.tri.contains(&b);
+        let ab_faces: SmallVec<[[u32; 3]; 4]> = fa
+            .iter()
+            .filter(|f| on_edge(f))
+            .map(|f| face_key(f.tri))
+            .collect();
+        if ab_faces.is_empty() {
+            // Both ends on the boundary but the edge is not: collapsing would pinch the boundary.
+            return false;
+        }
+        let others = |faces: &[BoundaryFace], v: u32| {
+            let mut verts: SmallVec<[u32; 32]> = SmallVec::new();
+            let mut edges: SmallVec<[[u32; 2]; 16]> = SmallVec::new();
+            for f in faces {
+                let i = f.tri.iter().position(|&w| w == v).unwrap_or(0);
+                let o = [f.tri[(i + 1) % 3], f.tri[(i + 2) % 3]];
+                verts.extend_from_slice(&o);
+                edges.push([o[0].min(o[1]), o[0].max(o[1])]);
+            }
+            verts.sort_unstable();
+            verts.dedup();
+            edges.sort_unstable();
+            (verts, edges)
+        };
+        let (va, ea) = others(&fa, a);
+        let (vb, eb) = others(&fb, b);
+        let outside = |x: &u32| *x != a && *x != b;
+        // Boundary edges av and bv: abv must be a boundary face.
+        let verts_ok = va
+            .iter()
+            .filter(|v| outside(v) && vb.binary_search(v).is_ok())
+            .all(|&v| ab_faces.contains(&face_key([a, b, v])));
+        // Boundary faces avw and bvw both present: the virtual tets would clash.
+        let faces_ok = !ea
+            .iter()
+            .any(|e| outside(&e[0]) && outside(&e[1]) && eb.binary_search(e).is_ok());
+        verts_ok && faces_ok
     }
 
     #[test]
@@ -540,6 +598,43 @@ mod tests {
             legal > 1000 && illegal > 100 && applied > 100,
             "{legal} {illegal} {applied}"
         );
+    }
+
+    #[test]
+    fn no_edge_of_a_lone_tet_may_collapse() {
+        // All four faces of a lone tet are boundary faces. The links of two corners share
+        // only the other two corners and their edge, as the link of the edge does; but both
+        // links hold the virtual vertex's triangle over that edge (two boundary faces), which
+        // the link of the edge cannot. Only the boundary part of the condition sees it.
+        let grid =
+            crate::ScalarGrid::new([4, 4, 4], (0..64u8).map(f64::from).collect::<Vec<f64>>())
+                .unwrap();
+        let mesh = crate::mesh::TetMesh {
+            points: vec![
+                [1.0, 1.0, 1.0],
+                [2.0, 1.0, 1.0],
+                [1.0, 2.0, 1.0],
+                [1.0, 1.0, 2.0],
+            ],
+            values: vec![21.0, 22.0, 25.0, 37.0],
+            tets: vec![[0, 1, 2, 3]],
+            boundary: vec![[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]],
+            boundary_labels: vec![crate::mesh::BoundaryLabel::Alpha; 4],
+        };
+        let opts = crate::improve::QualityOptions::default();
+        let ctx = crate::improve::context(&grid, 20.0, 40.0, &opts, std::time::Instant::now());
+        let quality = crate::improve::tet_qualities(&mesh, &ctx);
+        let (regions, _) =
+            crate::improve::local::extract_regions(&mesh, &[true; 4], &quality, &ctx, 0);
+        let lm = regions.iter().find(|lm| !lm.tets.is_empty()).unwrap();
+        for (a, b) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+            assert!(lm.is_free(a) && lm.is_free(b));
+            let shared = lm.edge_tets(a, b);
+            assert!(!link_condition(lm, a, b, &shared), "{a} {b}");
+            assert!(!reference_link_condition(lm, a, b, &shared), "{a} {b}");
+            let ring: Vec<u32> = (0..4).filter(|&w| w != a && w != b).collect();
+            assert!(!shares_off_ring(lm, [a, b], &link_vertices(lm, a), &ring));
+        }
     }
 
     #[test]
