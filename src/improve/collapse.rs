@@ -625,7 +625,7 @@ mod tests {
         let ctx = crate::improve::context(&grid, 20.0, 40.0, &opts, std::time::Instant::now());
         let quality = crate::improve::tet_qualities(&mesh, &ctx);
         let (regions, _) =
-            crate::improve::local::extract_regions(&mesh, &[true; 4], &quality, &ctx, 0);
+            crate::improve::local::extract_regions(&mesh, (&[true; 4], None), &quality, &ctx, 0);
         let lm = regions.iter().find(|lm| !lm.tets.is_empty()).unwrap();
         for (a, b) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
             assert!(lm.is_free(a) && lm.is_free(b));

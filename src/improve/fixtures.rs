@@ -54,7 +54,7 @@ pub fn wavy_torus_regions<'a>(grid: &'a ScalarGrid, phases: &[u32]) -> (Ctx<'a>,
     let quality = tet_qualities(&mesh, &ctx);
     let regions = phases
         .iter()
-        .flat_map(|&p| extract_regions(&mesh, &work, &quality, &ctx, p).0)
+        .flat_map(|&p| extract_regions(&mesh, (&work, None), &quality, &ctx, p).0)
         .collect();
     (ctx, regions)
 }

@@ -164,23 +164,26 @@ fn slabs(mesh: &TetMesh, work: &[bool], field: &Field, offset: f64) -> Vec<u32> 
 }
 
 /// Splits the stars of the work vertices in slabs of parity `phase` into regions, one per
-/// slab (empty for a slab without work); `quality` is each tet's [`Ctx::quality`]. Returns
-/// the regions (region `r` at index `r`) and the global bookkeeping.
+/// slab (empty for a slab without work); `quality` is each tet's [`Ctx::quality`], and
+/// `off_level` (if known) whether each point is a level vertex off its level
+/// ([`super::project::off_level_points`]), so that the regions need not evaluate the field at
+/// the others again. Returns the regions (region `r` at index `r`) and the global
+/// bookkeeping.
 pub fn extract_regions(
     mesh: &TetMesh,
-    work: &[bool],
+    (work, off_level): (&[bool], Option<&[bool]>),
     quality: &[f64],
     ctx: &Ctx,
     phase: u32,
 ) -> (Vec<LocalMesh>, Regions) {
-    extract(mesh, work, quality, ctx, phase, false)
+    extract(mesh, (work, off_level), quality, ctx, phase, false)
 }
 
 /// [`extract_regions`]; with `sort`, each region sorts its own points, as when regions
 /// overlap (tests compare both ways).
 fn extract(
     mesh: &TetMesh,
-    work: &[bool],
+    (work, off_level): (&[bool], Option<&[bool]>),
     quality: &[f64],
     ctx: &Ctx,
     phase: u32,
@@ -244,6 +247,7 @@ fn extract(
         quality,
         free_in: &free_in,
         local_id: local_id.as_deref(),
+        off_level,
     };
     let regions = tets_of
         .into_par_iter()
@@ -296,6 +300,8 @@ struct Source<'a> {
     quality: &'a [f64],
     /// Per point: the region whose free vertex it is (`NONE` if frozen or outside).
     free_in: &'a [u32],
+    /// Per point: whether it is a level vertex off its level (`None`: not known).
+    off_level: Option<&'a [bool]>,
     /// Per point: its local id in the one region that uses it ([`points_by_region`]); `None`
     /// when the regions sort their own points.
     local_id: Option<&'a [u32]>,
@@ -350,6 +356,9 @@ impl LocalMesh {
             lm.insert_face(f);
         }
         lm.classify(&ctx.field, ctx.levels);
+        if let Some(off) = copy.off_level {
+            lm.seed_on_level(off, &ctx.field);
+        }
         lm.volume = (0..lm.tets.len() as u32).map(|t| lm.volume_of(t)).sum();
         lm
     }
@@ -501,6 +510,20 @@ impl LocalMesh {
                 c.pinned = true;
             }
             self.con[v] = c;
+        }
+    }
+
+    /// Records as on their levels the free level vertices that the whole mesh found there
+    /// (`off`, per point: off its level), unless [`LocalMesh::classify`] moved them onto a box
+    /// plane.
+    fn seed_on_level(&mut self, off: &[bool], field: &Field) {
+        for v in 0..self.global.len() {
+            if self.con[v].level.is_some()
+                && !off[self.global[v] as usize]
+                && self.u[v] == field.to_index(self.x[v])
+            {
+                self.on_level[v] = true;
+            }
         }
     }
 
@@ -686,7 +709,8 @@ impl LocalMesh {
     /// Whether `v` is a level vertex farther than the tolerance from its level set.
     pub fn off_its_level(&self, v: u32, ctx: &Ctx) -> bool {
         self.con[v as usize].level.is_some_and(|l| {
-            (ctx.field.value(self.u[v as usize]) - ctx.levels[l as usize]).abs() > ctx.tol
+            !self.on_level[v as usize]
+                && (ctx.field.value(self.u[v as usize]) - ctx.levels[l as usize]).abs() > ctx.tol
         })
     }
 }
@@ -1046,8 +1070,8 @@ mod tests {
         // Every third point needs work: regions with frozen points and holes.
         let work: Vec<bool> = (0..mesh.points.len()).map(|v| v % 3 == 0).collect();
         for phase in 0..2 {
-            let (fast, _) = extract(&mesh, &work, &quality, &ctx, phase, false);
-            let (sorted, _) = extract(&mesh, &work, &quality, &ctx, phase, true);
+            let (fast, _) = extract(&mesh, (&work, None), &quality, &ctx, phase, false);
+            let (sorted, _) = extract(&mesh, (&work, None), &quality, &ctx, phase, true);
             assert_eq!(fast.len(), sorted.len());
             assert!(fast.iter().map(|lm| lm.tets.len()).sum::<usize>() > 100);
             for (a, b) in fast.iter().zip(&sorted) {

@@ -602,7 +602,7 @@ fn run_round_on(
     let mut phase = 0;
     loop {
         if sub.is_none() {
-            let mut work = needs_work(mesh, ctx, &state.quality, true);
+            let (mut work, _) = needs_work(mesh, ctx, &state.quality, true);
             if phase == 0 && !work.iter().any(|&w| w) {
                 return false;
             }
@@ -710,7 +710,7 @@ fn run_round(
     lap(&mut p.report.stage_seconds.project, &mut clock);
     for phase in first_phase..2 {
         clock = Instant::now();
-        let mut work = needs_work(mesh, ctx, p.quality, round > 0);
+        let (mut work, off) = needs_work(mesh, ctx, p.quality, round > 0);
         if ctx.polish {
             // The polishing round frees the neighbours of the work too, so that its
             // composite collapses may merge into them.
@@ -729,7 +729,7 @@ fn run_round(
             }
             p.report.rounds += 1;
         }
-        let regions = improve_phase(mesh, ctx, phase, &work, p.quality, p.report);
+        let regions = improve_phase(mesh, ctx, phase, (&work, &off), p.quality, p.report);
         collect_drift(&regions, p.drift);
         if let Some(u) = untouched.as_deref_mut() {
             u.before_splice(mesh, &regions.1);
@@ -770,17 +770,19 @@ fn context<'a>(
 }
 
 /// One phase of a round: improves the regions of the `work` vertices in slabs of parity
-/// `phase` (splice them back with [`splice_phase`]).
+/// `phase` (splice them back with [`splice_phase`]); `off` marks the level vertices off their
+/// levels.
 fn improve_phase(
     mesh: &TetMesh,
     ctx: &Ctx,
     phase: u32,
-    work: &[bool],
+    (work, off): (&[bool], &[bool]),
     quality: &[f64],
     report: &mut ImproveReport,
 ) -> (Vec<LocalMesh>, local::Regions) {
     let mut clock = Instant::now();
-    let (mut regions, bookkeeping) = local::extract_regions(mesh, work, quality, ctx, phase);
+    let (mut regions, bookkeeping) =
+        local::extract_regions(mesh, (work, Some(off)), quality, ctx, phase);
     lap(&mut report.stage_seconds.extract, &mut clock);
     let counts: Vec<ImproveReport> = regions
         .par_iter_mut()
@@ -864,7 +866,8 @@ fn finish_stage(
     for phase in 0..2 {
         // The points the first phase added need nothing.
         work.resize(mesh.points.len(), false);
-        let (mut regions, bookkeeping) = local::extract_regions(mesh, &work, quality, ctx, phase);
+        let (mut regions, bookkeeping) =
+            local::extract_regions(mesh, (&work, None), quality, ctx, phase);
         let (splits, moves) = regions
             .par_iter_mut()
             .map(|lm| finish_region(lm, ctx, opts, (&owed, &sagging)))
@@ -1006,13 +1009,14 @@ fn refresh_quality(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], quality: &mut [f64
 
 /// Per point: is it a corner of a tet below the target (by `quality`), or a level vertex off
 /// its level (with `ring`, or a corner of a tet around one, so that its neighbours can move)?
-fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> Vec<bool> {
+/// Also returns, per point, whether it is a level vertex off its level.
+fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> (Vec<bool>, Vec<bool>) {
     let off = project::off_level_points(mesh, ctx);
     let mut work = off.clone();
     mark_corners(mesh, &mut work, |t| {
         quality[t] < ctx.target || (ring && mesh.tets[t].iter().any(|&v| off[v as usize]))
     });
-    work
+    (work, off)
 }
 
 /// Sets `work` at the corners of every tet `t` for which `marks(t)` holds (in parallel:
