@@ -15,10 +15,6 @@ use super::Ctx;
 /// The boundary faces at a vertex ([`boundary_faces_at`]; inline up to 16).
 pub type VertexFaces = SmallVec<[BoundaryFace; 16]>;
 
-/// The vertices of a link ([`link_vertices`]; inline up to 96 before deduplication, three
-/// per tet of a star of 32).
-type LinkVertices = SmallVec<[u32; 96]>;
-
 /// The qualities of the tets a collapse changes, by tet id, as its test evaluated them
 /// ([`collapse_quality`]; inline up to 32).
 pub type Evaluated = SmallVec<[(u32, f64); 32]>;
@@ -302,15 +298,37 @@ fn face_without(tet: [u32; 4], skip: usize) -> [u32; 3] {
     f
 }
 
-/// The vertices of the tets around `v` other than `v`, sorted (the vertices of its link).
-fn link_vertices(lm: &LocalMesh, v: u32) -> LinkVertices {
-    let mut out = LinkVertices::new();
-    for &t in &lm.star[v as usize] {
-        out.extend(lm.tets[t as usize].into_iter().filter(|&w| w != v));
+/// A 256-bit filter of the corners of the tets around a vertex: a vertex whose bit is clear
+/// is not one of them; one whose bit is set is looked for in the star ([`StarFilter::has`]).
+struct StarFilter([u64; 4]);
+
+impl StarFilter {
+    fn of(lm: &LocalMesh, v: u32) -> Self {
+        let mut bits = [0u64; 4];
+        for &t in &lm.star[v as usize] {
+            for w in lm.tets[t as usize] {
+                let h = Self::slot(w);
+                bits[h >> 6] |= 1 << (h & 63);
+            }
+        }
+        StarFilter(bits)
     }
-    out.sort_unstable();
-    out.dedup();
-    out
+
+    /// The bit of `w` (the top byte of a multiplicative hash).
+    #[inline]
+    fn slot(w: u32) -> usize {
+        (w.wrapping_mul(0x9E37_79B1) >> 24) as usize
+    }
+
+    /// Whether `w` is a corner of a tet around `v` (the vertex the filter was made for).
+    #[inline]
+    fn has(&self, lm: &LocalMesh, v: u32, w: u32) -> bool {
+        let h = Self::slot(w);
+        self.0[h >> 6] & (1 << (h & 63)) != 0
+            && lm.star[v as usize]
+                .iter()
+                .any(|&t| lm.tets[t as usize].contains(&w))
+    }
 }
 
 /// Whether some tet around `v` has all of `ws` as corners.
@@ -335,7 +353,7 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
         .collect();
     ring.sort_unstable();
     ring.dedup();
-    if shares_off_ring(lm, [a, b], &link_vertices(lm, a), &ring) {
+    if shares_off_ring(lm, [a, b], &ring) {
         return false;
     }
     let on_ring = |w: u32| ring.binary_search(&w).is_ok();
@@ -358,17 +376,16 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
     boundary_link_condition(lm, a, b, &ring)
 }
 
-/// Whether a corner of the tets around `b` (other than `a` and `b`) is in the sorted link
-/// vertices `la` of `a` but not on the sorted `ring`: the links of `a` and `b` then share a
-/// vertex that the link of `ab` lacks. (Every ring vertex is in both links: the ring is
-/// made of corners of tets around `ab`.)
-fn shares_off_ring(lm: &LocalMesh, [a, b]: [u32; 2], la: &[u32], ring: &[u32]) -> bool {
+/// Whether a corner of the tets around `b` (other than `a` and `b`) is one of the tets
+/// around `a` too but not on the sorted `ring`: the links of `a` and `b` then share a vertex
+/// that the link of `ab` lacks. (Every ring vertex is in both links: the ring is made of
+/// corners of tets around `ab`.)
+fn shares_off_ring(lm: &LocalMesh, [a, b]: [u32; 2], ring: &[u32]) -> bool {
+    let around_a = StarFilter::of(lm, a);
     lm.star[b as usize]
         .iter()
         .flat_map(|&t| lm.tets[t as usize])
-        .any(|w| {
-            w != a && w != b && la.binary_search(&w).is_ok() && ring.binary_search(&w).is_err()
-        })
+        .any(|w| w != a && w != b && ring.binary_search(&w).is_err() && around_a.has(lm, a, w))
 }
 
 /// For an edge `vw` (no end `a` or `b`) of the link of `a`: it is also in the link of `b`
@@ -601,6 +618,28 @@ mod tests {
     }
 
     #[test]
+    fn the_star_filter_finds_exactly_the_corners_around_a_vertex() {
+        let grid = wavy_torus();
+        let (_, regions) = wavy_torus_regions(&grid, &[0]);
+        let lm = regions.iter().max_by_key(|lm| lm.tets.len()).unwrap();
+        let (mut found, mut passed_filter) = (0, 0);
+        for v in (0..lm.u.len() as u32).step_by(3) {
+            let filter = StarFilter::of(lm, v);
+            for w in 0..lm.u.len() as u32 {
+                let around = lm.star[v as usize]
+                    .iter()
+                    .any(|&t| lm.tets[t as usize].contains(&w));
+                assert_eq!(filter.has(lm, v, w), around, "{v} {w}");
+                found += usize::from(around);
+                let h = StarFilter::slot(w);
+                passed_filter += usize::from(filter.0[h >> 6] & (1 << (h & 63)) != 0);
+            }
+        }
+        // The filter alone lets through more than the star holds (so the look-up is tested).
+        assert!(found > 1000 && passed_filter > found, "{found} {passed_filter}");
+    }
+
+    #[test]
     fn no_edge_of_a_lone_tet_may_collapse() {
         // All four faces of a lone tet are boundary faces. The links of two corners share
         // only the other two corners and their edge, as the link of the edge does; but both
@@ -633,7 +672,7 @@ mod tests {
             assert!(!link_condition(lm, a, b, &shared), "{a} {b}");
             assert!(!reference_link_condition(lm, a, b, &shared), "{a} {b}");
             let ring: Vec<u32> = (0..4).filter(|&w| w != a && w != b).collect();
-            assert!(!shares_off_ring(lm, [a, b], &link_vertices(lm, a), &ring));
+            assert!(!shares_off_ring(lm, [a, b], &ring));
         }
     }
 
