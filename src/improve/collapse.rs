@@ -636,7 +636,10 @@ mod tests {
             }
         }
         // The filter alone lets through more than the star holds (so the look-up is tested).
-        assert!(found > 1000 && passed_filter > found, "{found} {passed_filter}");
+        assert!(
+            found > 1000 && passed_filter > found,
+            "{found} {passed_filter}"
+        );
     }
 
     #[test]

@@ -449,6 +449,25 @@ impl LocalMesh {
             .collect()
     }
 
+    /// [`LocalMesh::edge_tets`] of each edge `(tet[i], tet[j])`, `i < j`, of `tet` (a tet of
+    /// the region), in the order `(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)`: one scan of
+    /// the stars of the first three corners instead of one per edge.
+    pub fn tet_edge_tets(&self, tet: [u32; 4]) -> [EdgeTets; 6] {
+        let mut out: [EdgeTets; 6] = Default::default();
+        for i in 0..3 {
+            for &t in &self.star[tet[i] as usize] {
+                let other = self.tets[t as usize];
+                for j in i + 1..4 {
+                    if other.contains(&tet[j]) {
+                        // Edges from corner i come after the 6 - (3 - i)(4 - i)/2 before.
+                        out[i * (7 - i) / 2 + j - i - 1].push(t);
+                    }
+                }
+            }
+        }
+        out
+    }
+
     /// How many domain-boundary faces `v` is a corner of.
     #[inline]
     pub fn boundary_faces_of(&self, v: u32) -> usize {
@@ -1034,6 +1053,25 @@ mod tests {
     use super::*;
     use crate::improve::fixtures::{wavy_torus, wavy_torus_mesh};
     use crate::improve::tet_qualities;
+
+    #[test]
+    fn tet_edge_tets_lists_each_edge_as_edge_tets_does() {
+        let grid = wavy_torus();
+        let (_, regions) = crate::improve::fixtures::wavy_torus_regions(&grid, &[0, 1]);
+        let mut edges = 0;
+        for lm in &regions {
+            for &tet in &lm.tets {
+                let all = lm.tet_edge_tets(tet);
+                let pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+                for ((i, j), e) in pairs.into_iter().zip(&all) {
+                    assert_eq!(e, &lm.edge_tets(tet[i], tet[j]), "{tet:?} {i} {j}");
+                    assert!(!e.is_empty());
+                    edges += 1;
+                }
+            }
+        }
+        assert!(edges > 10_000, "{edges}");
+    }
 
     #[test]
     fn face_key_sorts_every_order_of_three() {

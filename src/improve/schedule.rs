@@ -5,7 +5,7 @@ use super::collapse::{apply_collapse, apply_evaluated, best_collapse, evaluate_m
 use super::composite::{collapse_then_move, worst};
 use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
-use super::local::{EdgeTets, LocalMesh, TetOp};
+use super::local::{LocalMesh, TetOp};
 use super::project::{absorb_and_project, merge_and_untangle, project_levels, untangle_around};
 use super::search::search_vertex;
 use super::smooth::smooth_vertex;
@@ -324,13 +324,12 @@ fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
     let edges = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(i, j)| (tet[i], tet[j]));
     // The tets around each edge, found once for both kinds (nothing changes while the
     // attempts fail; an edge with both ends frozen is tried by neither).
-    let around = edges.map(|(p, q)| {
-        if lm.is_free(p) || lm.is_free(q) {
-            lm.edge_tets(p, q)
-        } else {
-            EdgeTets::new()
+    let mut around = lm.tet_edge_tets(tet);
+    for (&(p, q), e) in edges.iter().zip(&mut around) {
+        if !lm.is_free(p) && !lm.is_free(q) {
+            e.clear();
         }
-    });
+    }
     let mut tries = edges.iter().zip(&around);
     if tries.any(|(&(p, q), e)| try_flip32(lm, ctx, (t, p, q), e)) {
         return Some(Flipped::Flip);
