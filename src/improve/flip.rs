@@ -4,12 +4,17 @@
 //! the boundary and the labels are unchanged; a flip is applied only when every new tet is
 //! positive and the worst new tet is better than the worst old one.
 
-use super::local::{face_key, LocalMesh};
+use super::local::{face_key, tet_edge, EdgeTets, LocalMesh};
 use super::Ctx;
 
-/// Tries the 2-3 flip of the face of tet `t` opposite its corner `i`. Returns whether it
-/// flipped.
-pub fn try_flip23(lm: &mut LocalMesh, ctx: &Ctx, t: u32, i: usize) -> bool {
+/// Tries the 2-3 flip of the face of tet `t` opposite its corner `i`; `around` holds the tets
+/// around each edge of `t` ([`LocalMesh::tet_edge_tets`]). Returns whether it flipped.
+pub fn try_flip23(
+    lm: &mut LocalMesh,
+    ctx: &Ctx,
+    (t, i): (u32, usize),
+    around: &[EdgeTets; 6],
+) -> bool {
     let tet = lm.tets[t as usize];
     let p = tet[i];
     // [p, b, c, d] is an even permutation of `tet`.
@@ -17,7 +22,7 @@ pub fn try_flip23(lm: &mut LocalMesh, ctx: &Ctx, t: u32, i: usize) -> bool {
     if ![b, c, d].iter().any(|&v| lm.is_free(v)) || is_boundary_face(lm, [b, c, d]) {
         return false;
     }
-    let Some(s) = other_tet_with_face(lm, t, [b, c, d]) else {
+    let Some(s) = neighbour_across(lm, (t, i), around) else {
         return false;
     };
     let q = lm.tets[s as usize]
@@ -33,6 +38,18 @@ pub fn try_flip23(lm: &mut LocalMesh, ctx: &Ctx, t: u32, i: usize) -> bool {
             .any(|&u| lm.tets[u as usize].contains(&q))
     };
     replace_if_better(lm, ctx, &old, &new, legal)
+}
+
+/// The other alive tet with the face of `t` opposite its corner `i`, among the tets around an
+/// edge of that face (`around`, as [`try_flip23`] takes it). A face with a free corner has all
+/// its tets in the region.
+fn neighbour_across(lm: &LocalMesh, (t, i): (u32, usize), around: &[EdgeTets; 6]) -> Option<u32> {
+    let tet = lm.tets[t as usize];
+    let [j, k, l] = FACES[i];
+    around[tet_edge(j.min(k), j.max(k))]
+        .iter()
+        .copied()
+        .find(|&u| u != t && lm.tets[u as usize].contains(&tet[l]))
 }
 
 /// Tries the 3-2 flip of the edge `(p, q)` of tet `t`, whose tets are `edge_tets`
@@ -110,18 +127,11 @@ fn replace_if_better(
 /// The face of `tet` opposite corner `i`, ordered so that `[tet[i], f0, f1, f2]` is an even
 /// permutation of `tet`.
 fn opposite_face(tet: [u32; 4], i: usize) -> [u32; 3] {
-    const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
     FACES[i].map(|k| tet[k])
 }
 
-/// The other alive tet with face `f`, besides `t`.
-fn other_tet_with_face(lm: &LocalMesh, t: u32, f: [u32; 3]) -> Option<u32> {
-    let free = *f.iter().find(|&&v| lm.is_free(v))?;
-    lm.star[free as usize]
-        .iter()
-        .copied()
-        .find(|&u| u != t && f.iter().all(|v| lm.tets[u as usize].contains(v)))
-}
+/// The corners of the face opposite each corner, ordered as [`opposite_face`] gives them.
+const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
 
 /// Whether `f` is a domain-boundary face (its corners are checked first: that is cheaper
 /// than the lookup, and most faces have a corner off the boundary).
@@ -171,6 +181,36 @@ fn is_even_permutation(a: [u32; 4], b: [u32; 4]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::improve::fixtures::{wavy_torus, wavy_torus_regions};
+
+    #[test]
+    fn the_neighbour_across_a_face_is_the_other_tet_with_it() {
+        let grid = wavy_torus();
+        let (_, regions) = wavy_torus_regions(&grid, &[0]);
+        let (mut inner, mut outer) = (0, 0);
+        for lm in &regions {
+            for t in 0..lm.tets.len() as u32 {
+                let around = lm.tet_edge_tets(lm.tets[t as usize]);
+                for i in 0..4 {
+                    let f = opposite_face(lm.tets[t as usize], i);
+                    if !f.iter().any(|&v| lm.is_free(v)) {
+                        continue;
+                    }
+                    let all: Vec<u32> = (0..lm.tets.len() as u32)
+                        .filter(|&u| u != t && f.iter().all(|v| lm.tets[u as usize].contains(v)))
+                        .collect();
+                    assert!(all.len() <= 1);
+                    assert_eq!(neighbour_across(lm, (t, i), &around), all.first().copied());
+                    if all.is_empty() {
+                        outer += 1;
+                    } else {
+                        inner += 1;
+                    }
+                }
+            }
+        }
+        assert!(inner > 1000 && outer > 100, "{inner} {outer}");
+    }
 
     #[test]
     fn opposite_faces_are_even_completions() {

@@ -114,6 +114,14 @@ pub fn face_key([a, b, c]: [u32; 3]) -> [u32; 3] {
 /// No region.
 const NONE: u32 = u32::MAX;
 
+/// The index of the edge between corners `i < j` of a tet in the order
+/// `(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)` (edges from corner `i` follow the
+/// `i (7 - i) / 2` edges from the corners before it).
+#[inline]
+pub fn tet_edge(i: usize, j: usize) -> usize {
+    i * (7 - i) / 2 + j - i - 1
+}
+
 /// The global id of a vertex added in a region, until it is spliced back.
 pub const NEW_POINT: u32 = u32::MAX;
 
@@ -459,8 +467,7 @@ impl LocalMesh {
                 let other = self.tets[t as usize];
                 for j in i + 1..4 {
                     if other.contains(&tet[j]) {
-                        // Edges from corner i come after the 6 - (3 - i)(4 - i)/2 before.
-                        out[i * (7 - i) / 2 + j - i - 1].push(t);
+                        out[tet_edge(i, j)].push(t);
                     }
                 }
             }
