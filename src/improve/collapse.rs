@@ -27,6 +27,8 @@ pub struct Collapse {
     pub to: u32,
     /// The qualities of the changed tets afterwards ([`apply_evaluated`] keeps them).
     pub evaluated: Evaluated,
+    /// The boundary faces at `from`, if the link condition gathered them.
+    pub faces: Option<VertexFaces>,
 }
 
 /// The better legal and improving collapse of edge `ab` (either way: the one whose worst
@@ -51,11 +53,15 @@ pub fn best_collapse(
         (None, Some(_)) => (b, a, at_ba),
         (None, None) => return None,
     };
-    link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(Collapse {
-        from,
-        to,
-        evaluated,
-    })
+    let mut faces = None;
+    link_condition_gathering(lm, from, to, &lm.edge_tets(from, to), &mut faces).then_some(
+        Collapse {
+            from,
+            to,
+            evaluated,
+            faces,
+        },
+    )
 }
 
 /// The collapse of `a` into `b`, if legal and every remaining tet stays positive (no gain
@@ -201,24 +207,25 @@ fn short_edge(lm: &LocalMesh, a: u32, b: u32, ratio: f64) -> bool {
 }
 
 /// Applies the collapse `c`, keeping the qualities its test evaluated.
-pub fn apply_evaluated(lm: &mut LocalMesh, c: &Collapse) {
-    merge(lm, c.from, c.to, &c.evaluated);
+pub fn apply_evaluated(lm: &mut LocalMesh, c: Collapse) {
+    merge(lm, c.from, c.to, &c.evaluated, c.faces);
 }
 
 /// Merges `a` into `b` (legality and gain checked by the caller).
 pub fn apply_collapse(lm: &mut LocalMesh, a: u32, b: u32) {
-    merge(lm, a, b, &[]);
+    merge(lm, a, b, &[], None);
 }
 
 /// Merges `a` into `b`; a changed tet listed in `known` takes the quality given there (the
-/// collapse test's, evaluated at the same corners), the others are evaluated.
-fn merge(lm: &mut LocalMesh, a: u32, b: u32, known: &[(u32, f64)]) {
+/// collapse test's, evaluated at the same corners), the others are evaluated. `faces`: the
+/// boundary faces at `a`, if known.
+fn merge(lm: &mut LocalMesh, a: u32, b: u32, known: &[(u32, f64)], faces: Option<VertexFaces>) {
     // Only a level vertex's star changes the domain: the tets left still fill an interior
     // vertex's star.
     let level = lm.con[a as usize].level.is_some();
     let mut added = if level { -lm.star_volume(a) } else { 0.0 };
     let shared = lm.edge_tets(a, b);
-    let faces = boundary_faces_at(lm, a);
+    let faces = faces.unwrap_or_else(|| boundary_faces_at(lm, a));
     for f in &faces {
         lm.remove_face(f.tri);
     }
@@ -346,6 +353,18 @@ fn star_has(lm: &LocalMesh, v: u32, ws: &[u32]) -> bool {
 /// looked up in the star of `b`: an edge `vw` of both links must lie in a tet of `shared`,
 /// and no triangle may be in both links (the two tets would become one).
 fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
+    link_condition_gathering(lm, a, b, shared, &mut None)
+}
+
+/// [`link_condition`], leaving in `faces` the boundary faces at `a` when its boundary part
+/// gathered them.
+fn link_condition_gathering(
+    lm: &LocalMesh,
+    a: u32,
+    b: u32,
+    shared: &[u32],
+    faces: &mut Option<VertexFaces>,
+) -> bool {
     let mut ring: SmallVec<[u32; 16]> = shared
         .iter()
         .flat_map(|&t| lm.tets[t as usize])
@@ -373,7 +392,7 @@ fn link_condition(lm: &LocalMesh, a: u32, b: u32, shared: &[u32]) -> bool {
             return false;
         }
     }
-    boundary_link_condition(lm, a, b, &ring)
+    boundary_link_condition(lm, a, b, &ring, faces)
 }
 
 /// Whether a corner of the tets around `b` (other than `a` and `b`) is one of the tets
@@ -410,11 +429,17 @@ fn edge_allowed(lm: &LocalMesh, a: u32, b: u32, shared: &[u32], e: [u32; 2]) -> 
 /// with `vw` is in the link of `a` when `avw` is a boundary face, and never in the link of
 /// `ab`: `bvw` must not be one. A vertex `v` of both of these is in both links, so on the
 /// ring, and only the boundary faces at `a` are gathered; those at `b` are looked up.
-fn boundary_link_condition(lm: &LocalMesh, a: u32, b: u32, ring: &[u32]) -> bool {
+fn boundary_link_condition(
+    lm: &LocalMesh,
+    a: u32,
+    b: u32,
+    ring: &[u32],
+    faces: &mut Option<VertexFaces>,
+) -> bool {
     if !lm.on_boundary(a) || !lm.on_boundary(b) {
         return true;
     }
-    let fa = boundary_faces_at(lm, a);
+    let fa = faces.insert(boundary_faces_at(lm, a));
     let opposite = |f: &BoundaryFace| {
         let i = f.tri.iter().position(|&w| w == a).unwrap_or(0);
         [f.tri[(i + 1) % 3], f.tri[(i + 2) % 3]]

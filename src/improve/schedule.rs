@@ -283,7 +283,7 @@ fn collapse_shortest(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> bool {
     };
     for (_, a, b) in edges {
         if let Some(c) = best_collapse(lm, ctx, a, b, floor) {
-            apply_evaluated(lm, &c);
+            apply_evaluated(lm, c);
             return true;
         }
     }
