@@ -137,10 +137,14 @@ fn best_triangulation(
     floor: f64,
 ) -> Option<RingVec<[usize; 3]>> {
     let k = ring.len();
+    // The corners' positions, gathered once: the programme evaluates up to 2 C(k, 3) tets.
+    let (xa, xb) = (lm.x[a as usize], lm.x[b as usize]);
+    let xr: RingVec<[f64; 3]> = ring.iter().map(|&v| lm.x[v as usize]).collect();
     let tri_quality = |i: usize, j: usize, l: usize| -> f64 {
         let mut worst = f64::INFINITY;
-        for tet in cone(a, b, ring, [i, j, l]) {
-            let q = ctx.quality(lm.corners(tet));
+        // The corners of `cone(a, b, ring, [i, j, l])`.
+        for p in [[xa, xr[i], xr[j], xr[l]], [xb, xr[i], xr[l], xr[j]]] {
+            let q = ctx.quality(p);
             if q <= floor {
                 return f64::NEG_INFINITY;
             }
