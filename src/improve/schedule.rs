@@ -342,8 +342,10 @@ fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
 
 /// The corners of the alive tets below the target, ascending.
 fn bad_corners(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
-    let mut verts: Vec<u32> = bad_tets(lm, ctx)
-        .flat_map(|t| lm.tets[t as usize])
+    // In tet order (sorted after): the order of `bad_tets` is not needed here.
+    let mut verts: Vec<u32> = (0..lm.tets.len())
+        .filter(|&t| lm.alive[t] && lm.q[t] < ctx.target)
+        .flat_map(|t| lm.tets[t])
         .collect();
     verts.sort_unstable();
     verts.dedup();
