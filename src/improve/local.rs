@@ -61,6 +61,12 @@ pub struct LocalMesh {
     face_count: Vec<u32>,
     /// Memo of failed attempts (see [`LocalMesh::settled_tet`]).
     memo: Memo,
+    /// The tets whose quality was set below `low_bar` since the list was last compacted (with
+    /// repeats, and some since removed or improved): a superset of the alive tets below it,
+    /// so that finding those ([`LocalMesh::tets_below`]) takes time in their number.
+    low: Vec<u32>,
+    /// The quality `low` is kept for (the target; `-inf`: none is kept).
+    low_bar: f64,
     /// Volume of the region's tets when it was copied out.
     pub volume: f64,
     /// Per vertex: the signed volume that the collapses into it and its moves have added
@@ -354,6 +360,7 @@ impl LocalMesh {
             .collect();
         let mut lm = LocalMesh::with_vertices(mesh, global, frozen, &ctx.field);
         lm.weight = ctx.obtuse_weight;
+        lm.low_bar = ctx.target;
         lm.reserve_tets(&local_tets);
         for (t, &g) in local_tets.into_iter().zip(tets) {
             lm.push_tet(t, copy.quality[g as usize]);
@@ -393,6 +400,8 @@ impl LocalMesh {
             drift: vec![0.0; n],
             on_level: vec![false; n],
             collapse_hint: vec![Cell::new(NONE); n],
+            low: Vec::new(),
+            low_bar: f64::NEG_INFINITY,
             memo: Memo {
                 clock: 1,
                 stamp: vec![1; n],
@@ -585,6 +594,7 @@ impl LocalMesh {
         self.tets.push(t);
         self.alive.push(true);
         self.q.push(q);
+        self.note_low(id);
         self.memo.tet_failed.push([0; 2]);
         for v in t {
             self.star[v as usize].push(id);
@@ -649,6 +659,7 @@ impl LocalMesh {
             let t = self.star[v as usize][i];
             self.touch(t);
             self.q[t as usize] = qt;
+            self.note_low(t);
         }
     }
 
@@ -668,8 +679,8 @@ impl LocalMesh {
         for i in 0..self.star[v as usize].len() {
             let t = self.star[v as usize][i];
             self.touch(t);
-            let t = t as usize;
-            self.q[t] = biased_min_sine(self.corners(self.tets[t]), self.weight);
+            self.q[t as usize] = biased_min_sine(self.corners(self.tets[t as usize]), self.weight);
+            self.note_low(t);
         }
     }
 
@@ -677,13 +688,39 @@ impl LocalMesh {
     pub fn set_quality(&mut self, t: u32, q: f64) {
         self.touch(t);
         self.q[t as usize] = q;
+        self.note_low(t);
     }
 
     /// Recomputes the quality of tet `t` (after its corners changed).
     pub fn update_quality(&mut self, t: u32) {
         self.touch(t);
-        let t = t as usize;
-        self.q[t] = biased_min_sine(self.corners(self.tets[t]), self.weight);
+        self.q[t as usize] = biased_min_sine(self.corners(self.tets[t as usize]), self.weight);
+        self.note_low(t);
+    }
+
+    /// Adds tet `t` to [`LocalMesh::low`] if its quality is below the bar kept.
+    #[inline]
+    fn note_low(&mut self, t: u32) {
+        if self.q[t as usize] < self.low_bar {
+            self.low.push(t);
+        }
+    }
+
+    /// The alive tets with quality below `bar`, ascending. At the bar the list of low tets is
+    /// kept for, from that list (compacted to them); at another, by a scan of all tets.
+    pub fn tets_below(&mut self, bar: f64) -> Vec<u32> {
+        let below = |lm: &Self, t: u32| lm.alive[t as usize] && lm.q[t as usize] < bar;
+        if bar != self.low_bar {
+            return (0..self.tets.len() as u32)
+                .filter(|&t| below(self, t))
+                .collect();
+        }
+        let mut low = std::mem::take(&mut self.low);
+        low.retain(|&t| below(self, t));
+        low.sort_unstable();
+        low.dedup();
+        self.low = low;
+        self.low.clone()
     }
 
     /// Signed volume of tet `t`.
@@ -1060,6 +1097,51 @@ mod tests {
     use super::*;
     use crate::improve::fixtures::{wavy_torus, wavy_torus_mesh};
     use crate::improve::tet_qualities;
+
+    #[test]
+    fn the_low_list_finds_the_tets_below_the_target_as_a_scan_does() {
+        let grid = wavy_torus();
+        let (ctx, mut regions) = crate::improve::fixtures::wavy_torus_regions(&grid, &[0]);
+        let lm = regions.iter_mut().max_by_key(|lm| lm.tets.len()).unwrap();
+        let scan = |lm: &LocalMesh, bar: f64| -> Vec<u32> {
+            (0..lm.tets.len() as u32)
+                .filter(|&t| lm.alive[t as usize] && lm.q[t as usize] < bar)
+                .collect()
+        };
+        let start = scan(lm, ctx.target);
+        assert!(!start.is_empty());
+        assert_eq!(lm.tets_below(ctx.target), start);
+        // Qualities raised and lowered, tets removed and added, and moves, in a fixed order.
+        let mut seed = 11u64;
+        let mut next = |n: usize| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as usize % n
+        };
+        for round in 0..50 {
+            for _ in 0..40 {
+                let t = next(lm.tets.len()) as u32;
+                if lm.alive[t as usize] {
+                    lm.set_quality(t, if next(2) == 0 { 0.01 } else { 0.9 });
+                }
+            }
+            let t = next(lm.tets.len()) as u32;
+            if lm.alive[t as usize] && round % 3 == 0 {
+                let tet = lm.tets[t as usize];
+                lm.kill_tet(t);
+                lm.push_tet(tet, 0.02);
+            }
+            let v = next(lm.u.len()) as u32;
+            if lm.is_free(v) && !lm.star[v as usize].is_empty() {
+                lm.update_star_quality(v);
+            }
+            let bar = ctx.target;
+            assert_eq!(lm.tets_below(bar), scan(lm, bar), "round {round}");
+            assert_eq!(lm.tets_below(0.5), scan(lm, 0.5), "round {round}");
+        }
+        assert!(lm.low.len() > start.len() / 2);
+    }
 
     #[test]
     fn tet_edge_tets_lists_each_edge_as_edge_tets_does() {

@@ -211,9 +211,10 @@ fn off_level(lm: &LocalMesh, ctx: &Ctx, v: u32) -> bool {
 }
 
 /// Alive tets below the target, worst first (ties by id).
-fn bad_tets(lm: &LocalMesh, ctx: &Ctx) -> impl Iterator<Item = u32> {
-    let mut bad: Vec<(i64, u32)> = (0..lm.tets.len() as u32)
-        .filter(|&t| lm.alive[t as usize] && lm.q[t as usize] < ctx.target)
+fn bad_tets(lm: &mut LocalMesh, ctx: &Ctx) -> impl Iterator<Item = u32> {
+    let mut bad: Vec<(i64, u32)> = lm
+        .tets_below(ctx.target)
+        .into_iter()
         .map(|t| (total_order(lm.q[t as usize]), t))
         .collect();
     // The keys are distinct (tet ids are), so an unstable sort gives the one order.
@@ -341,11 +342,12 @@ fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
 }
 
 /// The corners of the alive tets below the target, ascending.
-fn bad_corners(lm: &LocalMesh, ctx: &Ctx) -> Vec<u32> {
+fn bad_corners(lm: &mut LocalMesh, ctx: &Ctx) -> Vec<u32> {
     // In tet order (sorted after): the order of `bad_tets` is not needed here.
-    let mut verts: Vec<u32> = (0..lm.tets.len())
-        .filter(|&t| lm.alive[t] && lm.q[t] < ctx.target)
-        .flat_map(|t| lm.tets[t])
+    let mut verts: Vec<u32> = lm
+        .tets_below(ctx.target)
+        .into_iter()
+        .flat_map(|t| lm.tets[t as usize])
         .collect();
     verts.sort_unstable();
     verts.dedup();
