@@ -67,8 +67,9 @@ pub fn try_remove_edge(
 }
 
 /// The two new tets over the ring triangle `i < j < l`: `[a, r_i, r_j, r_l]` and
-/// `[b, r_i, r_l, r_j]`, positive when the ring runs so that `[a, b, r_i, r_{i+1}]` is.
-fn cone(a: u32, b: u32, ring: &[u32], [i, j, l]: [usize; 3]) -> [[u32; 4]; 2] {
+/// `[b, r_i, r_l, r_j]`, positive when the ring runs so that `[a, b, r_i, r_{i+1}]` is (as
+/// vertex ids, or as their positions).
+fn cone<T: Copy>(a: T, b: T, ring: &[T], [i, j, l]: [usize; 3]) -> [[T; 4]; 2] {
     [
         [a, ring[i], ring[j], ring[l]],
         [b, ring[i], ring[l], ring[j]],
@@ -142,8 +143,7 @@ fn best_triangulation(
     let xr: RingVec<[f64; 3]> = ring.iter().map(|&v| lm.x[v as usize]).collect();
     let tri_quality = |i: usize, j: usize, l: usize| -> f64 {
         let mut worst = f64::INFINITY;
-        // The corners of `cone(a, b, ring, [i, j, l])`.
-        for p in [[xa, xr[i], xr[j], xr[l]], [xb, xr[i], xr[l], xr[j]]] {
+        for p in cone(xa, xb, &xr, [i, j, l]) {
             let q = ctx.quality(p);
             if q <= floor {
                 return f64::NEG_INFINITY;

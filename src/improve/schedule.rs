@@ -320,17 +320,12 @@ enum Flipped {
 fn flip_tet(lm: &mut LocalMesh, ctx: &Ctx, t: u32) -> Option<Flipped> {
     let tet = lm.tets[t as usize];
     // The tets around each edge, found once for all kinds (nothing changes while the
-    // attempts fail; an edge with both ends frozen is tried by neither edge operation).
-    let mut around = lm.tet_edge_tets(tet);
+    // attempts fail; an edge with both ends frozen is refused by both edge operations).
+    let around = lm.tet_edge_tets(tet);
     if (0..4).any(|i| try_flip23(lm, ctx, (t, i), &around)) {
         return Some(Flipped::Flip);
     }
     let edges = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(i, j)| (tet[i], tet[j]));
-    for (&(p, q), e) in edges.iter().zip(&mut around) {
-        if !lm.is_free(p) && !lm.is_free(q) {
-            e.clear();
-        }
-    }
     let mut tries = edges.iter().zip(&around);
     if tries.any(|(&(p, q), e)| try_flip32(lm, ctx, (t, p, q), e)) {
         return Some(Flipped::Flip);
