@@ -1,6 +1,6 @@
 //! `solver-demo`: solve `-div(k grad u) = s` on a mesh written by `tptd-mesh`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -8,6 +8,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Parser;
 use solver_demo::pcg::{PcgOptions, Preconditioner};
 use solver_demo::run::{solve, Options};
+use tptd::io::{check_clashes, RunFile};
 
 /// Solve the steady heat / Poisson equation -div(k grad u) = s with P1 finite elements on a
 /// tetrahedral mesh (.msh 4.1/2.2 or .inp) and write u, grad u and the flux as .vtu.
@@ -120,9 +121,36 @@ fn progress_printer() -> impl FnMut(usize, f64) {
     }
 }
 
+/// A usage error (exit status 2): an output that is not `.vtu` or that is the same file as
+/// the input mesh.
+#[derive(Debug, thiserror::Error)]
+enum UsageError {
+    /// The output extension is not `.vtu`.
+    #[error("{}: the output is written as VTU; name it with a .vtu extension", .0.display())]
+    NotVtu(PathBuf),
+    /// The output is the input.
+    #[error(transparent)]
+    Clash(#[from] tptd::io::FileClash),
+}
+
+/// Checks the output before any work: a `.vtu` name, not the input mesh (compared by
+/// identity, not spelling), in a directory that exists.
+fn check_output(cli: &Cli, out: &Path) -> Result<()> {
+    let vtu = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vtu"));
+    if !vtu {
+        return Err(UsageError::NotVtu(out.to_path_buf()).into());
+    }
+    let input = [RunFile::new("the input mesh", &cli.mesh)];
+    check_clashes(&input, &[RunFile::new("-o", out)]).map_err(UsageError::from)?;
+    tptd::io::check_writable(out)?;
+    Ok(())
+}
+
 fn run(cli: &Cli) -> Result<()> {
     if let Some(out) = &cli.output {
-        tptd::io::check_writable(out)?;
+        check_output(cli, out)?;
     }
     let opts = options(cli)?;
     let t = Instant::now();
@@ -148,7 +176,8 @@ fn run(cli: &Cli) -> Result<()> {
     }
     let mut times = vec![("read", t_read)];
     times.extend(sol.times.iter().copied());
-    if let Some(out) = &cli.output {
+    // An unconverged solution is not written (nor does it replace an existing file).
+    if let Some(out) = cli.output.as_ref().filter(|_| sol.report.converged) {
         let t = Instant::now();
         solver_demo::output::write_solution(out, &file.mesh, &sol.u, &sol.k)?;
         times.push(("write", t.elapsed().as_secs_f64()));
@@ -182,7 +211,11 @@ fn main() -> ExitCode {
         Err(e) => {
             // Every error here is one line that already says what and where.
             eprintln!("solver-demo: error: {e}");
-            ExitCode::FAILURE
+            if e.is::<UsageError>() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

@@ -6,6 +6,8 @@
 //! last occurrence wins. Error messages name a field as the caller shows it (`'sizes'` for
 //! NRRD, `DimSize` for MetaImage).
 
+use std::fs::File;
+use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 
 use super::volume::{quote, ReadError, Skip};
@@ -221,6 +223,42 @@ pub(crate) fn skip(path: &Path, shown: &str, value: &str) -> Result<Skip, ReadEr
         )
     })?;
     Ok(Skip::Bytes(n))
+}
+
+/// The start of the file `path`: its complete lines up to those for which `ended` holds
+/// (called with every complete line read so far), or the whole file. Reads 64 KiB at a time,
+/// so a header is read without the data after it.
+///
+/// # Errors
+/// [`ReadError::Io`] if the file cannot be opened or read.
+pub(crate) fn read_prefix(
+    path: &Path,
+    ended: impl Fn(&[u8]) -> bool,
+) -> Result<Vec<u8>, ReadError> {
+    let err = |e| ReadError::io(path, "cannot read file", e);
+    let mut file = File::open(path).map_err(err)?;
+    let mut buf = Vec::new();
+    let mut chunk = vec![0u8; 1 << 16];
+    loop {
+        let n = match file.read(&mut chunk) {
+            Ok(0) => return Ok(buf),
+            Ok(n) => n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(err(e)),
+        };
+        buf.extend_from_slice(&chunk[..n]);
+        if let Some(last) = buf.iter().rposition(|&b| b == b'\n') {
+            if ended(&buf[..=last]) {
+                buf.truncate(last + 1);
+                return Ok(buf);
+            }
+        }
+    }
+}
+
+/// Whether `bytes` hold an empty line after the first (the end of a NRRD header).
+pub(crate) fn has_blank_line(bytes: &[u8]) -> bool {
+    lines(bytes).skip(1).any(|(_, line, _)| line.is_empty())
 }
 
 /// The path of a data file named in the header `header`: absolute as given, relative to the

@@ -12,7 +12,7 @@
 //! The 9 numbers of `TransformMatrix` are the direction matrix in column-major order, as
 //! ITK/SimpleITK write it: the first three are the direction of the first index axis.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use flate2::read::ZlibDecoder;
 
@@ -65,6 +65,23 @@ pub fn read_mhd(path: &Path) -> Result<ScalarGrid, ReadError> {
     };
     drop(bytes);
     build_grid(path, h.dims, h.spacing, h.origin, h.direction, values)
+}
+
+/// The files [`read_mhd`] reads for `path`: `path` itself, then its `ElementDataFile` unless
+/// that is `LOCAL`. Reads the header only.
+///
+/// # Errors
+/// Those of [`read_mhd`] about the header.
+pub(crate) fn mhd_files(path: &Path) -> Result<Vec<PathBuf>, ReadError> {
+    let ended = |b: &[u8]| {
+        Fields::read_equals(path, b, "ElementDataFile").map_or(true, |f| f.end().is_some())
+    };
+    let bytes = header::read_prefix(path, ended)?;
+    let mut files = vec![path.to_path_buf()];
+    if let DataLocation::File(data) = parse_header(path, &bytes)?.data {
+        files.push(data);
+    }
+    Ok(files)
 }
 
 /// The `nbytes` uncompressed data bytes of a `.mha` file, from `block` (the file after the

@@ -42,6 +42,19 @@ pub fn read_nrrd(path: &Path) -> Result<ScalarGrid, ReadError> {
     )
 }
 
+/// The files [`read_nrrd`] reads for `path`: `path` itself, then its detached data file if
+/// the header names one. Reads the header only.
+///
+/// # Errors
+/// Those of [`read_nrrd`] about the header.
+pub(crate) fn nrrd_files(path: &Path) -> Result<Vec<PathBuf>, ReadError> {
+    let bytes = header::read_prefix(path, header::has_blank_line)?;
+    let header = parse_header(path, &bytes)?;
+    Ok(std::iter::once(path.to_path_buf())
+        .chain(header.data_file)
+        .collect())
+}
+
 /// The `count` samples (`nbytes` data bytes), from the data file or from `bytes` (the whole
 /// `.nrrd` file) after the header. Detached raw and gzip data go straight into the samples'
 /// storage; attached raw data are copied from `bytes`; ascii data are read as `f64`.

@@ -11,7 +11,7 @@
 //! `.q` if it is one, else as `.f`. `field` picks a variable by name or by its 1-based number;
 //! default the first.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::volume::{decode_samples, read_all, Endian, ReadError, SampleType};
 use crate::grid::CurvilinearGrid;
@@ -186,16 +186,7 @@ pub fn read_plot3d(
     })?;
     let xyzv = arrays(&gb, pos, &l, &dims, 3, l.iblank);
     let n = dims[0] * dims[1] * dims[2];
-    let fpath = match function {
-        Some(f) => f.to_path_buf(),
-        None => ["q", "f"]
-            .iter()
-            .map(|e| xyz.with_extension(e))
-            .find(|p| p.exists())
-            .ok_or_else(|| {
-                ReadError::invalid(xyz, "no function file (.q or .f) next to it; name one")
-            })?,
-    };
+    let fpath = function_file(xyz, function)?;
     let ext = fpath
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
@@ -216,6 +207,24 @@ pub fn read_plot3d(
         file: xyz.display().to_string(),
         source,
     })
+}
+
+/// The function file [`read_plot3d`] reads with the grid file `xyz`: `function` if given,
+/// else the grid file's path with extension `.q`, else `.f` (the first that exists).
+///
+/// # Errors
+/// [`ReadError::Invalid`] naming `xyz` when neither exists.
+pub(crate) fn function_file(xyz: &Path, function: Option<&Path>) -> Result<PathBuf, ReadError> {
+    match function {
+        Some(f) => Ok(f.to_path_buf()),
+        None => ["q", "f"]
+            .iter()
+            .map(|e| xyz.with_extension(e))
+            .find(|p| p.exists())
+            .ok_or_else(|| {
+                ReadError::invalid(xyz, "no function file (.q or .f) next to it; name one")
+            }),
+    }
 }
 
 fn mismatch(path: &Path, what: &str) -> ReadError {

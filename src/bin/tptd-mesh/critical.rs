@@ -35,6 +35,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         check_writable(out).map_err(write_error)?;
     }
     let transfer_format = cli.transfer.as_deref().map(transfer_format).transpose()?;
+    crate::files::check_files(&cli, None)?;
     let grid = read_grid(&cli, &input)?;
     let opts = CriticalOptions {
         min_value: cli.min_value.unwrap_or(f64::NEG_INFINITY),

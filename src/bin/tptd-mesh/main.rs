@@ -4,18 +4,22 @@
 //! an optional JSON report.
 //!
 //! This is the only part of the crate that prints. Every failure is reported as one line
-//! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1; outputs are written
-//! atomically, so a failed run leaves no (partial) output file behind.
+//! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1 (2 for malformed
+//! arguments and for an output that is the same file as an input file or another output,
+//! found before any work); outputs are written atomically, so a failed run leaves no
+//! (partial) output file behind.
 //!
 //! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`run`] (the run,
 //! step by step), [`critical`] (`--critical` and the check of the bounds against the critical
 //! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
-//! (`{file}: {problem}` errors), [`surface`] (isosurface output).
+//! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
+//! output), [`surface`] (isosurface output).
 
 mod alloc;
 mod cli;
 mod critical;
 mod error;
+mod files;
 mod progress;
 mod run;
 mod summary;
@@ -36,7 +40,9 @@ fn main() {
     if let Err(e) = result {
         let msg = e.to_string().replace(['\n', '\r'], " ");
         eprintln!("tptd-mesh: error: {msg}");
-        std::process::exit(1);
+        // An output that would replace an input or another output is a usage error.
+        let usage = e.is::<tptd::io::FileClash>();
+        std::process::exit(if usage { 2 } else { 1 });
     }
 }
 

@@ -12,7 +12,7 @@ use tptd::improve::quality::summarize;
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
 use tptd::io::{
-    check_writable, read_volume, same_file, spill_for, write_mesh_pending, write_pending,
+    check_writable, read_volume, spill_for, write_mesh_pending, write_pending,
     write_spilled_pending, MeshFormat, PendingFile, SurfaceFormat,
 };
 use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
@@ -255,7 +255,7 @@ fn check_args(cli: &Cli) -> Result<Job> {
     };
     let (alpha, beta) = interval(cli, demo, &input_name)?;
     check_threads(cli.threads)?;
-    check_outputs(cli.input.as_deref(), &output, cli.report.as_deref())?;
+    check_outputs(cli, &output)?;
     let opts = MeshOptions {
         alpha,
         beta,
@@ -306,38 +306,18 @@ fn interval(cli: &Cli, demo: bool, input_name: &str) -> Result<(f64, f64)> {
     Ok((alpha, beta))
 }
 
-/// Checks the output (a known mesh or surface format, writable, not the input) and the report
-/// output (writable, neither the input nor the output), comparing files by identity, not
-/// spelling.
-fn check_outputs(input: Option<&Path>, output: &Path, report: Option<&Path>) -> Result<()> {
+/// Checks the output (a known mesh or surface format, writable) and the report output
+/// (writable), then that no output is an input file or another output (compared by
+/// identity, not spelling; see [`crate::files::check_files`]).
+fn check_outputs(cli: &Cli, output: &Path) -> Result<()> {
     if SurfaceFormat::from_path(output).is_none() {
         MeshFormat::from_path(output).map_err(write_error)?;
     }
     check_writable(output).map_err(write_error)?;
-    let clash = |a: &Path, b: &Path, what: &str| {
-        if same_file(a, b) {
-            Err(file_error(
-                a.display(),
-                format_args!(
-                    "{what} cannot be written to the same file as {}",
-                    b.display()
-                ),
-            ))
-        } else {
-            Ok(())
-        }
-    };
-    if let Some(i) = input {
-        clash(output, i, "the mesh")?;
-    }
-    if let Some(r) = report {
-        clash(r, output, "the report")?;
-        if let Some(i) = input {
-            clash(r, i, "the report")?;
-        }
+    if let Some(r) = &cli.report {
         check_writable(r).map_err(write_error)?;
     }
-    Ok(())
+    crate::files::check_files(cli, Some(output))
 }
 
 /// Most worker threads `-j` accepts per core: more only adds overhead.

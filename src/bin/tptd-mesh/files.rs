@@ -1,0 +1,36 @@
+//! The files a run reads and writes, and the check before any work that no output is an
+//! input file (detached data and function files included) or another output.
+
+use std::path::Path;
+
+use anyhow::Result;
+use tptd::io::{check_clashes, input_files, RunFile};
+
+use crate::cli::Cli;
+
+/// Refuses, before any sample is read, an output of the run (`output`: the mesh, absent with
+/// `--critical`; `--report`, `--json`, `--spectrum`, `--transfer`) that is the same file as
+/// a file of the input or as another output. A clash is a [`tptd::io::FileClash`] (exit 2).
+pub(crate) fn check_files(cli: &Cli, output: Option<&Path>) -> Result<()> {
+    let mut inputs = Vec::new();
+    if let Some(input) = &cli.input {
+        let files = input_files(input, cli.function.as_deref())?;
+        let read_with = format!("read with the input {}", input.display());
+        for (n, f) in files.into_iter().enumerate() {
+            let role = if n == 0 { "the input" } else { &read_with };
+            inputs.push(RunFile::new(role, f));
+        }
+    }
+    let outputs: Vec<RunFile> = [
+        ("-o", output),
+        ("--report", cli.report.as_deref()),
+        ("--json", cli.json.as_deref()),
+        ("--spectrum", cli.spectrum.as_deref()),
+        ("--transfer", cli.transfer.as_deref()),
+    ]
+    .into_iter()
+    .filter_map(|(role, path)| path.map(|p| RunFile::new(role, p)))
+    .collect();
+    check_clashes(&inputs, &outputs)?;
+    Ok(())
+}
