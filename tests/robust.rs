@@ -40,8 +40,19 @@ fn ball(i: usize, j: usize, k: usize) -> f64 {
 /// Checks a failed run: exit 1 (not a signal or a panic's 101), one stderr line
 /// `tptd-mesh: error: …` naming `names`, and `dir` exactly as `before`.
 fn assert_one_line_failure(o: &Output, dir: &Path, before: &[String], names: &str) -> String {
+    assert_one_line_exit(o, dir, before, names, 1)
+}
+
+/// [`assert_one_line_failure`] with exit status `code`.
+fn assert_one_line_exit(
+    o: &Output,
+    dir: &Path,
+    before: &[String],
+    names: &str,
+    code: i32,
+) -> String {
     let err = stderr(o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(o.status.code(), Some(code), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.starts_with("tptd-mesh: error: "), "{err}");
     assert!(err.contains(names), "{err} does not name {names}");
@@ -54,6 +65,13 @@ fn fails_cleanly(dir: &Path, args: &[&str], names: &str) -> String {
     let before = listing(dir);
     let o = run_in(dir, args);
     assert_one_line_failure(&o, dir, &before, names)
+}
+
+/// A refused run (exit 2) that leaves `dir` as it was.
+fn refused_cleanly(dir: &Path, args: &[&str], names: &str) -> String {
+    let before = listing(dir);
+    let o = run_in(dir, args);
+    assert_one_line_exit(&o, dir, &before, names, 2)
 }
 
 #[test]
@@ -159,14 +177,14 @@ fn a_report_never_replaces_the_input_or_the_mesh() {
     ] {
         let mut a = args.to_vec();
         a.extend(["--report", report]);
-        let e = fails_cleanly(d, &a, report);
+        let e = refused_cleanly(d, &a, report);
         assert!(e.contains("same file"), "{report}: {e}");
         assert_eq!(fs::read(d.join("victim.npy")).unwrap(), input, "{report}");
         assert_eq!(fs::read(d.join("out/m.vtu")).unwrap(), mesh, "{report}");
     }
     // The mesh may not replace the input either (a hard link with a mesh extension).
     fs::hard_link(d.join("victim.npy"), d.join("alias.vtu")).unwrap();
-    let e = fails_cleanly(
+    let e = refused_cleanly(
         d,
         &["victim.npy", "--beta", "3", "-o", "alias.vtu"],
         "alias.vtu",

@@ -133,17 +133,17 @@ enum UsageError {
     Clash(#[from] tptd::io::FileClash),
 }
 
-/// Checks the output before any work: a `.vtu` name, not the input mesh (compared by
-/// identity, not spelling), in a directory that exists.
+/// Checks the output before any work: not the input mesh (compared by
+/// identity, not spelling), a `.vtu` name, in a directory that exists.
 fn check_output(cli: &Cli, out: &Path) -> Result<()> {
+    let input = [RunFile::new("the input mesh", &cli.mesh)];
+    check_clashes(&input, &[RunFile::new("-o", out)]).map_err(UsageError::from)?;
     let vtu = out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("vtu"));
     if !vtu {
         return Err(UsageError::NotVtu(out.to_path_buf()).into());
     }
-    let input = [RunFile::new("the input mesh", &cli.mesh)];
-    check_clashes(&input, &[RunFile::new("-o", out)]).map_err(UsageError::from)?;
     tptd::io::check_writable(out)?;
     Ok(())
 }
