@@ -129,7 +129,7 @@ mod tests {
                 .to_vec();
         bytes.extend([0xff, 0, 1, 2, b'\n', 3, 4, 5]);
         fs::write(&mha, bytes).unwrap();
-        assert_eq!(input_files(&mha, None).unwrap(), [mha.clone()]);
+        assert_eq!(input_files(&mha, None).unwrap(), [mha]);
         let xyz = d.join("g.xyz");
         assert!(input_files(&xyz, None).is_err(), "no .q or .f next to it");
         fs::write(d.join("g.f"), b"").unwrap();
