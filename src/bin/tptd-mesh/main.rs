@@ -4,15 +4,18 @@
 //! an optional JSON report.
 //!
 //! This is the only part of the crate that prints. Every failure is reported as one line
-//! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1; outputs are written
-//! atomically, so a failed run leaves no (partial) output file behind.
+//! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1 (usage errors, checked
+//! before any work: status 2); outputs are written atomically, so a failed run leaves no
+//! (partial) output file behind. A closed stdout is not an error.
 //!
-//! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`run`] (the run,
+//! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
+//! that do nothing are refused), [`run`] (the run,
 //! step by step), [`critical`] (`--critical` and the check of the bounds against the critical
 //! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
 //! (`{file}: {problem}` errors), [`surface`] (isosurface output).
 
 mod alloc;
+mod applies;
 mod cli;
 mod critical;
 mod error;
