@@ -32,6 +32,7 @@ fn main() {
     tptd::memory::set_limit(cli.memory_limit);
     clean_up_on_signals();
     let result = if cli.critical {
+        alloc::set_critical_mode();
         critical::run(cli)
     } else {
         run::run(cli)
