@@ -102,23 +102,19 @@ fn check_output(m: &ArgMatches, output: &Path) -> Result<(), String> {
         })?),
     };
     let name = output.display();
-    let refuse = |id: &str, only: &str| {
-        Err(format!(
-            "{} applies only to {only} output, not {name}",
-            flag(id)
-        ))
-    };
+    let refuse =
+        |id: &str, only: &str| Err(format!("{} applies only to {only}, not {name}", flag(id)));
     if given(m, "msh_version") && mesh != Some(MeshFormat::Msh) {
-        return refuse("msh_version", ".msh");
+        return refuse("msh_version", ".msh output");
     }
     if given(m, "vtu_encoding") && mesh != Some(MeshFormat::Vtu) {
-        return refuse("vtu_encoding", ".vtu");
+        return refuse("vtu_encoding", ".vtu output");
     }
     if given(m, "caps") && surface.is_none() {
-        return refuse("caps", "isosurface (.obj, .ply, .stl)");
+        return refuse("caps", "isosurface output (.obj, .ply, .stl)");
     }
     if given(m, "ascii") && !matches!(surface, Some(SurfaceFormat::Ply | SurfaceFormat::Stl)) {
-        return refuse("ascii", ".ply and .stl (.obj is always text)");
+        return refuse("ascii", ".ply and .stl output (.obj is always text)");
     }
     Ok(())
 }
