@@ -54,6 +54,10 @@ pub enum GridError {
     /// The direction matrix (or the origin) is singular or not finite.
     #[error("direction matrix is singular (its axes are linearly dependent) or not finite")]
     BadDirection,
+    /// A curvilinear grid's point has a NaN or infinite coordinate; the vertex `(i, j, k)` and
+    /// its position.
+    #[error("grid point ({0}, {1}, {2}) has a coordinate that is not finite: {3:?}")]
+    NotFinitePoint(usize, usize, usize, [f64; 3]),
 }
 
 /// Identity direction matrix.
@@ -269,25 +273,54 @@ pub const SINGULAR_CONDITION: f64 = 1e15;
 /// out nearly flat (the CLI warns).
 pub const NEAR_SINGULAR_CONDITION: f64 = 1e3;
 
-/// Condition number of a 3×3 matrix in the Frobenius norm, divided by 3 so that a rotation
-/// gives 1 (within a factor of 3 of the 2-norm condition number); infinite when singular.
+/// Condition number of a 3×3 matrix in the 2-norm: its largest singular value over its
+/// smallest (1 for a rotation, 2000 for `diag(1, 1, 0.0005)`); infinite when singular.
 pub fn condition_number(m: &[[f64; 3]; 3]) -> f64 {
-    let det = det3(m);
+    // scaled to entries of at most 1, so that no square below overflows
+    let scale = m.iter().flatten().fold(0.0f64, |s, x| s.max(x.abs()));
+    if scale == 0.0 || !scale.is_finite() {
+        return f64::INFINITY;
+    }
+    let m = m.map(|row| row.map(|x| x / scale));
+    let det = det3(&m);
     if det == 0.0 || !det.is_finite() {
         return f64::INFINITY;
     }
-    // The inverse's Frobenius norm is the cofactors' divided by |det|.
-    let mut cof = 0.0;
-    for r in 0..3 {
-        for c in 0..3 {
+    // The inverse is the transposed cofactor matrix over the determinant; a transpose keeps
+    // the 2-norm.
+    let cof: [[f64; 3]; 3] = std::array::from_fn(|r| {
+        std::array::from_fn(|c| {
             let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
             let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
-            let x = m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1];
-            cof += x * x;
-        }
+            m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]
+        })
+    });
+    spectral_norm(&m) * spectral_norm(&cof) / det.abs()
+}
+
+/// Largest singular value of a 3×3 matrix: the square root of the largest eigenvalue of
+/// `MᵀM`.
+fn spectral_norm(m: &[[f64; 3]; 3]) -> f64 {
+    let gram: [[f64; 3]; 3] =
+        std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|k| m[k][r] * m[k][c]).sum()));
+    largest_eigenvalue(&gram).max(0.0).sqrt()
+}
+
+/// Largest eigenvalue of a symmetric 3×3 matrix, in closed form (the trigonometric solution
+/// of the characteristic cubic).
+fn largest_eigenvalue(a: &[[f64; 3]; 3]) -> f64 {
+    let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    let q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+    let p2 = (0..3).map(|i| (a[i][i] - q).powi(2)).sum::<f64>() + 2.0 * off;
+    if p2 == 0.0 {
+        return q;
     }
-    let norm: f64 = m.iter().flatten().map(|x| x * x).sum();
-    (norm.sqrt() * cof.sqrt() / det.abs()) / 3.0
+    let p = (p2 / 6.0).sqrt();
+    let b: [[f64; 3]; 3] = std::array::from_fn(|r| {
+        std::array::from_fn(|c| (a[r][c] - if r == c { q } else { 0.0 }) / p)
+    });
+    let phi = (det3(&b) / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
+    q + 2.0 * p * phi.cos()
 }
 
 /// Determinant of a row-major 3×3 matrix.
@@ -317,8 +350,8 @@ impl CurvilinearGrid {
     ///
     /// # Errors
     /// The [`GridError`]s of [`ScalarGrid::new`]; [`GridError::WrongLength`] when `points`
-    /// does not have one position per vertex; [`GridError::BadDirection`] for a non-finite
-    /// position.
+    /// does not have one position per vertex; [`GridError::NotFinitePoint`] for the first
+    /// position (x fastest) with a NaN or infinite coordinate.
     pub fn new(
         dims: [usize; 3],
         values: impl Into<Samples>,
@@ -332,8 +365,9 @@ impl CurvilinearGrid {
                 got: points.len(),
             });
         }
-        if points.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(GridError::BadDirection);
+        if let Some(n) = points.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+            let [i, j, k] = values.vertex_ijk(n);
+            return Err(GridError::NotFinitePoint(i, j, k, points[n]));
         }
         Ok(CurvilinearGrid { values, points })
     }
@@ -359,6 +393,14 @@ mod tests {
         assert!((condition_number(&rot) - 1.0).abs() < 1e-12);
         let shear = [[1.0, 1.0, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1.0]];
         assert!(condition_number(&shear) > NEAR_SINGULAR_CONDITION);
+        // the 2-norm condition number itself, not an estimate within a factor of 3
+        let thin = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 5e-4]];
+        assert!((condition_number(&thin) - 2000.0).abs() < 1e-9);
+        let (c, s) = (1e-3f64.cos(), 1e-3f64.sin());
+        let unit_shear = [[1.0, c, 0.0], [0.0, s, 0.0], [0.0, 0.0, 1.0]];
+        let k = condition_number(&unit_shear);
+        assert!((k - (1.0 + c) / s).abs() < 1e-6 * k, "{k}");
+        assert!(k > NEAR_SINGULAR_CONDITION);
         let flat = [[1.0, 2.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
         assert_eq!(condition_number(&flat), f64::INFINITY);
     }

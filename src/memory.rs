@@ -229,16 +229,27 @@ pub fn try_reserve<T>(v: &mut Vec<T>, n: usize) -> Result<(), TryReserveError> {
 
 /// Bytes for messages: `512 B`, `3.2 MiB`, `1.50 GiB`.
 pub fn fmt_bytes(b: u64) -> String {
-    const KIB: f64 = 1024.0;
-    let x = b as f64;
-    if x < KIB {
-        format!("{b} B")
-    } else if x < KIB * KIB {
-        format!("{:.1} KiB", x / KIB)
-    } else if x < KIB * KIB * KIB {
-        format!("{:.1} MiB", x / (KIB * KIB))
-    } else {
-        format!("{:.2} GiB", x / (KIB * KIB * KIB))
+    Bytes(b).to_string()
+}
+
+/// A number of bytes that displays with the unit that fits: `512 B`, `1.0 KiB`, `3.2 MiB`,
+/// `1.50 GiB`. Displaying it allocates nothing (the out-of-memory message uses it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bytes(pub u64);
+
+impl std::fmt::Display for Bytes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        const KIB: f64 = 1024.0;
+        let x = self.0 as f64;
+        if x < KIB {
+            write!(f, "{} B", self.0)
+        } else if x < KIB * KIB {
+            write!(f, "{:.1} KiB", x / KIB)
+        } else if x < KIB * KIB * KIB {
+            write!(f, "{:.1} MiB", x / (KIB * KIB))
+        } else {
+            write!(f, "{:.2} GiB", x / (KIB * KIB * KIB))
+        }
     }
 }
 

@@ -319,8 +319,6 @@ fn errors_are_one_line_and_leave_nothing_behind() {
         &["missing.npy", "-o", "m.vtu", "--alpha", "1"],
         "missing.npy",
     );
-    assert_clean_failure(d, &[vol, "-o", "m.off", "--alpha", "1"], "m.off");
-    assert_clean_failure(d, &[vol, "-o", "m", "--alpha", "1"], "m");
     let e = assert_clean_failure(
         d,
         &[vol, "-o", "m.vtu", "--alpha", "3", "--beta", "2"],
@@ -528,4 +526,209 @@ fn assert_refused(dir: &Path, args: &[&str], needle: &str) {
     assert_eq!(o.status.code(), Some(2), "{args:?}");
     assert!(stderr(&o).contains(needle), "{}", stderr(&o));
     assert!(listing(dir).is_empty());
+}
+
+/// `args` (run in `dir`) exit with status 2 and one line naming `needle`; `dir` is unchanged.
+fn assert_usage_error(dir: &Path, args: &[&str], needle: &str) -> String {
+    let before = listing(dir);
+    let o = run_in(dir, args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    assert!(err.starts_with("tptd-mesh: error: "), "{err}");
+    assert!(
+        err.contains(needle),
+        "{args:?}: {err} does not name {needle}"
+    );
+    assert!(stdout(&o).is_empty(), "{}", stdout(&o));
+    assert_eq!(listing(dir), before, "{args:?} left files behind");
+    err
+}
+
+#[test]
+fn options_that_do_nothing_in_the_mode_are_refused() {
+    let (dir, vol) = dir_with_volume();
+    let d = dir.path();
+    let vol = vol.to_str().unwrap();
+    let mesh = |out: &'static str| vec![vol, "-o", out, "--alpha", "2"];
+    // options of --critical while meshing
+    for extra in [
+        &["--json", "c.json"][..],
+        &["--spectrum", "s.csv"],
+        &["--transfer", "t.json"],
+        &["--persistence"],
+        &["--min-persistence", "1"],
+        &["--min-value", "1"],
+        &["--max-value", "2"],
+        &["--kind", "maximum"],
+    ] {
+        let args = [&mesh("m.vtu")[..], extra].concat();
+        let e = assert_usage_error(d, &args, extra[0]);
+        assert!(e.contains("--critical"), "{e}");
+    }
+    // options of other outputs
+    for (out, extra) in [
+        ("m.vtu", &["--caps"][..]),
+        ("m.msh", &["--ascii"]),
+        ("m.obj", &["--ascii"]),
+        ("m.vtu", &["--msh-version", "2.2"]),
+        ("m.inp", &["--msh-version", "4.1"]),
+        ("m.msh", &["--vtu-encoding", "raw"]),
+        ("m.stl", &["--vtu-encoding", "zlib"]),
+    ] {
+        let args = [&mesh(out)[..], extra].concat();
+        let e = assert_usage_error(d, &args, extra[0]);
+        assert!(e.contains(out), "{e}");
+    }
+    // options of other inputs
+    for extra in [&["--field", "a"][..], &["--function", "f.q"]] {
+        let args = [&mesh("m.vtu")[..], extra].concat();
+        assert_usage_error(d, &args, extra[0]);
+        let args = [&["--demo"][..], extra].concat();
+        assert_usage_error(d, &args, extra[0]);
+    }
+    // the bound check's tolerance without the check
+    let args = [
+        &mesh("m.vtu")[..],
+        &["--no-critical-check", "--critical-tol", "1"],
+    ]
+    .concat();
+    assert_usage_error(d, &args, "--critical-tol");
+    // meshing options with --critical
+    for extra in [
+        &["--alpha", "1"][..],
+        &["--beta", "1"],
+        &["--method", "six"],
+        &["--report", "r.json"],
+        &["--msh-version", "2.2"],
+        &["--vtu-encoding", "raw"],
+        &["--caps"],
+        &["--ascii"],
+        &["--no-analysis"],
+        &["--critical-tol", "0.1"],
+        &["--no-critical-check"],
+        &["--field", "a"],
+        &["--function", "f.q"],
+    ] {
+        let args = [&[vol, "--critical"][..], extra].concat();
+        let e = assert_usage_error(d, &args, extra[0]);
+        assert!(e.contains("--critical"), "{e}");
+    }
+    // what applies is still accepted
+    for (out, extra) in [
+        ("a.msh", &["--msh-version", "2.2"][..]),
+        ("b.vtu", &["--vtu-encoding", "raw"]),
+        ("c.ply", &["--caps", "--ascii"]),
+        ("d.obj", &["--caps"]),
+        ("e.vtu", &["--critical-tol", "0.1"]),
+    ] {
+        assert_ok(&run_in(d, &[&mesh(out)[..], extra, &["-q"]].concat()));
+    }
+    assert_ok(&run_in(
+        d,
+        &[vol, "--critical", "--kind", "minimum", "-j", "1", "-q"],
+    ));
+}
+
+#[test]
+fn negative_numbers_reach_the_value_checks() {
+    let (dir, vol) = dir_with_volume();
+    let d = dir.path();
+    let vol = vol.to_str().unwrap();
+    let mesh = [vol, "-o", "m.vtu", "--alpha", "2"];
+    for (extra, needle) in [
+        (&["--spacing", "-1,1,1"][..], "must be finite and positive"),
+        (&["--quality", "--min-angle", "-5"], "expected an angle"),
+        (&["--quality", "--max-angle", "-5"], "expected an angle"),
+        (
+            &["--quality", "--quality-time", "-1"],
+            "positive number of seconds",
+        ),
+        (
+            &["--quality", "--boundary-collapse-ratio", "-1"],
+            "positive ratio",
+        ),
+        (&["--quality", "--split-sag", "-0.5"], "positive ratio"),
+        (&["--critical-tol", "-1e-3"], "finite number >= 0"),
+        (&["-j", "-2"], "-2"),
+        (&["--memory-limit", "-1G"], "is not a size"),
+    ] {
+        let e = assert_usage_error(d, &[&mesh[..], extra].concat(), needle);
+        assert!(!e.contains("unexpected argument"), "{e}");
+    }
+    for (extra, needle) in [
+        (&["--min-persistence", "-1"][..], "finite number >= 0"),
+        (
+            &["--transfer", "t.csv", "--transfer-width", "-2"],
+            "finite number >= 0",
+        ),
+    ] {
+        let args = [&[vol, "--critical"][..], extra].concat();
+        let e = assert_usage_error(d, &args, needle);
+        assert!(!e.contains("unexpected argument"), "{e}");
+    }
+    // negative values that are valid work
+    let o = run_in(
+        d,
+        &[vol, "-o", "n.vtu", "--alpha", "-2.3", "--beta", "2.5", "-q"],
+    );
+    assert_ok(&o);
+    let o = run_in(
+        d,
+        &[
+            vol,
+            "--critical",
+            "--min-value",
+            "-1",
+            "--max-value",
+            "9",
+            "-q",
+        ],
+    );
+    assert_ok(&o);
+}
+
+#[test]
+fn an_unknown_extension_and_too_many_threads_are_usage_errors() {
+    let (dir, vol) = dir_with_volume();
+    let d = dir.path();
+    let vol = vol.to_str().unwrap();
+    let e = assert_usage_error(d, &[vol, "-o", "m.off", "--alpha", "1"], "m.off");
+    assert!(e.contains(".msh, .inp or .vtu"), "{e}");
+    assert_usage_error(d, &[vol, "-o", "m", "--alpha", "1"], "m");
+    // -j is at most 16 per core: 4096 is beyond it on any machine of fewer than 256 cores
+    let e = assert_usage_error(d, &[vol, "-o", "m.vtu", "--alpha", "1", "-j", "4096"], "-j");
+    assert!(e.contains("too many worker threads"), "{e}");
+    assert_usage_error(d, &[vol, "--critical", "-j", "4096"], "-j");
+}
+
+/// Runs `args` in `dir` with a stdout that is closed before the binary writes to it.
+fn run_with_closed_stdout(dir: &Path, args: &[&str]) -> Output {
+    let mut child = Command::new(BIN)
+        .current_dir(dir)
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    drop(child.stdout.take());
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_closed_stdout_is_not_an_error() {
+    let (dir, vol) = dir_with_volume();
+    let d = dir.path();
+    let vol = vol.to_str().unwrap();
+    for args in [
+        &[vol, "-o", "m.vtu", "--alpha", "2"][..],
+        &[vol, "--critical"],
+        &[vol, "--critical", "--transfer", "t.csv"],
+    ] {
+        let o = run_with_closed_stdout(d, args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+    assert!(d.join("m.vtu").exists() && d.join("t.csv").exists());
 }

@@ -427,7 +427,11 @@ fn torus_minimum_is_a_ring_region() {
     let info = r.region.as_ref().unwrap();
     let zeros = f.values.iter().filter(|&&v| v == 0.0).count();
     assert_eq!(info.vertices, zeros);
-    assert!(dist(r.position, [10.0, 10.0, 3.0]) < 0.3, "{r:#?}");
+    // the position is a vertex of the ring; the centroid, in its hole, is apart
+    assert!(dist(info.centroid, [10.0, 10.0, 3.0]) < 0.3, "{r:#?}");
+    assert_eq!(r.position, r.index, "{r:#?}");
+    let v = r.index.map(|x| x as usize);
+    assert_eq!(grid.values.get(grid.index(v[0], v[1], v[2])), 0.0, "{r:#?}");
     assert_eq!(info.bbox_min[2], 3.0);
     assert!((info.bbox_min[0] - 4.0).abs() <= 1.0 && (info.bbox_max[0] - 16.0).abs() <= 1.0);
     // just above the minimum the sublevel set is a solid torus
@@ -467,10 +471,19 @@ fn integer_plateaus_two_maxima_and_a_bridge() {
         got,
         vec![
             (CriticalKind::RegionMinimum, 0.0, got[0].2, background),
-            (CriticalKind::RegionSaddle, 3.0, [5.5, 2.5, 2.5], 16),
-            (CriticalKind::RegionMaximum, 5.0, [2.5, 2.5, 2.5], 8),
-            (CriticalKind::RegionMaximum, 5.0, [8.5, 2.5, 2.5], 8),
+            (CriticalKind::RegionSaddle, 3.0, [5.0, 2.0, 2.0], 16),
+            (CriticalKind::RegionMaximum, 5.0, [2.0, 2.0, 2.0], 8),
+            (CriticalKind::RegionMaximum, 5.0, [8.0, 2.0, 2.0], 8),
         ]
+    );
+    // a region's position is its first vertex nearest to its centroid
+    let centroids: Vec<[f64; 3]> = pts[1..]
+        .iter()
+        .map(|p| p.region.as_ref().unwrap().centroid)
+        .collect();
+    assert_eq!(
+        centroids,
+        [[5.5, 2.5, 2.5], [2.5, 2.5, 2.5], [8.5, 2.5, 2.5]]
     );
     check_routes_agree(&f, "plateaus");
 }

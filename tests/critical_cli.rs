@@ -337,3 +337,49 @@ fn transfer_bad_paths_are_one_line_errors_without_output() {
         "only the input is left"
     );
 }
+
+#[test]
+fn a_ring_region_is_placed_on_the_ring_with_its_centroid_apart() {
+    // integer data: 0 on a ring of radius 6 around (10, 10, 3), rising away from it; the
+    // ring's centroid is in its hole, where f = 12
+    let ring = |i: usize, j: usize, k: usize| {
+        let (x, y, z) = (i as f64, j as f64, k as f64);
+        let r = ((x - 10.0).powi(2) + (y - 10.0).powi(2)).sqrt();
+        (((r - 6.0).powi(2) + (z - 3.0).powi(2)) / 0.6)
+            .floor()
+            .min(12.0)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("ring.npy");
+    write_npy(&input, [21, 21, 7], ring);
+    let json = dir.path().join("c.json");
+    let (ok, stdout, stderr) = run(&[
+        input.to_str().unwrap(),
+        "--critical",
+        "--kind",
+        "region_minimum",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&fs::read_to_string(&json).unwrap()).unwrap();
+    let arr = v.as_array().unwrap();
+    assert_eq!(arr.len(), 1, "{v}");
+    let p = &arr[0];
+    let pos: Vec<f64> = (0..3).map(|a| p["position"][a].as_f64().unwrap()).collect();
+    // a grid vertex of the region (spacing 1, origin 0: physical = index)
+    assert!(pos.iter().all(|x| x.fract() == 0.0), "{p}");
+    assert_eq!(
+        ring(pos[0] as usize, pos[1] as usize, pos[2] as usize),
+        0.0,
+        "{p}"
+    );
+    assert_eq!(p["index"], p["position"], "{p}");
+    let c = &p["region"]["centroid"];
+    for (a, want) in [10.0, 10.0, 3.0].into_iter().enumerate() {
+        assert!((c[a].as_f64().unwrap() - want).abs() < 0.3, "{p}");
+    }
+    // the table shows the position too
+    let at = format!("{:.3}, {:.3}, {:.3}", pos[0], pos[1], pos[2]);
+    assert!(stdout.contains(&at), "{stdout}");
+}

@@ -199,13 +199,15 @@ fn a_huge_thread_count_fails_at_once() {
     let d = dir.path();
     write_npy(&d.join("v.npy"), [9, 8, 9], ball);
     let t = Instant::now();
-    let e = fails_cleanly(
-        d,
-        &["v.npy", "--beta", "3", "-o", "m.msh", "-j", "4096"],
-        "-j 4096",
-    );
+    let before = listing(d);
+    let o = run_in(d, &["v.npy", "--beta", "3", "-o", "m.msh", "-j", "4096"]);
     assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
-    assert!(e.contains("worker threads"), "{e}");
+    // a usage error: exit 2, one line naming -j, nothing written
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
+    assert!(e.contains("-j 4096") && e.contains("worker threads"), "{e}");
+    assert_eq!(listing(d), before);
 }
 
 /// Reads each `.vtu` with VTK and (unless raw) meshio and prints one line per reader:
@@ -418,7 +420,7 @@ fn the_memory_cap_gives_one_line_at_every_stage() {
     a[0] = "a.nrrd";
     let o = run_env(d, &a, &[("TPTD_MEMORY_LIMIT", "200K")]);
     let e = assert_one_line_failure(&o, d, &before, "out of memory");
-    assert!(e.contains("memory limit of 0.2 MiB"), "{e}");
+    assert!(e.contains("memory limit of 200.0 KiB"), "{e}");
     let o = run_env(d, &args, &[("TPTD_MEMORY_LIMIT", "200K")]);
     let e = assert_one_line_failure(&o, d, &before, "v.npy");
     assert!(e.contains("reading 64000 samples needs about"), "{e}");
@@ -564,4 +566,132 @@ fn pending_files_appear_only_when_committed() {
     assert!(same_file(&d.join("a.txt"), &d.join("sub/../a.txt")));
     assert!(same_file(&d.join("new.txt"), &d.join("sub/../new.txt")));
     assert!(!same_file(&d.join("a.txt"), &d.join("sub/a.txt")));
+}
+
+#[test]
+fn sizes_below_a_mebibyte_are_not_printed_as_zero() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_npy(&d.join("v.npy"), [9, 9, 9], ball);
+    let before = listing(d);
+    let o = run_in(
+        d,
+        &[
+            "v.npy",
+            "--beta",
+            "3",
+            "-o",
+            "m.vtu",
+            "--memory-limit",
+            "1K",
+        ],
+    );
+    let e = assert_one_line_failure(&o, d, &before, "1.0 KiB");
+    assert!(!e.contains("0.0 MiB"), "{e}");
+}
+
+#[test]
+fn out_of_memory_in_critical_mode_gives_a_hint_that_applies() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // an ascii NRRD (about 1 MB of text) is read whole before its header is looked at
+    let text: Vec<String> = (0..40 * 40 * 40)
+        .map(|n| format!("{:.15}", n as f64 / 7.0))
+        .collect();
+    let nrrd = "NRRD0004\ntype: double\ndimension: 3\nsizes: 40 40 40\nencoding: ascii\n\n";
+    fs::write(d.join("a.nrrd"), format!("{nrrd}{}\n", text.join(" "))).unwrap();
+    let before = listing(d);
+    let args = ["a.nrrd", "--critical", "--json", "c.json"];
+    let o = run_env(d, &args, &[("TPTD_MEMORY_LIMIT", "200K")]);
+    let e = assert_one_line_failure(&o, d, &before, "out of memory");
+    assert!(!e.contains("interval"), "{e}");
+    assert!(e.contains("--memory-limit") && e.contains("crop"), "{e}");
+}
+
+/// A 3×3×3 ASCII `.vts` (unit lattice) with `arrays` as point data and the point
+/// coordinates `points(i, j, k)`.
+fn write_small_vts(path: &Path, arrays: &str, points: impl Fn(usize, usize, usize) -> String) {
+    let mut pts = String::new();
+    for k in 0..3 {
+        for j in 0..3 {
+            for i in 0..3 {
+                pts += &points(i, j, k);
+                pts += " ";
+            }
+        }
+    }
+    let text = format!(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"StructuredGrid\" version=\"0.1\">\n\
+         <StructuredGrid WholeExtent=\"0 2 0 2 0 2\"><Piece Extent=\"0 2 0 2 0 2\">\n\
+         <PointData>{arrays}</PointData>\n\
+         <Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">{pts}\
+         </DataArray></Points></Piece></StructuredGrid></VTKFile>\n"
+    );
+    fs::write(path, text).unwrap();
+}
+
+fn lattice(i: usize, j: usize, k: usize) -> String {
+    format!("{i} {j} {k}")
+}
+
+/// 27 values: `f(n)` for point `n`, space-separated.
+fn values(f: impl Fn(usize) -> String) -> String {
+    (0..27).map(f).collect::<Vec<_>>().join(" ")
+}
+
+#[test]
+fn a_vts_without_a_scalar_array_lists_the_arrays_it_has() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let v = values(|n| format!("{n} 0 1"));
+    let arrays = format!(
+        "<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" \
+         format=\"ascii\">{v}</DataArray>"
+    );
+    write_small_vts(&d.join("v.vts"), &arrays, lattice);
+    let e = fails_cleanly(d, &["v.vts", "--alpha", "1", "-o", "m.vtu"], "v.vts");
+    assert!(!e.contains("none"), "{e}");
+    assert!(e.contains("velocity") && e.contains("3 components"), "{e}");
+}
+
+#[test]
+fn a_nan_point_in_a_vts_is_reported_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let f = values(|n| format!("{}", n as f64 * 0.5));
+    let arrays = format!("<DataArray type=\"Float64\" Name=\"f\" format=\"ascii\">{f}</DataArray>");
+    let points = |i, j, k| {
+        if (i, j, k) == (1, 2, 0) {
+            format!("{i} nan {k}")
+        } else {
+            lattice(i, j, k)
+        }
+    };
+    write_small_vts(&d.join("n.vts"), &arrays, points);
+    let e = fails_cleanly(d, &["n.vts", "--alpha", "1", "-o", "m.vtu"], "n.vts");
+    assert!(!e.contains("direction"), "{e}");
+    assert!(e.contains("(1, 2, 0)") && e.contains("NaN"), "{e}");
+}
+
+#[test]
+fn a_direction_matrix_of_condition_number_2000_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // unit axes x and (1, 0.001, 0) / |.|: 2-norm condition number about 2000
+    write_nhdr_with_directions(d, "c2000.nhdr", "(1,0,0) (1,0.001,0) (0,0,1)");
+    let o = run_in(d, &["c2000.nhdr", "--beta", "3", "-o", "s.vtu", "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("the direction matrix is nearly singular (condition number 2.00e3)"),
+        "{}",
+        stderr(&o)
+    );
+    // a condition number of 500 is not
+    write_nhdr_with_directions(d, "c500.nhdr", "(1,0,0) (1,0.004,0) (0,0,1)");
+    let o = run_in(d, &["c500.nhdr", "--beta", "3", "-o", "t.vtu", "-q"]);
+    assert!(
+        o.status.success() && stderr(&o).is_empty(),
+        "{}",
+        stderr(&o)
+    );
 }

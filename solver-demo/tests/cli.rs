@@ -105,18 +105,24 @@ fn output_is_identical_for_one_and_two_threads() {
 }
 
 #[test]
-fn mms_mode_prints_the_errors() {
+fn mms_mode_prints_relative_errors_and_the_problem() {
     let dir = tempfile::tempdir().unwrap();
     let mesh = shell_file(dir.path());
     let o = run(&[mesh.to_str().unwrap(), "--mms"]);
     let stdout = text(&o.stdout);
     assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        stdout.contains("u = sin(2x) cos(y) exp(z/2)") && stdout.contains("-div(k grad u)"),
+        "{stdout}"
+    );
     let line = stdout
         .lines()
-        .find(|l| l.starts_with("mms errors: L2 "))
+        .find(|l| l.starts_with("mms relative errors: L2 "))
         .expect(&stdout);
-    let l2: f64 = line.split_whitespace().nth(3).unwrap().parse().unwrap();
+    let l2: f64 = line.split_whitespace().nth(4).unwrap().parse().unwrap();
+    let h1: f64 = line.split_whitespace().nth(6).unwrap().parse().unwrap();
     assert!(l2 > 0.0 && l2 < 0.05, "{line}");
+    assert!(h1 > l2 && h1 < 0.5, "{line}");
 }
 
 /// Runs with `args` (output `x.vtu` in `dir`), expects failure with one line on stderr

@@ -106,6 +106,9 @@ impl CriticalKind {
 pub struct RegionInfo {
     /// Number of grid vertices in the region.
     pub vertices: usize,
+    /// Physical centroid of the region's vertices (it may lie outside the region, e.g. in
+    /// the hole of a ring; the point's `position` is a vertex of the region).
+    pub centroid: [f64; 3],
     /// Smallest physical coordinates of the region's vertices.
     pub bbox_min: [f64; 3],
     /// Largest physical coordinates of the region's vertices.
@@ -119,9 +122,11 @@ pub struct CriticalPoint {
     pub value: f64,
     /// What it is.
     pub kind: CriticalKind,
-    /// Physical position (a region: the centroid of its vertices).
+    /// Physical position (a region: its vertex nearest to its centroid, see
+    /// [`RegionInfo::centroid`]).
     pub position: [f64; 3],
-    /// Position in index coordinates (grid vertex `(i, j, k)` is `[i, j, k]`).
+    /// Position in index coordinates (grid vertex `(i, j, k)` is `[i, j, k]`), of
+    /// `position`.
     pub index: [f64; 3],
     /// Whether the point (or some vertex of the region) lies on the grid box.
     pub on_box: bool,

@@ -377,12 +377,13 @@ fn region_point(
     } else {
         CriticalKind::RegionSaddle
     };
-    let centroid = sum.map(|s| s / region.len() as f64);
+    let centroid = grid.to_physical(sum.map(|s| s / region.len() as f64));
     let class = LinkClass {
         upper: [np.min(255) as u8, 0, 0],
         lower: [nn.min(255) as u8, 0, 0],
     };
-    let mut pt = make_point(grid, kind, v, centroid, class, false);
+    let at = nearest_vertex(grid, region, centroid).map(|x| x as f64);
+    let mut pt = make_point(grid, kind, v, at, class, false);
     pt.on_box = on_box;
     pt.superlevel = superlevel;
     pt.sublevel = sublevel;
@@ -390,6 +391,7 @@ fn region_point(
     let (a, b) = (corner(lo), corner(hi));
     pt.region = Some(RegionInfo {
         vertices: region.len(),
+        centroid,
         bbox_min: std::array::from_fn(|k| a[k].min(b[k])),
         bbox_max: std::array::from_fn(|k| a[k].max(b[k])),
     });
@@ -398,6 +400,23 @@ fn region_point(
         .map(|&r| crate::keys::vertex_key(r, crate::keys::CORNER))
         .collect();
     Some(pt)
+}
+
+/// The vertex of `region` nearest (physically) to `point`, the first in `region` of equally
+/// near ones: a point of the region where its centroid may lie outside it (in a ring's hole).
+fn nearest_vertex(grid: &ScalarGrid, region: &[usize], point: [f64; 3]) -> [usize; 3] {
+    let dist2 = |r: usize| {
+        let p = grid.to_physical(grid.vertex_ijk(r).map(|x| x as f64));
+        (0..3).map(|a| (p[a] - point[a]).powi(2)).sum::<f64>()
+    };
+    let mut best = (f64::INFINITY, region[0]);
+    for &r in region {
+        let d = dist2(r);
+        if d < best.0 {
+            best = (d, r);
+        }
+    }
+    grid.vertex_ijk(best.1)
 }
 
 /// Whether the plateau is cube-complex contractible as far as Euler characteristics tell

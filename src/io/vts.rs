@@ -264,27 +264,42 @@ pub fn read_vts(path: &Path, field: Option<&str>) -> Result<CurvilinearGrid, Rea
         Some(f) => scalars.iter().find(|a| a.name == f),
         None => scalars.first(),
     }
-    .ok_or_else(|| {
-        let names: Vec<&str> = scalars.iter().map(|a| a.name.as_str()).collect();
-        ReadError::invalid(
-            path,
-            format!(
-                "no point-data scalar {}; the file has: {}",
-                field.map_or(String::new(), |f| format!("{f:?}")),
-                if names.is_empty() {
-                    "none".into()
-                } else {
-                    names.join(", ")
-                }
-            ),
-        )
-    })?;
+    .ok_or_else(|| ReadError::invalid(path, missing_field(&p.arrays, field)))?;
     let values = src.values(chosen, n)?;
     let points = pts.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     CurvilinearGrid::new(dims, values, points).map_err(|source| ReadError::Grid {
         file: path.display().to_string(),
         source,
     })
+}
+
+/// Why no point-data scalar (named `field`) was found: the scalars there are, or, when there
+/// is none, the point-data arrays there are and that none is a scalar.
+fn missing_field(arrays: &[ArrayDesc], field: Option<&str>) -> String {
+    let what = field.map_or("no point-data scalar".to_string(), |f| {
+        format!("no point-data scalar {f:?}")
+    });
+    let scalars: Vec<&str> = arrays
+        .iter()
+        .filter(|a| a.point_data && a.components == 1)
+        .map(|a| a.name.as_str())
+        .collect();
+    if !scalars.is_empty() {
+        return format!("{what}; the file has: {}", scalars.join(", "));
+    }
+    let others: Vec<String> = arrays
+        .iter()
+        .filter(|a| a.point_data)
+        .map(|a| format!("{:?} ({} components)", a.name, a.components))
+        .collect();
+    if others.is_empty() {
+        format!("{what}; the file has no point-data arrays")
+    } else {
+        format!(
+            "{what}; the file's point-data arrays are not scalar: {}",
+            others.join(", ")
+        )
+    }
 }
 
 /// Where the arrays' data come from.

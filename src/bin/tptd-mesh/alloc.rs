@@ -8,12 +8,21 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::Write;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
-use tptd::memory::{explicit_limit, in_fallible_section};
+use tptd::memory::{explicit_limit, in_fallible_section, Bytes};
 
 /// Bytes allocated through [`CappedAlloc`] and not yet freed (counted only under a limit).
 static IN_USE: AtomicU64 = AtomicU64::new(0);
+
+/// Whether the run lists critical points (`--critical`) instead of meshing: the
+/// out-of-memory hint then says what helps there.
+static CRITICAL: AtomicBool = AtomicBool::new(false);
+
+/// Makes the out-of-memory hint the one of `--critical` runs.
+pub(crate) fn set_critical_mode() {
+    CRITICAL.store(true, Ordering::Relaxed);
+}
 
 /// The system allocator under the process's explicit memory limit.
 pub(crate) struct CappedAlloc;
@@ -57,18 +66,28 @@ fn out_of_memory(size: usize) -> ! {
     tptd::io::remove_pending_temporaries();
     let mut buf = [0u8; 320];
     let mut cur = std::io::Cursor::new(&mut buf[..]);
-    let mib = size as f64 / (1024.0 * 1024.0);
+    let critical = CRITICAL.load(Ordering::Relaxed);
+    let size = Bytes(size as u64);
     let _ = match explicit_limit() {
         Some(l) => writeln!(
             cur,
-            "tptd-mesh: error: out of memory: {mib:.1} MiB more would exceed the memory limit of \
-             {:.1} MiB; raise --memory-limit, crop the volume or narrow the interval",
-            l as f64 / (1024.0 * 1024.0)
+            "tptd-mesh: error: out of memory: {size} more would exceed the memory limit of {}; \
+             raise --memory-limit, {}",
+            Bytes(l),
+            if critical {
+                "crop the volume or leave out --spectrum and --persistence"
+            } else {
+                "crop the volume or narrow the interval"
+            }
         ),
         None => writeln!(
             cur,
-            "tptd-mesh: error: out of memory: the system refused {mib:.1} MiB; crop the volume, \
-             narrow the interval or use --no-analysis"
+            "tptd-mesh: error: out of memory: the system refused {size}; {}",
+            if critical {
+                "crop the volume or leave out --spectrum and --persistence"
+            } else {
+                "crop the volume, narrow the interval or use --no-analysis"
+            }
         ),
     };
     let n = cur.position() as usize;

@@ -47,7 +47,7 @@ pub(crate) struct Cli {
     pub(crate) report: Option<PathBuf>,
 
     /// Worker threads [default: all cores]
-    #[arg(short = 'j', long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(short = 'j', long, value_name = "N", allow_hyphen_values = true, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub(crate) threads: Option<u32>,
 
     /// Gmsh file format version for .msh output: 4.1 (ASCII), 2.2 (ASCII) or 4.1-binary (the
@@ -62,7 +62,7 @@ pub(crate) struct Cli {
 
     /// Override the grid spacing (physical size of a voxel, in the file's units, e.g. mm),
     /// e.g. 0.5,0.5,1.2
-    #[arg(long, value_name = "SX,SY,SZ", value_parser = parse_spacing)]
+    #[arg(long, value_name = "SX,SY,SZ", allow_hyphen_values = true, value_parser = parse_spacing)]
     pub(crate) spacing: Option<Spacing>,
 
     /// Curvilinear input: the point-data scalar (.vts) or variable (Plot3D: a name such as
@@ -95,30 +95,30 @@ pub(crate) struct Cli {
     /// Target smallest dihedral angle of --quality, in degrees. Targets above the defaults
     /// (15 and 155) are reached in stages of at most 2.5 degrees, each undone if it leaves the
     /// worst element worse; they take longer, coarsen the mesh and may move the volume more
-    #[arg(long, value_name = "DEG", default_value_t = 15.0, value_parser = parse_min_angle, requires = "quality")]
+    #[arg(long, value_name = "DEG", default_value_t = 15.0, allow_hyphen_values = true, value_parser = parse_min_angle, requires = "quality")]
     pub(crate) min_angle: f64,
 
     /// Target largest dihedral angle of --quality, in degrees
-    #[arg(long, value_name = "DEG", default_value_t = 155.0, value_parser = parse_max_angle, requires = "quality")]
+    #[arg(long, value_name = "DEG", default_value_t = 155.0, allow_hyphen_values = true, value_parser = parse_max_angle, requires = "quality")]
     pub(crate) max_angle: f64,
 
     /// Time budget of --quality in seconds: the pass stops when it runs out (the mesh is valid
     /// then, but how far it got depends on the machine)
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, requires = "quality")]
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = parse_seconds, requires = "quality")]
     pub(crate) quality_time: Option<f64>,
 
     /// With --quality, merge two boundary nodes only along an edge shorter than R times the
     /// mean edge length at the node removed, or `inf` for no limit. The limit keeps thin
     /// layers such as shells finer, so their elements stay better shaped; without it convex
     /// boundaries get coarser
-    #[arg(long, value_name = "R", default_value = "3", value_parser = parse_ratio, requires = "quality")]
+    #[arg(long, value_name = "R", default_value = "3", allow_hyphen_values = true, value_parser = parse_ratio, requires = "quality")]
     pub(crate) boundary_collapse_ratio: f64,
 
     /// With --quality, split a boundary edge whose chord sags from the level set by more than
     /// S times its length, putting the new node on the level set (where no element gets worse
     /// than the target), or `inf` for never. Nodes on a curved level set inscribe the surface
     /// in it: thin tubes lose volume without the splits
-    #[arg(long, value_name = "S", default_value = "0.03", value_parser = parse_ratio, requires = "quality")]
+    #[arg(long, value_name = "S", default_value = "0.03", allow_hyphen_values = true, value_parser = parse_ratio, requires = "quality")]
     pub(crate) split_sag: f64,
 
     /// Mesh a generated sample (two vessels a third of a voxel apart) with the interval
@@ -129,7 +129,7 @@ pub(crate) struct Cli {
     /// Memory limit, e.g. 8G or 512M: runs whose estimate exceeds it stop before the work,
     /// and allocations beyond it end the run with an error [default: the available memory,
     /// for the estimates only]
-    #[arg(long, value_name = "SIZE", env = "TPTD_MEMORY_LIMIT", value_parser = parse_memory)]
+    #[arg(long, value_name = "SIZE", env = "TPTD_MEMORY_LIMIT", allow_hyphen_values = true, value_parser = parse_memory)]
     pub(crate) memory_limit: Option<u64>,
 
     /// Print nothing on stdout and no progress bar (warnings and errors still go to stderr)
@@ -169,7 +169,7 @@ pub(crate) struct Cli {
     /// With --transfer: width (in data units) of the opacity elevations and hue descents
     /// around each critical value; closer critical values are dropped [default: 2% of the
     /// data range]
-    #[arg(long, value_name = "W", requires = "transfer", value_parser = parse_nonnegative)]
+    #[arg(long, value_name = "W", requires = "transfer", allow_hyphen_values = true, value_parser = parse_nonnegative)]
     pub(crate) transfer_width: Option<f64>,
 
     /// With --critical: compute the persistence of each point (a union-find over the whole
@@ -178,7 +178,7 @@ pub(crate) struct Cli {
     pub(crate) persistence: bool,
 
     /// With --critical: hide points whose persistence is below P (and those without one)
-    #[arg(long, value_name = "P", requires = "critical", value_parser = parse_nonnegative)]
+    #[arg(long, value_name = "P", requires = "critical", allow_hyphen_values = true, value_parser = parse_nonnegative)]
     pub(crate) min_persistence: Option<f64>,
 
     /// With --critical: hide points with a value below V
@@ -196,7 +196,7 @@ pub(crate) struct Cli {
 
     /// Tolerance of the check that --alpha/--beta are not (near) a critical value
     /// [default: 1e-5 of the data range]
-    #[arg(long, value_name = "T", value_parser = parse_nonnegative)]
+    #[arg(long, value_name = "T", allow_hyphen_values = true, value_parser = parse_nonnegative)]
     pub(crate) critical_tol: Option<f64>,
 
     /// Skip the check of --alpha/--beta against the critical values before meshing
@@ -393,15 +393,23 @@ fn parse_spacing(s: &str) -> Result<Spacing, String> {
     Ok(Spacing(out))
 }
 
-/// Parses the command line. `--help` and `--version` print as clap does (stdout, exit 0);
+/// Parses the command line and refuses options that do nothing in the chosen mode
+/// ([`crate::applies`]). `--help` and `--version` print as clap does (stdout, exit 0);
 /// a usage error prints one line `tptd-mesh: error: … (see tptd-mesh --help)` on stderr and
 /// exits with status 2.
 pub(crate) fn parse_or_exit() -> Cli {
-    let e = match Cli::try_parse() {
+    use clap::error::ErrorKind;
+    use clap::{CommandFactory, FromArgMatches};
+    let parsed = Cli::command().try_get_matches().and_then(|m| {
+        let cli = Cli::from_arg_matches(&m)?;
+        crate::applies::check(&cli, &m)
+            .map_err(|msg| Cli::command().error(ErrorKind::ArgumentConflict, msg))?;
+        Ok(cli)
+    });
+    let e = match parsed {
         Ok(cli) => return cli,
         Err(e) => e,
     };
-    use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
         e.exit();
     }

@@ -66,9 +66,20 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         write_transfer_function(&cli, tf, points.len(), &input, path, format)?;
     }
     if !cli.quiet {
-        print_table(&input, &points, secs)?;
+        stdout_result(print_table(&input, &points, secs))?;
     }
     Ok(())
+}
+
+/// A failed write on stdout as an error, except a closed pipe (e.g. `| head`): that is not an
+/// error of the run, whose files are written by then, so it ends quietly with status 0.
+fn stdout_result(r: std::io::Result<()>) -> Result<()> {
+    match r {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(file_error("stdout", format_args!("cannot write: {e}")))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// The format of `--transfer FILE` from its extension.
@@ -120,11 +131,12 @@ fn write_transfer_function(
     };
     write_transfer(path, format, &table).map_err(write_error)?;
     if !cli.quiet {
-        println!(
+        stdout_result(writeln!(
+            std::io::stdout(),
             "transfer function ({design}, {} critical values from {n_points} points): {}",
             tf.values.len(),
             path.display()
-        );
+        ))?;
     }
     Ok(())
 }

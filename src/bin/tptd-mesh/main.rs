@@ -7,15 +7,17 @@
 //! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1 (2 for malformed
 //! arguments and for an output that is the same file as an input file or another output,
 //! found before any work); outputs are written atomically, so a failed run leaves no
-//! (partial) output file behind.
+//! (partial) output file behind. A closed stdout is not an error.
 //!
-//! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`run`] (the run,
+//! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
+//! that do nothing are refused), [`run`] (the run,
 //! step by step), [`critical`] (`--critical` and the check of the bounds against the critical
 //! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
 //! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
 //! output), [`surface`] (isosurface output).
 
 mod alloc;
+mod applies;
 mod cli;
 mod critical;
 mod error;
@@ -33,6 +35,7 @@ fn main() {
     tptd::memory::set_limit(cli.memory_limit);
     clean_up_on_signals();
     let result = if cli.critical {
+        alloc::set_critical_mode();
         critical::run(cli)
     } else {
         run::run(cli)

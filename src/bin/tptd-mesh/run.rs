@@ -32,7 +32,7 @@ use tptd::surface::analysis::SurfaceAnalysis;
 use tptd::CurvilinearGrid;
 
 /// Output written by `--demo` when no `-o` is given.
-const DEMO_OUTPUT: &str = "tptd-demo.vtu";
+pub(crate) const DEMO_OUTPUT: &str = "tptd-demo.vtu";
 
 /// The checked arguments of a run.
 pub(crate) struct Job {
@@ -190,7 +190,7 @@ fn mesh_in_memory(
 /// Reads the input volume (a curvilinear grid's values in parameter space, with the grid).
 fn read_input(cli: &Cli, job: &Job) -> Result<(ScalarGrid, Option<CurvilinearGrid>)> {
     let stage = Stage::start(format!("reading {}", job.input_name), cli.quiet);
-    let curvilinear = read_curvilinear_input(cli, &job.input_name)?;
+    let curvilinear = read_curvilinear_input(cli)?;
     let grid = match &curvilinear {
         Some(c) => c.values.clone(),
         None => read_grid(cli, &job.input_name)?,
@@ -324,7 +324,7 @@ fn check_outputs(cli: &Cli, output: &Path) -> Result<()> {
 const MAX_THREADS_PER_CORE: usize = 16;
 
 /// Checks `-j` against the machine at once (a huge pool takes long to start and to fail).
-fn check_threads(threads: Option<u32>) -> Result<()> {
+pub(crate) fn check_threads(threads: Option<u32>) -> Result<()> {
     let Some(n) = threads else { return Ok(()) };
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let max = (cores * MAX_THREADS_PER_CORE).max(MAX_THREADS_PER_CORE);

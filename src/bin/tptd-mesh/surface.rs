@@ -8,7 +8,7 @@ use tptd::CurvilinearGrid;
 use tptd::{level_surface, SurfaceOptions, TetMesh};
 
 use crate::cli::Cli;
-use crate::error::{file_error, write_error};
+use crate::error::write_error;
 use crate::run::Job;
 
 /// Writes the level sets of `mesh` (with `--caps` the box triangles too) to a temporary of
@@ -29,25 +29,11 @@ pub(crate) fn write_level_surface(
 }
 
 /// The curvilinear grid of a `.vts` / `.xyz` input (`None` for other inputs).
-pub(crate) fn read_curvilinear_input(
-    cli: &Cli,
-    input_name: &str,
-) -> Result<Option<CurvilinearGrid>> {
+pub(crate) fn read_curvilinear_input(cli: &Cli) -> Result<Option<CurvilinearGrid>> {
+    // --field, --function and --spacing were checked against the input by `crate::applies`
     let Some(path) = cli.input.as_deref().filter(|p| is_curvilinear(p)) else {
-        if cli.field.is_some() || cli.function.is_some() {
-            return Err(file_error(
-                input_name,
-                "--field and --function apply to curvilinear grids (.vts, .xyz) only",
-            ));
-        }
         return Ok(None);
     };
-    if cli.spacing.is_some() {
-        return Err(file_error(
-            input_name,
-            "--spacing does not apply to a curvilinear grid (its points give the geometry)",
-        ));
-    }
     Ok(Some(read_curvilinear(
         path,
         cli.function.as_deref(),
