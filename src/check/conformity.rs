@@ -102,54 +102,55 @@ pub(crate) fn faces(mesh: &TetMesh, problems: &mut Problems) -> Vec<BoundaryFace
         s.sort_unstable();
         s
     };
-    /// What one group of equal faces says.
+    /// What one group of equal faces says (after setting aside duplicate tets).
     enum Group {
         Boundary(BoundaryFace),
         Pair,
-        Duplicate(usize, usize),
         SameSide(usize, usize),
         Many(Vec<usize>),
     }
-    let groups: Vec<Group> = starts
+    let groups: Vec<(Group, Vec<(usize, usize)>)> = starts
         .par_iter()
         .enumerate()
         .map(|(g, &s)| {
             let e = starts.get(g + 1).copied().unwrap_or(keys.len());
-            let members: Vec<(usize, usize)> = keys[s..e].iter().map(|&k| entry(k)).collect();
-            if let [(t, f)] = members[..] {
-                return Group::Boundary(BoundaryFace {
-                    tri: tet_face(&tets[t], f),
-                    tet: t as u32,
-                });
-            }
-            // Duplicates first: two tets with the same corners share all their faces.
-            for i in 0..members.len() {
-                for j in i + 1..members.len() {
-                    let (a, b) = (members[i].0, members[j].0);
-                    if a != b && sorted_tet(a) == sorted_tet(b) {
-                        return Group::Duplicate(a.min(b), a.max(b));
-                    }
+            // Members in tet order; a tet with the corners of an earlier member is a duplicate
+            // and set aside, so the face is judged as if it were not there.
+            let mut members: Vec<(usize, usize)> = Vec::with_capacity(e - s);
+            let mut dups = Vec::new();
+            for &k in &keys[s..e] {
+                let (t, f) = entry(k);
+                match members.iter().find(|m| sorted_tet(m.0) == sorted_tet(t)) {
+                    Some(m) => dups.push((m.0, t)),
+                    None => members.push((t, f)),
                 }
             }
-            if let [(t, f), (u, h)] = members[..] {
-                let (_, p) = face_key(tet_face(&tets[t], f));
-                let (_, q) = face_key(tet_face(&tets[u], h));
-                return if p != q {
-                    Group::Pair
-                } else {
-                    Group::SameSide(t, u)
-                };
-            }
-            Group::Many(members.iter().map(|m| m.0).collect())
+            let group = match members[..] {
+                [(t, f)] => Group::Boundary(BoundaryFace {
+                    tri: tet_face(&tets[t], f),
+                    tet: t as u32,
+                }),
+                [(t, f), (u, h)] => {
+                    let (_, p) = face_key(tet_face(&tets[t], f));
+                    let (_, q) = face_key(tet_face(&tets[u], h));
+                    if p != q {
+                        Group::Pair
+                    } else {
+                        Group::SameSide(t, u)
+                    }
+                }
+                _ => Group::Many(members.iter().map(|m| m.0).collect()),
+            };
+            (group, dups)
         })
         .collect();
     let mut boundary = Vec::new();
     let mut dups: Vec<(usize, usize)> = Vec::new();
-    for g in groups {
+    for (g, d) in groups {
+        dups.extend(d);
         match g {
             Group::Boundary(b) => boundary.push(b),
             Group::Pair => {}
-            Group::Duplicate(a, b) => dups.push((a, b)),
             Group::SameSide(a, b) => problems.add(ProblemKind::TetsOnSameSideOfFace, vec![a, b]),
             Group::Many(ts) => problems.add(ProblemKind::FaceInThreeOrMoreTets, ts),
         }
