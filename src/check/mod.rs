@@ -40,6 +40,10 @@ use crate::mesh::TetMesh;
 pub use level::LevelSummary;
 pub use winding::{WindingSummary, WINDING_TOLERANCE};
 
+/// Memory [`check_mesh`] needs beyond the mesh, per tet: the sorted faces (4 × 16 B) and
+/// their group starts; estimated from those buffers, not measured.
+pub const CHECK_BYTES_PER_TET: u64 = 80;
+
 /// What [`check_mesh`] checks against, and how much it samples.
 #[derive(Clone, Copy, Debug)]
 pub struct CheckOptions<'a> {
