@@ -79,7 +79,11 @@ fn assert_valid(name: &str, mesh: &TetMesh, g: &ScalarGrid, (a, b): (f64, f64)) 
     r
 }
 
-fn cases() -> Vec<(&'static str, ScalarGrid, (f64, f64), [usize; 3])> {
+/// A named volume, its interval and the Betti numbers of its interval volume (`[0, 0, 0]`:
+/// not asserted).
+type Case = (&'static str, ScalarGrid, (f64, f64), [usize; 3]);
+
+fn cases() -> Vec<Case> {
     vec![
         ("shell", sphere(16), (3.2, 6.1), [1, 0, 1]),
         ("torus", torus(18, 5.0), (f64::NEG_INFINITY, 2.3), [1, 1, 0]),
@@ -110,7 +114,7 @@ fn the_mesher_output_is_valid_for_every_method() {
 
 /// Meshes `case` plainly and as `--quality` does (warped clipping, then the quality pass) and
 /// checks both.
-fn check_quality((name, g, (a, b), _): (&str, ScalarGrid, (f64, f64), [usize; 3])) {
+fn check_quality((name, g, (a, b), _): Case) {
     let opts = MeshOptions::new(a, b, Method::Ctd);
     let plain = mesh_interval(&g, &opts).unwrap().mesh;
     let mut out = mesh_interval(&g, &opts.warp(DEFAULT_WARP)).unwrap();

@@ -158,7 +158,7 @@ fn samples(u: &[P; 3], bound: f64) -> Vec<P> {
             out.push(point([i, j, k].map(|x| x as f64 / n as f64)));
         }
     }
-    if n % 3 != 0 {
+    if !n.is_multiple_of(3) {
         out.push(point([1.0 / 3.0; 3]));
     }
     out

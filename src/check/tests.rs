@@ -49,7 +49,7 @@ fn cubes(cells: &[[i32; 3]], moved: &[usize], shift: P) -> TetMesh {
         let own = moved.contains(&n);
         let corner: Vec<u32> = (0..8)
             .map(|k| {
-                let p = [0, 1, 2].map(|a| c[a] + ((k >> a) & 1) as i32);
+                let p = [0, 1, 2].map(|a| c[a] + ((k >> a) & 1));
                 let pos = p.map(|x| x as f64);
                 if own {
                     points.push([0, 1, 2].map(|a| pos[a] + shift[a]));
