@@ -22,6 +22,10 @@ pub struct LevelSummary {
     pub max_distance: f64,
     /// Points with no point of their level found within the bound.
     pub beyond: usize,
+    /// Largest distance found, by the same search out to four times the bound, from a point
+    /// beyond the bound to its level (infinite when one has none within four times the
+    /// bound; 0 when no point is beyond).
+    pub max_beyond: f64,
     /// Points outside the grid box.
     pub outside: usize,
     /// Box triangles not on a face of the grid box.
@@ -40,8 +44,9 @@ const MAX_SUBDIVISION: usize = 64;
 enum Found {
     /// A point of the level within the bound, at this distance.
     Within(f64),
-    /// None found within the bound.
-    Beyond,
+    /// None found within the bound; the distance found within four times the bound
+    /// (infinite if none).
+    Beyond(f64),
     /// The point is outside the grid box.
     Outside,
 }
@@ -67,22 +72,33 @@ impl Search<'_> {
     /// The distance from `u` (index space) to the level set `f = level`, if within the bound.
     fn distance(&self, u: P, level: f64) -> Found {
         if !level.is_finite() {
-            return Found::Beyond;
+            return Found::Beyond(f64::INFINITY);
         }
         if !self.inside(u) {
             return Found::Outside;
         }
         let u = self.clamp(u);
+        match self.search(u, level, self.bound) {
+            Some(d) => Found::Within(d),
+            None => Found::Beyond(
+                self.search(u, level, 4.0 * self.bound)
+                    .unwrap_or(f64::INFINITY),
+            ),
+        }
+    }
+
+    /// The distance from `u` to a point of `level` found within `bound`.
+    fn search(&self, u: P, level: f64, bound: f64) -> Option<f64> {
         let (f0, g) = self.field.value_gradient(u);
         let r0 = f0 - level;
         if r0 == 0.0 {
-            return Found::Within(0.0);
+            return Some(0.0);
         }
         let dist = |p: P| ((0..3).map(|k| (p[k] - u[k]).powi(2)).sum::<f64>()).sqrt();
         if let Some(p) = self.field.project(u, level, 0b111, self.tol) {
             let d = dist(p);
-            if d <= self.bound {
-                return Found::Within(d);
+            if d <= bound {
+                return Some(d);
             }
         }
         let side = r0.signum();
@@ -90,23 +106,20 @@ impl Search<'_> {
         let down = (gn > 0.0 && gn.is_finite()).then(|| g.map(|x| -side * x / gn));
         down.iter()
             .chain(&self.dirs)
-            .filter_map(|&d| self.walk(u, d, level, side))
+            .filter_map(|&d| self.walk(u, d, level, side, bound))
             .min_by(f64::total_cmp)
-            .map_or(Found::Beyond, Found::Within)
     }
 
     /// The distance along unit direction `d` from `u` to the first crossing of `level`
-    /// within the bound, inside the box.
-    fn walk(&self, u: P, d: P, level: f64, side: f64) -> Option<f64> {
+    /// within the bound. Near the box the walk may leave it, on the trilinear polynomials of
+    /// the boundary cells extended (the level set of a cell does not end at the box).
+    fn walk(&self, u: P, d: P, level: f64, side: f64, bound: f64) -> Option<f64> {
         let at = |t: f64| -> P { [0, 1, 2].map(|k| u[k] + t * d[k]) };
         let crossed = |t: f64| (self.field.value(at(t)) - level) * side <= 0.0;
-        let h = self.bound / WALK_STEPS as f64;
+        let h = bound / WALK_STEPS as f64;
         let mut prev = 0.0;
         for s in 1..=WALK_STEPS {
             let t = h * s as f64;
-            if !self.inside(at(t)) {
-                return None;
-            }
             if crossed(t) {
                 let (mut a, mut b) = (prev, t);
                 for _ in 0..BISECTIONS {
@@ -225,14 +238,20 @@ pub(crate) fn level_distance(
             for &p in &inner {
                 match search.distance(p, level) {
                     Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
-                    Found::Beyond => acc.beyond += 1,
+                    Found::Beyond(d) => {
+                        acc.beyond += 1;
+                        acc.max_beyond = acc.max_beyond.max(d);
+                    }
                     Found::Outside => acc.outside += 1,
                 }
             }
             for &v in t {
                 match corner_at(v, label as u8) {
                     Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
-                    Found::Beyond => acc.corner_beyond = true,
+                    Found::Beyond(d) => {
+                        acc.corner_beyond = true;
+                        acc.max_beyond = acc.max_beyond.max(d);
+                    }
                     Found::Outside => acc.corner_outside = true,
                 }
             }
@@ -245,7 +264,7 @@ pub(crate) fn level_distance(
     };
     for f in &corner_found {
         match f {
-            Found::Beyond => s.beyond += 1,
+            Found::Beyond(_) => s.beyond += 1,
             Found::Outside => s.outside += 1,
             Found::Within(_) => {}
         }
@@ -254,6 +273,7 @@ pub(crate) fn level_distance(
         s.points += t.points;
         s.max_distance = s.max_distance.max(t.max_distance);
         s.beyond += t.beyond;
+        s.max_beyond = s.max_beyond.max(t.max_beyond);
         s.outside += t.outside;
         if t.outside > 0 || t.corner_outside {
             problems.add(ProblemKind::OutsideGrid, vec![i]);
@@ -274,6 +294,7 @@ struct Tri {
     points: usize,
     max_distance: f64,
     beyond: usize,
+    max_beyond: f64,
     outside: usize,
     corner_beyond: bool,
     corner_outside: bool,

@@ -419,6 +419,9 @@ fn a_triangle_off_its_level_by_more_than_the_bound() {
         if off {
             assert_eq!(kinds(&r), [OffLevel]);
             assert!(l.beyond > 0);
+            // How far, found by the search out to four times the bound.
+            let d = 0.8 / (1.0f64 + 0.09).sqrt();
+            assert!((l.max_beyond - d).abs() < 1e-6, "{l:?} vs {d}");
         } else {
             assert!(r.valid, "{:?}", r.problems);
             // The level set x + 0.3 y = 1.65 is a plane: the distance of the moved corner.

@@ -221,10 +221,17 @@ fn check_output(
     let report = check_mesh(mesh, &opts);
     stage.finish();
     if !report.valid {
+        let how_far = match &report.level {
+            Some(l) if l.beyond > 0 => format!(
+                "; boundary points up to {:.3} voxel from their level set",
+                l.max_beyond
+            ),
+            _ => String::new(),
+        };
         return Err(file_error(
             job.output.display(),
             format_args!(
-                "the mesh fails --check ({}); nothing written",
+                "the mesh fails --check ({}{how_far}); nothing written",
                 report.summary_line()
             ),
         ));
