@@ -14,6 +14,7 @@
 // Index loops over small fixed arrays (corners, faces, axes) read better than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
+pub mod check;
 pub(crate) mod clip;
 pub mod critical;
 pub mod curvilinear;

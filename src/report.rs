@@ -78,6 +78,9 @@ pub struct Timings {
     /// The quality pass (`--quality` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub quality: Option<f64>,
+    /// The validity check (`--check` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub check: Option<f64>,
     /// Writing the output mesh.
     pub write: f64,
     /// Whole run.
@@ -140,6 +143,10 @@ pub struct Report {
     /// after [`build_report`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub surface: Option<crate::surface::analysis::SurfaceAnalysis>,
+    /// The validity check of the mesh (`--check` only; set by the caller after
+    /// [`build_report`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub check: Option<crate::check::CheckReport>,
     /// Worker threads used.
     pub threads: usize,
     /// Stage timings.
@@ -238,6 +245,7 @@ pub fn build_report(
         dihedral_degrees: facts.dihedral.map(|(min, max)| Dihedral { min, max }),
         quality,
         surface: None,
+        check: None,
         threads: run.threads,
         timings_seconds: timings,
     }

@@ -93,6 +93,12 @@ pub(crate) fn triangle_links(t: &[u32; 3]) -> [(u32, u32); 3] {
 
 /// Betti numbers `[b0, b1, b2]` of the meshed domain.
 pub fn betti(mesh: &TetMesh) -> [usize; 3] {
+    betti_with_boundary(mesh, &mesh.boundary)
+}
+
+/// [`betti`] with the boundary triangles given (a closed manifold surface: the faces of one
+/// tet of `mesh`) instead of the mesh's labelled ones.
+pub(crate) fn betti_with_boundary(mesh: &TetMesh, boundary: &[[u32; 3]]) -> [usize; 3] {
     let n = mesh.points.len();
     if mesh.tets.is_empty() {
         return [0, 0, 0];
@@ -105,14 +111,14 @@ pub fn betti(mesh: &TetMesh) -> [usize; 3] {
     }
     let b0 = count_components(n, &used, &mesh.tets, tet_links);
     let mut on_b = vec![false; n];
-    for t in &mesh.boundary {
+    for t in boundary {
         for &i in t {
             on_b[i as usize] = true;
         }
     }
-    let surfaces = count_components(n, &on_b, &mesh.boundary, triangle_links);
+    let surfaces = count_components(n, &on_b, boundary, triangle_links);
     let vb = on_b.iter().filter(|&&x| x).count() as i64;
-    betti_from_counts(b0, surfaces, vb, mesh.boundary.len() as i64)
+    betti_from_counts(b0, surfaces, vb, boundary.len() as i64)
 }
 
 /// Betti numbers from the counts: `b0` solid components, boundary-surface components, and

@@ -732,3 +732,70 @@ fn a_closed_stdout_is_not_an_error() {
     }
     assert!(d.join("m.vtu").exists() && d.join("t.csv").exists());
 }
+
+#[test]
+fn check_validates_the_mesh_before_writing_it() {
+    // --check holds the mesh in memory and checks it; the file is the streamed one, byte for
+    // byte, and the report carries the check.
+    let (dir, _) = dir_with_volume();
+    let d = dir.path();
+    assert_ok(&run_in(
+        d,
+        &["vol.npy", "--alpha", "3", "--beta", "6", "-o", "plain.vtu"],
+    ));
+    let o = run_in(
+        d,
+        &[
+            "vol.npy",
+            "--alpha",
+            "3",
+            "--beta",
+            "6",
+            "-o",
+            "checked.vtu",
+            "--check",
+            "--report",
+            "r.json",
+        ],
+    );
+    assert_ok(&o);
+    assert!(
+        stdout(&o).contains("check     valid: winding number 1"),
+        "{}",
+        stdout(&o)
+    );
+    assert_eq!(
+        fs::read(d.join("plain.vtu")).unwrap(),
+        fs::read(d.join("checked.vtu")).unwrap()
+    );
+    let r = read_json(&d.join("r.json"));
+    assert_eq!(r["check"]["valid"], Value::Bool(true));
+    assert_eq!(r["check"]["problems"], Value::Array(Vec::new()));
+    assert!(r["check"]["level"]["max_distance"].as_f64().unwrap() <= 0.5);
+    assert!(r["timings_seconds"]["check"].as_f64().unwrap() >= 0.0);
+    assert_eq!(r["check"]["betti"], r["betti"]);
+    // With --quality too.
+    let o = run_in(
+        d,
+        &[
+            "vol.npy",
+            "--alpha",
+            "3",
+            "--beta",
+            "6",
+            "-o",
+            "q.msh",
+            "--check",
+            "--quality",
+        ],
+    );
+    assert_ok(&o);
+    assert!(stdout(&o).contains("check     valid"), "{}", stdout(&o));
+    // Nothing to check in --critical mode.
+    let empty = tempfile::tempdir().unwrap();
+    assert_refused(
+        empty.path(),
+        &["vol.npy", "--critical", "--check"],
+        "--check",
+    );
+}

@@ -86,6 +86,14 @@ pub(crate) struct Cli {
     #[arg(long)]
     pub(crate) no_analysis: bool,
 
+    /// Check the mesh before writing it: conforming, every tet positive, a closed manifold
+    /// boundary that does not meet itself, the tets covering the domain once (winding number
+    /// 1 at sampled tets), alpha and beta triangles within half a voxel of their trilinear
+    /// level sets (not checked for curvilinear grids). A failed check is an error and writes
+    /// nothing. The mesh is then held in memory, also without --quality
+    #[arg(long, conflicts_with = "critical")]
+    pub(crate) check: bool,
+
     /// Improve the elements after meshing (collapses, flips, edge removal, smoothing) towards
     /// the target dihedral angles, keeping the topology, the labels and the boundary on the
     /// trilinear level sets

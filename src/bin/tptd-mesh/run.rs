@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
+use tptd::check::{check_mesh, CheckOptions, CheckReport};
 use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
 use tptd::facts::{FactsSink, MeshFacts};
 use tptd::improve::quality::summarize;
@@ -53,11 +54,13 @@ struct Written {
     quality: Option<QualitySection>,
     surface: Option<SurfaceAnalysis>,
     comparison: Option<DemoComparison>,
+    check: Option<CheckReport>,
     mesh_file: PendingFile,
-    /// Seconds of meshing, analysis, the quality pass and writing.
+    /// Seconds of meshing, analysis, the quality pass, the check and writing.
     t_mesh: f64,
     t_analysis: f64,
     t_quality: Option<f64>,
+    t_check: Option<f64>,
     t_write: f64,
 }
 
@@ -88,11 +91,13 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         mesh: w.t_mesh,
         analysis: w.t_analysis,
         quality: w.t_quality,
+        check: w.t_check,
         write: w.t_write,
         total: secs(t_total),
     };
     let mut report = make_report(&job, &grid, &w.facts, &w.stats, w.quality, timings);
     report.surface = w.surface;
+    report.check = w.check;
     finish(&cli, &report, w.comparison.as_ref(), w.mesh_file)?;
     // The process ends here: let the OS reclaim the grid at exit instead of freeing hundreds
     // of megabytes page by page first.
@@ -101,9 +106,10 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
 }
 
 /// Whether the mesh goes straight to disk slab by slab: a volume mesh output without the
-/// quality pass (which needs the whole mesh) or a curvilinear mapping.
+/// quality pass (which needs the whole mesh), a curvilinear mapping or the check (which reads
+/// the whole mesh).
 fn streams(cli: &Cli, job: &Job, curvilinear: bool) -> bool {
-    !cli.quality && !curvilinear && SurfaceFormat::from_path(&job.output).is_none()
+    !cli.quality && !cli.check && !curvilinear && SurfaceFormat::from_path(&job.output).is_none()
 }
 
 /// Meshes slab by slab into spill files next to the output, gathering the facts on the way,
@@ -130,10 +136,12 @@ fn stream_to_disk(cli: &Cli, job: &Job, grid: &ScalarGrid) -> Result<Written> {
         quality: None,
         surface: None,
         comparison: compare_demo(cli, grid, job)?,
+        check: None,
         mesh_file: mesh_file.map_err(write_error)?,
         t_mesh,
         t_analysis: 0.0,
         t_quality: None,
+        t_check: None,
         t_write: secs(t),
     })
 }
@@ -165,6 +173,7 @@ fn mesh_in_memory(
         q
     });
     let comparison = compare_demo(cli, grid, job)?;
+    let (check, t_check) = check_output(cli, job, grid, curvilinear.is_some(), &out.mesh)?;
 
     // The mesh stays under its temporary name until the report is written too (`finish`).
     let t = Instant::now();
@@ -179,12 +188,55 @@ fn mesh_in_memory(
         quality,
         surface,
         comparison,
+        check,
         mesh_file,
         t_mesh,
         t_analysis,
         t_quality,
+        t_check,
         t_write,
     })
+}
+
+/// With `--check`: the validity check of the mesh, before anything is written; a mesh that
+/// fails it is an error naming the count of each problem. Curvilinear meshes are checked
+/// without the level-set distance (their grid's values are in parameter space).
+fn check_output(
+    cli: &Cli,
+    job: &Job,
+    grid: &ScalarGrid,
+    curvilinear: bool,
+    mesh: &tptd::TetMesh,
+) -> Result<(Option<CheckReport>, Option<f64>)> {
+    if !cli.check {
+        return Ok((None, None));
+    }
+    let t = Instant::now();
+    let stage = Stage::start("checking the mesh".into(), cli.quiet);
+    let opts = if curvilinear {
+        CheckOptions::default()
+    } else {
+        CheckOptions::with_grid(grid, job.opts.alpha, job.opts.beta)
+    };
+    let report = check_mesh(mesh, &opts);
+    stage.finish();
+    if !report.valid {
+        let how_far = match &report.level {
+            Some(l) if l.beyond > 0 => format!(
+                "; boundary points up to {:.3} voxel from their level set",
+                l.max_beyond
+            ),
+            _ => String::new(),
+        };
+        return Err(file_error(
+            job.output.display(),
+            format_args!(
+                "the mesh fails --check ({}{how_far}); nothing written",
+                report.summary_line()
+            ),
+        ));
+    }
+    Ok((Some(report), Some(secs(t))))
 }
 
 /// Reads the input volume (a curvilinear grid's values in parameter space, with the grid).
@@ -215,7 +267,7 @@ fn check_input(
         let (a, b) = (job.opts.alpha, job.opts.beta);
         crate::critical::warn_critical_bounds(grid, &job.input_name, a, b, cli.critical_tol);
     }
-    check_memory(grid, job, streaming, cli.quality)
+    check_memory(grid, job, streaming, cli.quality, cli.check)
 }
 
 /// Writes the mesh (or, for a surface extension, the level sets) under a temporary name;
@@ -411,7 +463,13 @@ fn inside_value(values: &Samples, bound: f64, lower: bool) -> Option<f64> {
 
 /// Checks the memory estimate of meshing, analysis and the quality pass before the work (see
 /// [`tptd::memory`]).
-fn check_memory(grid: &ScalarGrid, job: &Job, streaming: bool, quality: bool) -> Result<()> {
+fn check_memory(
+    grid: &ScalarGrid,
+    job: &Job,
+    streaming: bool,
+    quality: bool,
+    check: bool,
+) -> Result<()> {
     use tptd::memory::{estimate_tets, mesh_bytes, stream_bytes};
     let tets = estimate_tets(grid, job.opts.alpha, job.opts.beta);
     let bytes = grid.values.bytes_per_sample() as u64;
@@ -426,7 +484,14 @@ fn check_memory(grid: &ScalarGrid, job: &Job, streaming: bool, quality: bool) ->
         } else {
             0
         };
-        mesh_bytes(voxels, bytes, tets).saturating_add(pass)
+        let checker = if check {
+            tets.saturating_mul(tptd::check::CHECK_BYTES_PER_TET)
+        } else {
+            0
+        };
+        mesh_bytes(voxels, bytes, tets)
+            .saturating_add(pass)
+            .saturating_add(checker)
     };
     let what = format!(
         "meshing {} (about {:.1} M tetrahedra)",

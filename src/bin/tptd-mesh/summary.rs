@@ -8,6 +8,24 @@ use tptd::report::Report;
 use tptd::CellCase;
 use tptd::Method;
 
+/// The check's findings on a valid mesh.
+fn check_line(c: &tptd::check::CheckReport) -> String {
+    let mut line = c.summary_line();
+    if let Some(w) = &c.winding {
+        line += &format!(
+            ": winding number 1 at {} sampled tets",
+            w.exact + w.generalised
+        );
+    }
+    if let Some(l) = &c.level {
+        line += &format!(
+            ", boundary within {:.3} voxel of its levels ({} points)",
+            l.max_distance, l.points
+        );
+    }
+    line
+}
+
 /// What the demo shows: the same interval meshed with a method of the other kind.
 pub(crate) struct DemoComparison {
     /// The method of the other kind.
@@ -228,8 +246,11 @@ fn output_lines(s: &mut String, r: &Report, report_path: Option<&Path>) {
         let quality = t
             .quality
             .map_or_else(String::new, |q| format!("quality {q:.3} s, "));
+        let check = t
+            .check
+            .map_or_else(String::new, |c| format!(", check {c:.3} s"));
         format!(
-            "mesh {:.3} s, {quality}analysis {:.3} s",
+            "mesh {:.3} s, {quality}analysis {:.3} s{check}",
             t.mesh, t.analysis
         )
     };
@@ -249,6 +270,9 @@ fn output_lines(s: &mut String, r: &Report, report_path: Option<&Path>) {
             if sf.closed_manifold { "yes" } else { "no" },
             if sf.oriented { "yes" } else { "no" }
         );
+    }
+    if let Some(c) = &r.check {
+        let _ = writeln!(s, "  check     {}", check_line(c));
     }
     let _ = writeln!(s, "  wrote     {}", r.output);
     if let Some(p) = report_path {

@@ -1,0 +1,309 @@
+//! Level-set distance: every boundary triangle labelled alpha or beta stays within a bound
+//! (index units: voxels) of the trilinear level set it is labelled with, at sampled points of
+//! the triangle; every box triangle lies on a face of the grid box.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::{ProblemKind, Problems};
+use crate::grid::ScalarGrid;
+use crate::improve::field::Field;
+use crate::mesh::{BoundaryLabel, TetMesh};
+
+type P = [f64; 3];
+
+/// What the level-set distances at the sampled points of the labelled triangles were.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct LevelSummary {
+    /// Points sampled on alpha and beta triangles (corners once per level).
+    pub points: usize,
+    /// Largest distance (index units) from a sampled point to a point of its level found
+    /// within the bound (an upper bound of the true distance at that point).
+    pub max_distance: f64,
+    /// Points with no point of their level found within the bound.
+    pub beyond: usize,
+    /// Largest distance found, by the same search out to four times the bound, from a point
+    /// beyond the bound to its level (infinite when one has none within four times the
+    /// bound; 0 when no point is beyond).
+    pub max_beyond: f64,
+    /// Points outside the grid box.
+    pub outside: usize,
+    /// Box triangles not on a face of the grid box.
+    pub box_off: usize,
+}
+
+/// Steps per walk of the search along a direction.
+const WALK_STEPS: usize = 10;
+/// Bisections of the step of a walk that crosses the level.
+const BISECTIONS: usize = 40;
+/// Most subdivisions of a triangle edge.
+const MAX_SUBDIVISION: usize = 64;
+
+/// Where a point stands against its level.
+#[derive(Clone, Copy)]
+enum Found {
+    /// A point of the level within the bound, at this distance.
+    Within(f64),
+    /// None found within the bound; the distance found within four times the bound
+    /// (infinite if none).
+    Beyond(f64),
+    /// The point is outside the grid box.
+    Outside,
+}
+
+struct Search<'a> {
+    field: Field<'a>,
+    hi: [f64; 3],
+    eps: f64,
+    bound: f64,
+    tol: f64,
+    dirs: Vec<P>,
+}
+
+impl Search<'_> {
+    fn inside(&self, u: P) -> bool {
+        (0..3).all(|k| u[k] >= -self.eps && u[k] <= self.hi[k] + self.eps)
+    }
+
+    fn clamp(&self, u: P) -> P {
+        [0, 1, 2].map(|k| u[k].clamp(0.0, self.hi[k]))
+    }
+
+    /// The distance from `u` (index space) to the level set `f = level`, if within the bound.
+    fn distance(&self, u: P, level: f64) -> Found {
+        if !level.is_finite() {
+            return Found::Beyond(f64::INFINITY);
+        }
+        if !self.inside(u) {
+            return Found::Outside;
+        }
+        let u = self.clamp(u);
+        match self.search(u, level, self.bound) {
+            Some(d) => Found::Within(d),
+            None => Found::Beyond(
+                self.search(u, level, 4.0 * self.bound)
+                    .unwrap_or(f64::INFINITY),
+            ),
+        }
+    }
+
+    /// The distance from `u` to a point of `level` found within `bound`.
+    fn search(&self, u: P, level: f64, bound: f64) -> Option<f64> {
+        let (f0, g) = self.field.value_gradient(u);
+        let r0 = f0 - level;
+        if r0 == 0.0 {
+            return Some(0.0);
+        }
+        let dist = |p: P| ((0..3).map(|k| (p[k] - u[k]).powi(2)).sum::<f64>()).sqrt();
+        if let Some(p) = self.field.project(u, level, 0b111, self.tol) {
+            let d = dist(p);
+            if d <= bound {
+                return Some(d);
+            }
+        }
+        let side = r0.signum();
+        let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let down = (gn > 0.0 && gn.is_finite()).then(|| g.map(|x| -side * x / gn));
+        down.iter()
+            .chain(&self.dirs)
+            .filter_map(|&d| self.walk(u, d, level, side, bound))
+            .min_by(f64::total_cmp)
+    }
+
+    /// The distance along unit direction `d` from `u` to the first crossing of `level`
+    /// within the bound. Near the box the walk may leave it, on the trilinear polynomials of
+    /// the boundary cells extended (the level set of a cell does not end at the box).
+    fn walk(&self, u: P, d: P, level: f64, side: f64, bound: f64) -> Option<f64> {
+        let at = |t: f64| -> P { [0, 1, 2].map(|k| u[k] + t * d[k]) };
+        let crossed = |t: f64| (self.field.value(at(t)) - level) * side <= 0.0;
+        let h = bound / WALK_STEPS as f64;
+        let mut prev = 0.0;
+        for s in 1..=WALK_STEPS {
+            let t = h * s as f64;
+            if crossed(t) {
+                let (mut a, mut b) = (prev, t);
+                for _ in 0..BISECTIONS {
+                    let m = 0.5 * (a + b);
+                    if crossed(m) {
+                        b = m;
+                    } else {
+                        a = m;
+                    }
+                }
+                return Some(b);
+            }
+            prev = t;
+        }
+        None
+    }
+}
+
+/// The 26 lattice directions, normalised.
+fn lattice_directions() -> Vec<P> {
+    (0..27usize)
+        .filter(|&c| c != 13)
+        .map(|c| {
+            let d = [c % 3, c / 3 % 3, c / 9].map(|k| k as f64 - 1.0);
+            let n = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+            d.map(|x| x / n)
+        })
+        .collect()
+}
+
+/// Barycentric sample points of a triangle with corners `u` (index space), corners excluded:
+/// edge midpoints and the centroid, and for an edge longer than `bound` the points of a
+/// barycentric lattice fine enough that neighbours are at most `bound` apart.
+fn samples(u: &[P; 3], bound: f64) -> Vec<P> {
+    let len = |a: P, b: P| ((0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>()).sqrt();
+    let longest = (0..3)
+        .map(|k| len(u[k], u[(k + 1) % 3]))
+        .fold(0.0, f64::max);
+    let n = ((longest / bound).ceil() as usize).clamp(2, MAX_SUBDIVISION);
+    let mut out = Vec::new();
+    let point =
+        |w: [f64; 3]| -> P { [0, 1, 2].map(|k| w[0] * u[0][k] + w[1] * u[1][k] + w[2] * u[2][k]) };
+    for i in 0..=n {
+        for j in 0..=n - i {
+            let k = n - i - j;
+            if i == n || j == n || k == n {
+                continue; // a corner
+            }
+            out.push(point([i, j, k].map(|x| x as f64 / n as f64)));
+        }
+    }
+    if !n.is_multiple_of(3) {
+        out.push(point([1.0 / 3.0; 3]));
+    }
+    out
+}
+
+/// Checks the labelled triangles of `mesh` against `grid` and the `levels` (alpha, beta).
+pub(crate) fn level_distance(
+    mesh: &TetMesh,
+    grid: &ScalarGrid,
+    levels: (f64, f64),
+    bound: f64,
+    problems: &mut Problems,
+) -> LevelSummary {
+    let field = Field::new(grid);
+    let hi = grid.dims.map(|d| (d - 1) as f64);
+    let (lo_v, hi_v) = grid.value_range();
+    let scale = lo_v.abs().max(hi_v.abs()).max(f64::MIN_POSITIVE);
+    let search = Search {
+        field,
+        hi,
+        eps: 1e-9 * hi.iter().fold(1.0, |a: f64, &b| a.max(b)),
+        bound,
+        tol: 1e-12 * scale,
+        dirs: lattice_directions(),
+    };
+    let level_of = |l: BoundaryLabel| match l {
+        BoundaryLabel::Alpha => Some(levels.0),
+        BoundaryLabel::Beta => Some(levels.1),
+        BoundaryLabel::Box => None,
+    };
+    let to_index = |v: u32| field.to_index(mesh.points[v as usize]);
+    // Corners once per (vertex, level).
+    let mut corners: Vec<(u32, u8)> = mesh
+        .boundary
+        .iter()
+        .zip(&mesh.boundary_labels)
+        .filter(|(_, &l)| l != BoundaryLabel::Box)
+        .flat_map(|(t, &l)| t.iter().map(move |&v| (v, l as u8)))
+        .collect();
+    corners.par_sort_unstable();
+    corners.dedup();
+    let level_for = |l: u8| if l == 0 { levels.0 } else { levels.1 };
+    let corner_found: Vec<Found> = corners
+        .par_iter()
+        .map(|&(v, l)| search.distance(to_index(v), level_for(l)))
+        .collect();
+    let corner_at = |v: u32, l: u8| -> Found {
+        let i = corners.partition_point(|&c| c < (v, l));
+        corner_found[i]
+    };
+    let per_tri: Vec<Tri> = mesh
+        .boundary
+        .par_iter()
+        .zip(&mesh.boundary_labels)
+        .map(|(t, &label)| {
+            let u = t.map(to_index);
+            let mut acc = Tri::default();
+            let Some(level) = level_of(label) else {
+                acc.off_box = !on_box(&u, hi, search.eps * 100.0);
+                return acc;
+            };
+            let inner = samples(&u, bound);
+            acc.points = inner.len();
+            for &p in &inner {
+                match search.distance(p, level) {
+                    Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
+                    Found::Beyond(d) => {
+                        acc.beyond += 1;
+                        acc.max_beyond = acc.max_beyond.max(d);
+                    }
+                    Found::Outside => acc.outside += 1,
+                }
+            }
+            for &v in t {
+                match corner_at(v, label as u8) {
+                    Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
+                    Found::Beyond(d) => {
+                        acc.corner_beyond = true;
+                        acc.max_beyond = acc.max_beyond.max(d);
+                    }
+                    Found::Outside => acc.corner_outside = true,
+                }
+            }
+            acc
+        })
+        .collect();
+    let mut s = LevelSummary {
+        points: corners.len(),
+        ..LevelSummary::default()
+    };
+    for f in &corner_found {
+        match f {
+            Found::Beyond(_) => s.beyond += 1,
+            Found::Outside => s.outside += 1,
+            Found::Within(_) => {}
+        }
+    }
+    for (i, t) in per_tri.iter().enumerate() {
+        s.points += t.points;
+        s.max_distance = s.max_distance.max(t.max_distance);
+        s.beyond += t.beyond;
+        s.max_beyond = s.max_beyond.max(t.max_beyond);
+        s.outside += t.outside;
+        if t.outside > 0 || t.corner_outside {
+            problems.add(ProblemKind::OutsideGrid, vec![i]);
+        } else if t.beyond > 0 || t.corner_beyond {
+            problems.add(ProblemKind::OffLevel, vec![i]);
+        }
+        if t.off_box {
+            s.box_off += 1;
+            problems.add(ProblemKind::BoxTriangleOffBox, vec![i]);
+        }
+    }
+    s
+}
+
+/// One labelled triangle's sampled points (corners counted per vertex instead).
+#[derive(Default)]
+struct Tri {
+    points: usize,
+    max_distance: f64,
+    beyond: usize,
+    max_beyond: f64,
+    outside: usize,
+    corner_beyond: bool,
+    corner_outside: bool,
+    off_box: bool,
+}
+
+/// Whether all corners `u` (index space) lie on one face of the grid box `[0, hi]`.
+fn on_box(u: &[P; 3], hi: [f64; 3], eps: f64) -> bool {
+    (0..3).any(|k| {
+        u.iter().all(|p| p[k].abs() <= eps) || u.iter().all(|p| (p[k] - hi[k]).abs() <= eps)
+    })
+}

