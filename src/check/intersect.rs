@@ -22,8 +22,15 @@ enum Contact {
     Crossing,
 }
 
+/// Whether two boundary triangles with corner identities `ids` (equal ids: the same point)
+/// and corners `pos` meet where they must not (exactly): anywhere, sharing no corner; beyond
+/// it, sharing one; folded onto each other, sharing an edge; always, sharing all three.
+pub(crate) fn triangles_cross<T: PartialEq>(ids: [&[T; 3]; 2], pos: [&[P; 3]; 2]) -> bool {
+    contact(ids, pos).is_some()
+}
+
 /// How triangles `i` and `j` meet, if they meet where they must not.
-fn contact(ids: [&[u32; 3]; 2], pos: [&[P; 3]; 2]) -> Option<Contact> {
+fn contact<T: PartialEq>(ids: [&[T; 3]; 2], pos: [&[P; 3]; 2]) -> Option<Contact> {
     let [a, b] = ids;
     let [s, t] = pos;
     let shared: Vec<(usize, usize)> = (0..3)

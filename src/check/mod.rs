@@ -37,6 +37,7 @@ use serde::Serialize;
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
 
+pub(crate) use intersect::triangles_cross;
 pub use level::LevelSummary;
 pub use winding::{WindingSummary, WINDING_TOLERANCE};
 

@@ -9,6 +9,7 @@
 
 use smallvec::SmallVec;
 
+use super::embed;
 use super::local::{face_key, BoundaryFace, LocalMesh};
 use super::Ctx;
 
@@ -101,13 +102,14 @@ pub fn star_floor(lm: &LocalMesh, v: u32) -> f64 {
 /// Whether `a` may merge into `b` whatever the tets' signs afterwards: both free, the
 /// constraints allow it, `ab` is an edge and the link condition holds (for a merge whose
 /// inverted tets are then untangled, [`super::project::merge_and_untangle`]).
-pub fn topological_merge(lm: &LocalMesh, a: u32, b: u32) -> bool {
+pub fn topological_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> bool {
     let edge = lm.edge_tets(a, b);
     lm.is_free(a)
         && lm.is_free(b)
         && lm.con[a as usize].may_merge_into(&lm.con[b as usize])
         && !edge.is_empty()
         && link_condition(lm, a, b, &edge)
+        && embed::collapse_keeps_boundary(lm, ctx, a, b)
 }
 
 /// For a collapse of `a` into `b` along an edge of the mesh that the constraints allow and
@@ -170,6 +172,10 @@ fn collapse_quality(
     if lm.star[a as usize].len() + lm.star[b as usize].len() > HUB_TETS && lm.off_its_level(b, ctx)
     {
         // A vertex with many tets around it can hardly be moved onto its level later.
+        return None;
+    }
+    // Last, the boundary faces `a` leaves to `b` must stay near their level sets.
+    if !embed::collapse_keeps_boundary(lm, ctx, a, b) {
         return None;
     }
     Some(new)

@@ -12,6 +12,7 @@ use rustc_hash::FxHashMap;
 use smallvec::SmallVec;
 
 use super::constraint::Constraint;
+use super::face_grid::FaceGrid;
 use super::field::Field;
 use super::Ctx;
 use crate::improve::quality::biased_min_sine;
@@ -59,6 +60,8 @@ pub struct LocalMesh {
     pub faces: FxHashMap<[u32; 3], BoundaryFace>,
     /// Per vertex: how many of `faces` it is a corner of.
     face_count: Vec<u32>,
+    /// `faces` in buckets over index space, as their corners are now.
+    pub face_grid: FaceGrid,
     /// Memo of failed attempts (see [`LocalMesh::settled_tet`]).
     memo: Memo,
     /// The tets whose quality was set below `low_bar` since the list was last compacted (with
@@ -396,6 +399,7 @@ impl LocalMesh {
             weight: 1.0,
             faces: FxHashMap::default(),
             face_count: vec![0; n],
+            face_grid: FaceGrid::default(),
             volume: 0.0,
             drift: vec![0.0; n],
             on_level: vec![false; n],
@@ -434,6 +438,8 @@ impl LocalMesh {
         for v in f.tri {
             self.face_count[v as usize] += 1;
         }
+        self.face_grid
+            .put(face_key(f.tri), f.tri.map(|v| self.u[v as usize]));
         if let Some(old) = self.faces.insert(face_key(f.tri), f) {
             for v in old.tri {
                 self.face_count[v as usize] -= 1;
@@ -447,6 +453,7 @@ impl LocalMesh {
             for v in f.tri {
                 self.face_count[v as usize] -= 1;
             }
+            self.face_grid.remove(face_key(tri));
         }
     }
 
@@ -672,6 +679,12 @@ impl LocalMesh {
             Some(l) => ctx.levels[l as usize],
             None => ctx.field.value(u),
         };
+        if self.on_boundary(v) {
+            for f in super::collapse::boundary_faces_at(self, v) {
+                let p = f.tri.map(|w| self.u[w as usize]);
+                self.face_grid.put(face_key(f.tri), p);
+            }
+        }
     }
 
     /// Recomputes the quality of the tets around `v` (after `v` moved).

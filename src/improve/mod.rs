@@ -14,6 +14,8 @@ pub(crate) mod collapse;
 mod composite;
 pub(crate) mod constraint;
 pub(crate) mod edge_removal;
+mod embed;
+mod face_grid;
 pub mod field;
 #[cfg(test)]
 mod fixtures;
@@ -29,6 +31,7 @@ pub(crate) mod smooth;
 pub(crate) mod split;
 pub mod stages;
 pub(crate) mod submesh;
+mod verify;
 pub(crate) mod warped;
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -146,6 +149,9 @@ pub struct ImproveReport {
     /// Boundary edges split where their chord sagged from the level set
     /// ([`QualityOptions::split_sag`]).
     pub splits: usize,
+    /// Regions put back as they started because their boundary would have crossed itself or
+    /// left its level set (`verify.rs`).
+    pub regions_undone: usize,
     /// Seconds spent.
     pub seconds: f64,
     /// Seconds spent in each stage, summed over rounds.
@@ -197,6 +203,7 @@ impl ImproveReport {
         self.smoothed += o.smoothed;
         self.restored += o.restored;
         self.merged_off_level += o.merged_off_level;
+        self.regions_undone += o.regions_undone;
         self.out_of_time |= o.out_of_time;
     }
 }
@@ -784,6 +791,7 @@ fn improve_phase(
     let (mut regions, bookkeeping) =
         local::extract_regions(mesh, (work, Some(off)), quality, ctx, phase);
     lap(&mut report.stage_seconds.extract, &mut clock);
+    let starts = regions.clone();
     let counts: Vec<ImproveReport> = regions
         .par_iter_mut()
         .map(|lm| {
@@ -798,6 +806,7 @@ fn improve_phase(
     for c in counts {
         report.add(&c);
     }
+    report.regions_undone += verify::keep_embedded(mesh, ctx, &mut regions, starts, &bookkeeping);
     lap(&mut report.stage_seconds.local, &mut clock);
     (regions, bookkeeping)
 }
@@ -868,10 +877,13 @@ fn finish_stage(
         work.resize(mesh.points.len(), false);
         let (mut regions, bookkeeping) =
             local::extract_regions(mesh, (&work, None), quality, ctx, phase);
+        let starts = regions.clone();
         let (splits, moves) = regions
             .par_iter_mut()
             .map(|lm| finish_region(lm, ctx, opts, (&owed, &sagging)))
             .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
+        report.regions_undone +=
+            verify::keep_embedded(mesh, ctx, &mut regions, starts, &bookkeeping);
         report.splits += splits;
         report.restored += moves;
         if splits > 0 {

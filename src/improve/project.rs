@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use super::collapse::{apply_collapse, legal_collapse, topological_merge};
 use super::constraint::Constraint;
+use super::embed;
 use super::local::{LocalMesh, StarCorners};
 use super::smooth::{climb, move_vertex};
 use super::Ctx;
@@ -242,11 +243,12 @@ fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     }
     let free = c.free_axes();
     let direct = ctx.field.project(u, target, free, ctx.tol);
-    if let Some(p) = direct.filter(|&p| lm.star_above_at(v, p, ctx, 0.0)) {
+    let keeps = |p: [f64; 3]| embed::move_keeps_boundary(lm, ctx, v, p);
+    if let Some(p) = direct.filter(|&p| lm.star_above_at(v, p, ctx, 0.0) && keeps(p)) {
         lm.set_position(v, p, ctx);
         return true;
     }
-    match detour(lm, ctx, v, target, free, direct) {
+    match detour(lm, ctx, v, target, free, direct).filter(|&p| keeps(p)) {
         Some(p) => {
             lm.set_position(v, p, ctx);
             true
@@ -304,7 +306,10 @@ fn untangle_corners(lm: &mut LocalMesh, ctx: &Ctx, v: u32, mut undo: Vec<(u32, [
     }
     let positive = std::iter::once(v)
         .chain(undo.iter().map(|&(w, _)| w))
-        .all(|w| lm.star[w as usize].iter().all(|&t| lm.q[t as usize] > 0.0));
+        .all(|w| lm.star[w as usize].iter().all(|&t| lm.q[t as usize] > 0.0))
+        && std::iter::once(v)
+            .chain(undo.iter().map(|&(w, _)| w))
+            .all(|w| embed::move_keeps_boundary(lm, ctx, w, lm.u[w as usize]));
     if !positive {
         for &(w, u) in undo.iter().rev() {
             lm.set_position(w, u, ctx);
@@ -355,7 +360,7 @@ pub fn merge_and_untangle(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     let level = lm.con[v as usize].level;
     let on_level = |w: u32| lm.con[w as usize].level == level && !lm.off_its_level(w, ctx);
     for b in nearest(lm, v, on_level) {
-        if !topological_merge(lm, v, b) {
+        if !topological_merge(lm, ctx, v, b) {
             continue;
         }
         let mut trial = lm.clone();

@@ -7,6 +7,7 @@
 //! the mesh, so smoothing never changes the topology.
 
 use super::constraint::Constraint;
+use super::embed;
 use super::local::{LocalMesh, StarCorners, StarVec};
 use super::Ctx;
 use crate::geom::{dot, norm, sub};
@@ -59,6 +60,9 @@ pub(crate) fn move_by(
         .collect();
     let from = lm.u[v as usize];
     let u = search(lm, &star, &mut qs)?;
+    if !embed::move_keeps_boundary(lm, ctx, v, u) {
+        return None;
+    }
     if c.level.is_some() {
         let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
         let (v0, v1) = star.volumes(x0, x1);

@@ -1,0 +1,282 @@
+//! The embedding guard: an operation of the quality pass may change the boundary surface only
+//! where the new boundary triangles stay near the trilinear level set they are labelled with.
+//!
+//! Positive tets and the link condition keep the complex right, but not its embedding: on a
+//! thin interval nearly every vertex is a level vertex, every tet is a sliver between the two
+//! sheets, and collapses and moves that keep every tet positive can turn the boundary into
+//! long chords across the folds of the layer, so that the mesh covers other parts of the
+//! domain, and space outside it, a second time. The guard refuses a move or a collapse whose
+//! new boundary triangles leave their level set by more than [`GUARD_DISTANCE`] index units at
+//! any of their sample points ([`sample_points`]); the check after each phase
+//! ([`super::verify`]) also refuses boundary triangles that cross one another.
+
+use super::collapse::{boundary_faces_at, VertexFaces};
+use super::local::{BoundaryFace, LocalMesh};
+use super::Ctx;
+use crate::check::triangles_cross;
+use crate::mesh::BoundaryLabel;
+
+/// How far (index units, voxels) a boundary triangle may leave its level set, as the guard
+/// measures it: below the half voxel that the checker allows, so that the checker's own
+/// search, which tries more directions, always finds the level set within its bound.
+pub const GUARD_DISTANCE: f64 = 0.4;
+
+/// Spacing (index units) of the sample points of a triangle.
+const SAMPLE_SPACING: f64 = 0.25;
+
+/// At most this many subdivisions of a triangle's edges: a longer triangle is refused (its
+/// edge is more than `MAX_SUBDIVISIONS * SAMPLE_SPACING` voxels long).
+const MAX_SUBDIVISIONS: usize = 64;
+
+/// The level a boundary label lies on (`None` for the grid box).
+pub fn label_level(label: BoundaryLabel, levels: [f64; 2]) -> Option<f64> {
+    match label {
+        BoundaryLabel::Alpha => Some(levels[0]),
+        BoundaryLabel::Beta => Some(levels[1]),
+        BoundaryLabel::Box => None,
+    }
+}
+
+/// The points of triangle `t` (index space) at which its distance to the level set is
+/// measured: a barycentric lattice with `n` steps along each edge, `n` such that neighbouring
+/// points are at most [`SAMPLE_SPACING`] apart (at least 2: corners, edge midpoints and three
+/// inner points). `None` if the triangle is too long to sample ([`MAX_SUBDIVISIONS`]).
+pub fn sample_points(t: [[f64; 3]; 3]) -> Option<impl Iterator<Item = [f64; 3]>> {
+    let len = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let longest = len(t[0], t[1]).max(len(t[1], t[2])).max(len(t[2], t[0]));
+    let n = (longest / SAMPLE_SPACING).ceil().max(2.0);
+    if n.is_nan() || n > MAX_SUBDIVISIONS as f64 {
+        return None;
+    }
+    let n = n as usize;
+    Some((0..=n).flat_map(move |i| {
+        (0..=n - i).map(move |j| {
+            let (a, b) = (i as f64 / n as f64, j as f64 / n as f64);
+            let c = 1.0 - a - b;
+            [0, 1, 2].map(|k| a * t[0][k] + b * t[1][k] + c * t[2][k])
+        })
+    }))
+}
+
+/// Whether the level set `f = level` of the trilinear field passes within `bound` (index
+/// units) of index point `u`: `|f(u) - level| <= tol`, or `f - level` changes sign along a
+/// segment of length `bound` from `u` (down the gradient towards the level first, then along
+/// the 26 lattice directions). A sign change is a witness: the answer `true` is never wrong;
+/// `false` may be, where the level set is near but found along none of these segments.
+pub fn near_level(ctx: &Ctx, u: [f64; 3], level: f64, bound: f64) -> bool {
+    let (f, g) = ctx.field.value_gradient(u);
+    let d = f - level;
+    if d.abs() <= ctx.tol {
+        return true;
+    }
+    let crosses = |dir: [f64; 3]| {
+        let norm = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+        if norm == 0.0 || !norm.is_finite() {
+            return false;
+        }
+        (1..=4).any(|k| {
+            let s = bound * k as f64 / 4.0 / norm;
+            let p = [0, 1, 2].map(|a| u[a] + s * dir[a]);
+            (ctx.field.value(p) - level) * d.signum() <= 0.0
+        })
+    };
+    let down = g.map(|c| -c * d.signum());
+    if crosses(down) {
+        return true;
+    }
+    (0..27).filter(|&i| i != 13).any(|i| {
+        let dir = [i % 3, (i / 3) % 3, i / 9].map(|c| c as f64 - 1.0);
+        crosses(dir)
+    })
+}
+
+/// Whether every sample point of triangle `t` (index space) with label `label` lies within
+/// [`GUARD_DISTANCE`] of its level set (box triangles: always).
+pub fn triangle_near_level(ctx: &Ctx, t: [[f64; 3]; 3], label: BoundaryLabel) -> bool {
+    let Some(level) = label_level(label, ctx.levels) else {
+        return true;
+    };
+    match sample_points(t) {
+        Some(mut points) => points.all(|p| near_level(ctx, p, level, GUARD_DISTANCE)),
+        None => false,
+    }
+}
+
+/// Whether the boundary faces `faces` of region `lm`, with vertex `v` at index point `u`, all
+/// stay near their level sets ([`triangle_near_level`]).
+pub fn faces_near_level_with(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    faces: &[BoundaryFace],
+    v: u32,
+    u: [f64; 3],
+) -> bool {
+    faces.iter().all(|f| {
+        let t = f.tri.map(|w| if w == v { u } else { lm.u[w as usize] });
+        triangle_near_level(ctx, t, f.label)
+    })
+}
+
+/// Whether moving vertex `v` of region `lm` to index point `u` keeps the boundary faces at `v`
+/// near their level sets and clear of the boundary faces around them (always, for a vertex
+/// off the boundary).
+pub fn move_keeps_boundary(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> bool {
+    if !lm.on_boundary(v) {
+        return true;
+    }
+    let faces = boundary_faces_at(lm, v);
+    move_keeps_volume(lm, ctx, v, u)
+        && faces_near_level_with(lm, ctx, &faces, v, u)
+        && !crosses_nearby(lm, &faces, (v, v), u)
+}
+
+/// Whether merging `a` into `b` keeps the boundary faces that `a` leaves to `b` near their
+/// level sets and clear of the boundary faces around them (always, for `a` off the
+/// boundary).
+pub fn collapse_keeps_boundary(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> bool {
+    if !lm.on_boundary(a) {
+        return true;
+    }
+    let faces = boundary_faces_at(lm, a);
+    let kept: VertexFaces = faces.into_iter().filter(|f| !f.tri.contains(&b)).collect();
+    let ub = lm.u[b as usize];
+    collapse_keeps_volume(lm, a, b)
+        && faces_near_level_with(lm, ctx, &kept, a, ub)
+        && !crosses_nearby(lm, &kept, (a, b), ub)
+}
+
+/// The share of a level vertex's star volume that one move or collapse of it may add or take
+/// away. On a thin interval the star is a thin slice between the two level sets, and a move
+/// that keeps every sample of its faces within [`GUARD_DISTANCE`] of the level set can still
+/// make the slice several times thicker; elsewhere a move along the level set changes the
+/// star's volume by a small share of it.
+pub const VOLUME_SHARE: f64 = 0.2;
+
+/// Whether moving level vertex `v` to index point `u` changes its star's volume by at most
+/// [`VOLUME_SHARE`] of it (always, for other vertices).
+pub fn move_keeps_volume(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> bool {
+    if lm.con[v as usize].level.is_none() {
+        return true;
+    }
+    let x = ctx.field.to_physical(u);
+    let (mut before, mut after) = (0.0, 0.0);
+    for &t in &lm.star[v as usize] {
+        before += lm.volume_of(t);
+        let p = lm.corners_with(t, v, x);
+        after += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
+    }
+    (after - before).abs() <= VOLUME_SHARE * before.abs()
+}
+
+/// Whether merging level vertex `a` into `b` changes the volume of `a`'s star by at most
+/// [`VOLUME_SHARE`] of it (always, for other vertices).
+pub fn collapse_keeps_volume(lm: &LocalMesh, a: u32, b: u32) -> bool {
+    if lm.con[a as usize].level.is_none() {
+        return true;
+    }
+    let xb = lm.x[b as usize];
+    let (mut before, mut after) = (0.0, 0.0);
+    for &t in &lm.star[a as usize] {
+        before += lm.volume_of(t);
+        if !lm.tets[t as usize].contains(&b) {
+            let p = lm.corners_with(t, a, xb);
+            after += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
+        }
+    }
+    (after - before).abs() <= VOLUME_SHARE * before.abs()
+}
+
+/// Whether a face of `new` (faces at `from`, with `from` becoming `to` at index point `u`: a
+/// move when `from == to`, a collapse otherwise) crosses another of them, or another boundary
+/// face of the region that the change keeps ([`LocalMesh::face_grid`]).
+fn crosses_nearby(
+    lm: &LocalMesh,
+    new: &[BoundaryFace],
+    (from, to): (u32, u32),
+    u: [f64; 3],
+) -> bool {
+    let rename = |w: u32| if w == from { to } else { w };
+    let at = |w: u32| if w == to { u } else { lm.u[w as usize] };
+    let tri = |t: [u32; 3]| {
+        let t = t.map(rename);
+        (t.map(at), t.map(|w| w as u64))
+    };
+    new.iter().enumerate().any(|(i, f)| {
+        let (p, ids) = tri(f.tri);
+        if new[i + 1..].iter().any(|g| {
+            let (q, jds) = tri(g.tri);
+            triangles_cross([&ids, &jds], [&p, &q])
+        }) {
+            return true;
+        }
+        lm.face_grid.near(&p).into_iter().any(|key| {
+            // The faces at `from` are the new ones (or go, in a collapse).
+            if key.contains(&from) {
+                return false;
+            }
+            let (q, jds) = tri(key);
+            triangles_cross([&ids, &jds], [&p, &q])
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Instant;
+
+    use crate::grid::ScalarGrid;
+    use crate::improve::{context, QualityOptions};
+
+    fn ctx_of(grid: &ScalarGrid) -> Ctx<'_> {
+        context(grid, 2.0, 3.0, &QualityOptions::default(), Instant::now())
+    }
+
+    /// f = x on a 5³ grid: the level set f = 2 is the plane x = 2.
+    fn linear_x() -> ScalarGrid {
+        let n = 5;
+        let values: Vec<f64> = (0..n * n * n).map(|i| (i % n) as f64).collect();
+        ScalarGrid::new([n, n, n], values).unwrap()
+    }
+
+    #[test]
+    fn a_point_is_near_its_level_exactly_within_the_bound() {
+        let grid = linear_x();
+        let ctx = ctx_of(&grid);
+        assert!(near_level(&ctx, [2.0, 1.0, 1.0], 2.0, 0.4));
+        assert!(near_level(&ctx, [2.39, 1.0, 1.0], 2.0, 0.4));
+        assert!(near_level(&ctx, [1.61, 1.0, 1.0], 2.0, 0.4));
+        assert!(!near_level(&ctx, [2.45, 1.0, 1.0], 2.0, 0.4));
+        assert!(!near_level(&ctx, [1.5, 1.0, 1.0], 2.0, 0.4));
+    }
+
+    #[test]
+    fn a_triangle_is_near_its_level_only_if_every_sample_is() {
+        let grid = linear_x();
+        let ctx = ctx_of(&grid);
+        let on = [[2.0, 0.5, 0.5], [2.0, 3.5, 0.5], [2.0, 0.5, 3.5]];
+        assert!(triangle_near_level(&ctx, on, BoundaryLabel::Alpha));
+        // Corners on the level, the triangle bent away from it: a corner at x = 3 would put
+        // the midpoints of its edges half a voxel off.
+        let off = [[2.0, 0.5, 0.5], [2.0, 3.5, 0.5], [3.0, 2.0, 2.0]];
+        assert!(!triangle_near_level(&ctx, off, BoundaryLabel::Alpha));
+        // The same triangle on the beta level (x = 3) is off at two corners.
+        assert!(!triangle_near_level(&ctx, on, BoundaryLabel::Beta));
+        // Box triangles are not measured.
+        assert!(triangle_near_level(&ctx, off, BoundaryLabel::Box));
+    }
+
+    #[test]
+    fn sample_points_cover_corners_and_refuse_huge_triangles() {
+        let t = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let points: Vec<[f64; 3]> = sample_points(t).unwrap().collect();
+        for c in t {
+            assert!(points.contains(&c));
+        }
+        // n = 6 steps along the longest edge (sqrt 2 / 0.25 = 5.7): 28 points.
+        assert_eq!(points.len(), 28);
+        assert!(sample_points([[0.0; 3], [100.0, 0.0, 0.0], [0.0, 1.0, 0.0]]).is_none());
+    }
+}
