@@ -672,8 +672,10 @@ mod tests {
                 }
             }
         }
+        // The embedding guard refuses the merges whose faces would leave the level set or
+        // cross another face; the rest go through.
         assert!(
-            pushed >= 30 && merged > pushed / 2,
+            pushed >= 30 && merged > pushed / 5,
             "{merged} of {pushed} pushed vertices merged"
         );
     }

@@ -284,6 +284,7 @@ mod tests {
             max_angle: 145.0,
             ..QualityOptions::default()
         };
+        let mut later = 0;
         for opts in [QualityOptions::default(), staged] {
             let run = |rings| {
                 let mut m = mesh.clone();
@@ -291,7 +292,7 @@ mod tests {
                 (m, r)
             };
             let (whole, report) = run(None);
-            assert!(report.rounds > 1, "later rounds ran: {}", report.rounds);
+            later += usize::from(report.rounds > 1);
             for rings in [1, 3] {
                 let (copy, r) = run(Some(rings));
                 assert_eq!(copy, whole, "{rings} rings, {}°", opts.min_angle);
@@ -306,5 +307,6 @@ mod tests {
                 );
             }
         }
+        assert!(later > 0, "no pass needed a later round");
     }
 }
