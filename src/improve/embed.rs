@@ -121,15 +121,26 @@ pub fn faces_near_level_with(
 
 /// Whether moving vertex `v` of region `lm` to index point `u` keeps the boundary faces at `v`
 /// near their level sets and clear of the boundary faces around them (always, for a vertex
-/// off the boundary).
+/// off the boundary). Smoothing moves also ask [`move_keeps_volume`]; projections onto the
+/// level set do not (they correct the geometry).
 pub fn move_keeps_boundary(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> bool {
     if !lm.on_boundary(v) {
         return true;
     }
     let faces = boundary_faces_at(lm, v);
-    move_keeps_volume(lm, ctx, v, u)
-        && faces_near_level_with(lm, ctx, &faces, v, u)
-        && !crosses_nearby(lm, &faces, (v, v), u)
+    faces_near_level_with(lm, ctx, &faces, v, u) && !crosses_nearby(lm, &faces, (v, v), u)
+}
+
+/// Whether projecting level vertex `v` onto its level set at index point `u` keeps the
+/// boundary faces at `v` clear of the boundary faces around them. Their distance to the level
+/// set is not asked: the projection brings `v` to it, and a face whose other corners are
+/// still off their level would otherwise hold every corner back.
+pub fn projection_keeps_boundary(lm: &LocalMesh, v: u32, u: [f64; 3]) -> bool {
+    if !lm.on_boundary(v) {
+        return true;
+    }
+    let faces = boundary_faces_at(lm, v);
+    !crosses_nearby(lm, &faces, (v, v), u)
 }
 
 /// Whether merging `a` into `b` keeps the boundary faces that `a` leaves to `b` near their

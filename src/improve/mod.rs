@@ -709,6 +709,7 @@ fn run_round(
         let kept = p.quality.len() == mesh.tets.len();
         let fill = (!kept).then_some(&mut *p.quality);
         let moved = project::project_mesh(mesh, ctx, p.drift, fill);
+
         p.report.projected += moved.iter().filter(|&&m| m).count();
         if kept {
             refresh_quality(mesh, ctx, &moved, p.quality);
@@ -806,7 +807,8 @@ fn improve_phase(
     for c in counts {
         report.add(&c);
     }
-    report.regions_undone += verify::keep_embedded(mesh, ctx, &mut regions, starts, &bookkeeping);
+    report.regions_undone +=
+        verify::keep_embedded(mesh, ctx, &mut regions, starts, &bookkeeping, true);
     lap(&mut report.stage_seconds.local, &mut clock);
     (regions, bookkeeping)
 }
@@ -883,7 +885,7 @@ fn finish_stage(
             .map(|lm| finish_region(lm, ctx, opts, (&owed, &sagging)))
             .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
         report.regions_undone +=
-            verify::keep_embedded(mesh, ctx, &mut regions, starts, &bookkeeping);
+            verify::keep_embedded(mesh, ctx, &mut regions, starts, &bookkeeping, false);
         report.splits += splits;
         report.restored += moves;
         if splits > 0 {

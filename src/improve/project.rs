@@ -71,6 +71,44 @@ pub fn project_mesh(
     let all = (0..mesh.tets.len() as u32).into_par_iter();
     let first = qualities_at_targets(mesh, (&target, &moved), all.clone(), ctx);
     let mut bad = inverted_moves(mesh, &moved, all, &first);
+    // Moves whose boundary faces would cross another face or leave the level set are taken
+    // back too (on a thin interval a node's trilinear level set can lie across the other
+    // sheet), then the inversion check runs again around them.
+    loop {
+        revert_inverting(mesh, ctx, (&target, &mut moved), &around_moved, bad);
+        let position: Vec<[f64; 3]> = (0..mesh.points.len())
+            .into_par_iter()
+            .map(|v| match target[v] {
+                Some(t) if moved[v] => t,
+                _ => mesh.points[v],
+            })
+            .collect();
+        bad = super::verify::moves_breaking_embedding(mesh, ctx, &position, &moved);
+        if bad.is_empty() {
+            break;
+        }
+    }
+    add_moved_volume(mesh, &around_moved, &target, &moved, drift);
+    for (v, t) in target.iter().enumerate() {
+        if moved[v] {
+            mesh.points[v] = t.expect("moved vertices have a target");
+        }
+    }
+    if let Some(quality) = quality {
+        *quality = qualities_after(mesh, ctx, first, (&target, &moved));
+    }
+    moved
+}
+
+/// Takes back the moves of the vertices in `bad` and then those of the corners of the tets
+/// that stay inverted, [`REVERT_ROUNDS`] times at most (then every move).
+fn revert_inverting(
+    mesh: &TetMesh,
+    ctx: &Ctx,
+    (target, moved): (&[Option<[f64; 3]>], &mut [bool]),
+    around_moved: &[u32],
+    mut bad: Vec<u32>,
+) {
     for round in 0..=REVERT_ROUNDS {
         if bad.is_empty() {
             break;
@@ -90,19 +128,9 @@ pub fn project_mesh(
             .copied()
             .filter(|&t| mesh.tets[t as usize].iter().any(|&v| reverted[v as usize]))
             .collect();
-        let q = qualities_at_targets(mesh, (&target, &moved), check.par_iter().copied(), ctx);
-        bad = inverted_moves(mesh, &moved, check.par_iter().copied(), &q);
+        let q = qualities_at_targets(mesh, (target, moved), check.par_iter().copied(), ctx);
+        bad = inverted_moves(mesh, moved, check.par_iter().copied(), &q);
     }
-    add_moved_volume(mesh, &around_moved, &target, &moved, drift);
-    for (v, t) in target.iter().enumerate() {
-        if moved[v] {
-            mesh.points[v] = t.expect("moved vertices have a target");
-        }
-    }
-    if let Some(quality) = quality {
-        *quality = qualities_after(mesh, ctx, first, (&target, &moved));
-    }
-    moved
 }
 
 /// Every tet's quality after the projection: `first` (per tet, with every targeted corner at
@@ -243,7 +271,7 @@ fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     }
     let free = c.free_axes();
     let direct = ctx.field.project(u, target, free, ctx.tol);
-    let keeps = |p: [f64; 3]| embed::move_keeps_boundary(lm, ctx, v, p);
+    let keeps = |p: [f64; 3]| embed::projection_keeps_boundary(lm, v, p);
     if let Some(p) = direct.filter(|&p| lm.star_above_at(v, p, ctx, 0.0) && keeps(p)) {
         lm.set_position(v, p, ctx);
         return true;

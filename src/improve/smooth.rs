@@ -60,7 +60,7 @@ pub(crate) fn move_by(
         .collect();
     let from = lm.u[v as usize];
     let u = search(lm, &star, &mut qs)?;
-    if !embed::move_keeps_boundary(lm, ctx, v, u) {
+    if !embed::move_keeps_volume(lm, ctx, v, u) || !embed::move_keeps_boundary(lm, ctx, v, u) {
         return None;
     }
     if c.level.is_some() {

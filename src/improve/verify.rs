@@ -15,13 +15,12 @@
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use super::embed;
 use super::local::{face_key, LocalMesh, Regions, NEW_POINT};
 use super::Ctx;
 use crate::check::triangles_cross;
 
 type Point = [f64; 3];
-use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::mesh::TetMesh;
 
 /// Side of the buckets (index units) the triangles are sorted into.
 const BUCKET: f64 = 1.0;
@@ -35,7 +34,6 @@ struct Face {
     ids: [u64; 3],
     /// The region that changed it (`u32::MAX`: unchanged).
     changed_by: u32,
-    label: BoundaryLabel,
 }
 
 /// Buckets of triangles over index space.
@@ -142,13 +140,11 @@ fn boundary(
     let mut faces: Vec<Face> = mesh
         .boundary
         .iter()
-        .zip(&mesh.boundary_labels)
-        .filter(|(tri, _)| bookkeeping.keeps_face(**tri))
-        .map(|(tri, &label)| Face {
+        .filter(|tri| bookkeeping.keeps_face(**tri))
+        .map(|tri| Face {
             p: tri.map(|v| ctx.field.to_index(mesh.points[v as usize])),
             ids: tri.map(|v| v as u64),
             changed_by: u32::MAX,
-            label,
         })
         .collect();
     for (r, (lm, start)) in regions.iter().zip(starts).enumerate() {
@@ -162,14 +158,15 @@ fn boundary(
             } else {
                 u32::MAX
             },
-            label: f.label,
         }));
     }
     faces
 }
 
 /// Puts back as it started every region whose changed boundary faces cross another boundary
-/// face or leave their level set, until none does. `starts[r]` is region `r` as copied out.
+/// face, until none does, and first (with `check_volume`: not in the
+/// last stage, whose restoration changes volumes on purpose) every region whose volume
+/// changed by more than [`REGION_VOLUME_SHARE`]. `starts[r]` is region `r` as copied out.
 /// Returns how many regions were put back.
 pub fn keep_embedded(
     mesh: &TetMesh,
@@ -177,9 +174,13 @@ pub fn keep_embedded(
     regions: &mut [LocalMesh],
     starts: Vec<LocalMesh>,
     bookkeeping: &Regions,
+    check_volume: bool,
 ) -> usize {
     let mut undone = vec![false; regions.len()];
-    let swelled: Vec<bool> = regions.iter().map(changed_volume).collect();
+    let swelled: Vec<bool> = regions
+        .iter()
+        .map(|lm| check_volume && changed_volume(lm))
+        .collect();
     for (r, &bad) in swelled.iter().enumerate() {
         if bad {
             regions[r] = starts[r].clone();
@@ -195,9 +196,7 @@ pub fn keep_embedded(
                 if f.changed_by == u32::MAX {
                     return None;
                 }
-                let bad =
-                    !embed::triangle_near_level(ctx, f.p, f.label) || index.crosses_another(i);
-                bad.then_some(f.changed_by)
+                index.crosses_another(i).then_some(f.changed_by)
             })
             .collect();
         fails.sort_unstable();
@@ -211,4 +210,41 @@ pub fn keep_embedded(
         }
     }
     undone.iter().filter(|&&u| u).count()
+}
+
+/// The moved corners of the boundary faces of `mesh` that, with every point at `position`
+/// (physical), cross another boundary face, among the faces with a corner flagged in
+/// `moved`: the moves of the whole-mesh projection to take back.
+pub fn moves_breaking_embedding(
+    mesh: &TetMesh,
+    ctx: &Ctx,
+    position: &[[f64; 3]],
+    moved: &[bool],
+) -> Vec<u32> {
+    let faces: Vec<Face> = mesh
+        .boundary
+        .iter()
+        .map(|tri| Face {
+            p: tri.map(|v| ctx.field.to_index(position[v as usize])),
+            ids: tri.map(|v| v as u64),
+            changed_by: if tri.iter().any(|&v| moved[v as usize]) {
+                0
+            } else {
+                u32::MAX
+            },
+        })
+        .collect();
+    let index = Index::new(faces);
+    let mut back: Vec<u32> = (0..index.faces.len())
+        .into_par_iter()
+        .filter(|&i| {
+            let f = &index.faces[i];
+            f.changed_by != u32::MAX && index.crosses_another(i)
+        })
+        .flat_map_iter(|i| mesh.boundary[i])
+        .filter(|&v| moved[v as usize])
+        .collect();
+    back.sort_unstable();
+    back.dedup();
+    back
 }
