@@ -1,16 +1,19 @@
 //! The check after each phase of regions: the boundary surface must stay embedded.
 //!
 //! The operations keep every tet positive, and the guard ([`super::embed`]) keeps the new
-//! boundary triangles of collapses and smoothing moves near their level sets. A mesh whose
-//! tets are all positive (locally injective) and whose boundary surface is embedded is
-//! globally injective: it covers its domain once. So after the regions of a phase are
-//! improved (in parallel, each blind to the others) and before they are written back, every
-//! boundary triangle a region changed (new, or with a moved corner) is checked against every
-//! other boundary triangle near it, the other regions' as they ended and the untouched ones
-//! of the mesh, with exact predicates ([`crate::intersect`]), and against its level set
-//! ([`embed::triangle_near_level`]). A region that fails is put back as it was copied out
-//! (its start), and the check runs again until every region passes: putting regions back
-//! only returns to the boundary the phase started with, which was embedded.
+//! boundary triangles of collapses, moves and projections clear of the region's other faces
+//! (and those of collapses and moves near their level sets). A mesh whose tets are all
+//! positive (locally injective) and whose boundary surface is embedded is globally
+//! injective: it covers its domain once. So after the regions of a phase are improved (in
+//! parallel, each blind to the others) and before they are written back, every boundary
+//! triangle a region changed (new, or with a moved corner) is checked against every other
+//! boundary triangle near it, the other regions' as they ended and the untouched ones of the
+//! mesh, with exact predicates ([`crate::check::triangles_cross`]); in the rounds, a region's
+//! volume is also checked against its start. A region that fails is put back as it was
+//! copied out (its start), and the check runs again until every region passes: putting
+//! regions back only returns to the boundary the phase started with, which was embedded.
+//! The whole-mesh projection takes back its moves the same way
+//! ([`moves_breaking_embedding`]).
 
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
