@@ -150,6 +150,12 @@ fn every_output_spares(dir: &Path, input: &Input) {
             };
             let link = format!("to-{}-{n}.{ext}", file.replace('.', "_"));
             symlink(file, dir.join(&link)).unwrap();
+            // `--critical` meshes nothing and refuses `--function` before any file is
+            // compared (exit 2, `options_that_do_nothing_in_the_mode_are_refused`).
+            let critical = !matches!(flag, "-o" | "--report");
+            if critical && input.args.iter().any(|a| a == "--function") {
+                continue;
+            }
             let accepts = |name: &str| flag != "-o" && flag != "--transfer" || name.ends_with(ext);
             for target in [spelling, link] {
                 if accepts(&target) {
