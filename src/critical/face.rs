@@ -1,5 +1,5 @@
 //! Face saddles: saddles of the bilinear interpolant on grid faces that are critical points of
-//! the piecewise-trilinear field (Lemma 4 of seed 002), on interior faces and on the grid box.
+//! the piecewise-trilinear field (Lemma 4 of “Exploring scalar fields using critical isovalues”), on interior faces and on the grid box.
 //!
 //! Rotate the face so that its corners `A, C` (a diagonal) lie above the saddle value `s` and
 //! `B, D` below, and shift all values by `-s`. On the plane at distance `t` into one of the two
@@ -10,7 +10,7 @@
 //! connect `B` and `D`. The saddle is a saddle of the whole field iff both cells connect the
 //! same pair; on the grid box, where only one cell exists, the pair the cell does *not* connect
 //! stays apart, which changes only one of the two filtrations. `d = 0` is degenerate (a curve of
-//! critical points crosses the cell, seed 004 §5.3): the point is reported as such.
+//! critical points crosses the cell, “Critical regions” §5.3): the point is reported as such.
 
 use super::vertex::LinkClass;
 

@@ -3,17 +3,17 @@
 //! consecutive critical values).
 //!
 //! * [`vertex`]: grid vertices from their six edge-connected neighbours (the 64-entry table).
-//! * [`face`]: face saddles by Lemma 4 of seed 002.
+//! * [`face`]: face saddles by Lemma 4 of “Exploring scalar fields using critical isovalues”.
 //! * [`body`]: saddles inside cells.
 //! * [`region`]: plateaus (edge-connected equal values): flood fill and the neighbourhood
-//!   graph of seed 004.
+//!   graph of “Critical regions”.
 //! * [`complex`]: the second route, the TPTD tetrahedral complex of the grid (a
 //!   piecewise-linear field whose level sets have the trilinear topology): Betti numbers of
 //!   its superlevel and sublevel sets.
 //! * [`persistence`]: union–find over the superlevel and sublevel sets of that complex.
 //! * [`spectrum`]: Betti numbers between consecutive critical values.
 //! * [`safe`]: the critical values near a chosen bound and the nearest safe bounds.
-//! * [`transfer`]: colour/opacity transfer functions from the critical values (seed 002 §5).
+//! * [`transfer`]: colour/opacity transfer functions from the critical values (“Exploring scalar fields using critical isovalues” §5).
 //!
 //! Points on the grid box are classified with the part of their neighbourhood inside the box,
 //! so the box itself creates critical points (a box vertex whose inward neighbour is lower

@@ -1,5 +1,5 @@
 //! Transfer functions (colour and opacity over the value range) built from critical values,
-//! the two designs of seed 002 §5 (after Fujishiro et al.):
+//! the two designs of “Exploring scalar fields using critical isovalues” §5 (after Fujishiro et al.):
 //!
 //! * [`TransferDesign::Intervals`] emphasises *topologically equivalent regions*: the hue
 //!   decreases uniformly with the value, except for a drop `δh` at each critical value `cv`, so
@@ -31,7 +31,7 @@ pub const BRIGHTNESS: f64 = 0.95;
 /// Largest hue change (degrees) between neighbouring colour control points.
 pub const MAX_HUE_STEP: f64 = 10.0;
 
-/// Which design of seed 002 §5.
+/// Which design of “Exploring scalar fields using critical isovalues” §5.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TransferDesign {
     /// Hue bands per interval between critical values, opacity hats at them.

@@ -1,7 +1,7 @@
-//! Criticality of a grid vertex from its (up to) six edge-connected neighbours (seed 002 §3.2).
+//! Criticality of a grid vertex from its (up to) six edge-connected neighbours (“Exploring scalar fields using critical isovalues” §3.2).
 //!
 //! Near a vertex the trilinear field splits each incident cell (an octant) like a linear
-//! tetrahedron (Lemma 3 of seed 002), so the part of a small sphere around the vertex where
+//! tetrahedron (Lemma 3 of “Exploring scalar fields using critical isovalues”), so the part of a small sphere around the vertex where
 //! `f > f(vertex)` (the *upper link*) is homotopy equivalent to the full subcomplex on the
 //! `+` neighbours of the link triangulation: the octahedron with the six neighbour directions
 //! as vertices and one triangle per incident cell. Inside the grid box the link is the whole
@@ -159,7 +159,7 @@ pub const fn link_class(upper: u8, octants: u8) -> LinkClass {
     }
 }
 
-/// The 64-entry table of seed 002 for interior vertices: entry `m` classifies a vertex whose
+/// The 64-entry table of “Exploring scalar fields using critical isovalues” for interior vertices: entry `m` classifies a vertex whose
 /// neighbours in the directions with a bit in `m` are higher and the others lower.
 pub const VERTEX_TABLE: [LinkClass; 64] = vertex_table();
 
@@ -199,7 +199,7 @@ pub fn vertex_octants(p: [usize; 3], dims: [usize; 3]) -> u8 {
 mod tests {
     use super::*;
 
-    /// Gerstner–Pajarola's criterion over the octahedron's edge graph (seed 002 §3.1):
+    /// Gerstner–Pajarola's criterion over the octahedron's edge graph (“Exploring scalar fields using critical isovalues” §3.1):
     /// components of `+` and of `-` neighbours after deleting mixed edges.
     fn edge_graph_components(m: u8) -> (usize, usize) {
         let mut count = [0usize; 2];

@@ -306,7 +306,7 @@ pub fn improve_meshed(
 /// [`RESIDUAL`] before the last stage); keeping a copy of it would only cost memory.
 const VOLUME_RETRY_TETS: usize = 1 << 20;
 
-/// The share of the plain volume beyond which a small mesh's pass is run again (issue 6
+/// The share of the plain volume beyond which a small mesh's pass is run again (the quality goal
 /// allows 0.5 %).
 const VOLUME_RETRY: f64 = 4e-3;
 
@@ -898,7 +898,7 @@ fn finish_stage(
 }
 
 /// The share of the plain volume that the mesh may be off by without the restoration
-/// (before the last stage), or after it without [`restore_residual`] (half of what issue 6
+/// (before the last stage), or after it without [`restore_residual`] (half of what the quality goal
 /// allows, 0.5 %).
 const RESIDUAL: f64 = 2.5e-3;
 

@@ -15,7 +15,7 @@ use crate::geom::{dot, norm, sub};
 /// Gradient steps per call. One: a vertex still at a bad tet is smoothed again in the next
 /// sweep, after its neighbours moved, and the steps are spent where the tets still need them
 /// (one step instead of four made the local stage 19–24 % shorter on the full-size volumes,
-/// with fewer tets left below 15° on the T1: docs/QUALITY-LOG.md, *Session 28*).
+/// with fewer tets left below 15° on the T1: docs/QUALITY-LOG.md).
 const ITERATIONS: usize = 1;
 /// Halvings of the step in the line search.
 const HALVINGS: usize = 10;

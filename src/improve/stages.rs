@@ -12,10 +12,10 @@
 //! once after the last, gave the higher minimum on 35 and the lower one on 15 of 72 runs, and
 //! the smaller volume change on 56 and the larger on 9 (the domains of
 //! `benchmarks/quality.py` at N = 24, 28, 36, 40 and targets 20°, 25°, 30°;
-//! `benchmarks/stages_matrix.py`; build 892dab5), and there every domain's minimum rose (or
+//! `benchmarks/stages_matrix.py`), and there every domain's minimum rose (or
 //! stayed) from target to target and none ended below 15° (given back once: the 28³ shell
 //! 12.6° at 20°). The drift left to the end had grown past what the restoration can give back
-//! without taking a tet below the higher target. With edge removal (build b04640b) every
+//! without taking a tet below the higher target. With edge removal every
 //! minimum still rises or stays with the target. The first stage is the default pass, with
 //! the single pass's retry of stuck regions (`schedule::improve_local`); later stages do not
 //! retry (retrying in every stage: higher minimum on 5, lower on 10 of the 72 runs). Without

@@ -159,7 +159,7 @@ pub(crate) struct Cli {
     pub(crate) spectrum: Option<PathBuf>,
 
     /// With --critical: write a transfer function built from the (filtered) critical values
-    /// (seed 002 §5) as a ParaView colour-map/opacity preset (.json) or as CSV (.csv)
+    /// (“Exploring scalar fields using critical isovalues” §5) as a ParaView colour-map/opacity preset (.json) or as CSV (.csv)
     #[arg(long, value_name = "FILE.json|FILE.csv", requires = "critical")]
     pub(crate) transfer: Option<PathBuf>,
 
