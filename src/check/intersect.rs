@@ -33,10 +33,20 @@ pub(crate) fn triangles_cross<T: PartialEq>(ids: [&[T; 3]; 2], pos: [&[P; 3]; 2]
 fn contact<T: PartialEq>(ids: [&[T; 3]; 2], pos: [&[P; 3]; 2]) -> Option<Contact> {
     let [a, b] = ids;
     let [s, t] = pos;
-    let shared: Vec<(usize, usize)> = (0..3)
-        .flat_map(|i| (0..3).map(move |j| (i, j)))
-        .filter(|&(i, j)| a[i] == b[j])
-        .collect();
+    let mut pairs = [(0, 0); 3];
+    let mut n = 0;
+    for i in 0..3 {
+        for j in 0..3 {
+            if a[i] == b[j] && n < 3 {
+                pairs[n] = (i, j);
+                n += 1;
+            }
+        }
+    }
+    let shared = &pairs[..n];
+    if n == 0 && boxes_apart(s, t) {
+        return None;
+    }
     let kind = |flat: bool| {
         if flat {
             Contact::Overlap
@@ -44,7 +54,7 @@ fn contact<T: PartialEq>(ids: [&[T; 3]; 2], pos: [&[P; 3]; 2]) -> Option<Contact
             Contact::Crossing
         }
     };
-    match shared[..] {
+    match *shared {
         [] => triangles_meet(s, t).then(|| kind(coplanar(s, t))),
         [(i, j)] => {
             let v = s[i];
@@ -59,6 +69,17 @@ fn contact<T: PartialEq>(ids: [&[T; 3]; 2], pos: [&[P; 3]; 2]) -> Option<Contact
         }
         _ => Some(Contact::Overlap),
     }
+}
+
+/// Whether the bounding boxes of `s` and `t` are apart along some axis (then the triangles
+/// cannot meet).
+#[inline]
+fn boxes_apart(s: &[P; 3], t: &[P; 3]) -> bool {
+    (0..3).any(|k| {
+        let lo = |x: &[P; 3]| x[0][k].min(x[1][k]).min(x[2][k]);
+        let hi = |x: &[P; 3]| x[0][k].max(x[1][k]).max(x[2][k]);
+        hi(s) < lo(t) || hi(t) < lo(s)
+    })
 }
 
 /// Tests every pair of triangles of `tris` (corner ids and positions) that share a bucket;

@@ -31,6 +31,7 @@ pub(crate) mod smooth;
 pub(crate) mod split;
 pub mod stages;
 pub(crate) mod submesh;
+mod thin;
 mod verify;
 pub(crate) mod warped;
 
@@ -234,6 +235,9 @@ pub struct Ctx<'a> {
     pub centroid: bool,
     /// Per point: pinned (frozen in every region), as the rim of a [`submesh::SubMesh`] is.
     pub pinned: Option<&'a [bool]>,
+    /// On a copy: per point, what the whole mesh said of it when the copy was cut
+    /// ([`thin::rim_marks`]; the rim's faces and tets outside the copy are missing from it).
+    pub rim_marks: Option<&'a [u8]>,
     /// A region that ends with a few tets below the target is improved again from its start
     /// with other smoothing ([`Ctx::steepest`], [`Ctx::centroid`]), and the best end is kept
     /// ([`schedule::improve_local`]). Set for the last round of a single pass and of the
@@ -620,12 +624,13 @@ fn run_round_on(
                 grow(mesh, &mut work);
             }
             let mut clock = Instant::now();
+            let marks = thin::rim_marks(mesh, ctx);
             *sub = Some(SubMesh::cut(
                 mesh,
                 &work,
                 rings,
-                &state.quality,
-                &state.drift,
+                (&state.quality, &state.drift),
+                &marks,
             ));
             // Copying out is part of extracting.
             lap(&mut report.stage_seconds.extract, &mut clock);
@@ -635,6 +640,7 @@ fn run_round_on(
         };
         let pinned = Ctx {
             pinned: Some(&s.rim),
+            rim_marks: Some(&s.rim_marks),
             ..*ctx
         };
         let progress = Progress {
@@ -774,6 +780,7 @@ fn context<'a>(
         retry_stuck: false,
         polish: false,
         pinned: None,
+        rim_marks: None,
     }
 }
 
@@ -1024,13 +1031,26 @@ fn refresh_quality(mesh: &TetMesh, ctx: &Ctx, moved: &[bool], quality: &mut [f64
 /// Per point: is it a corner of a tet below the target (by `quality`), or a level vertex off
 /// its level (with `ring`, or a corner of a tet around one, so that its neighbours can move)?
 /// Also returns, per point, whether it is a level vertex off its level.
+///
+/// Tets across a thin layer ([`thin`]) are not work, nor are the level vertices off their
+/// level at their corners: nothing the pass does brings them to the target.
 fn needs_work(mesh: &TetMesh, ctx: &Ctx, quality: &[f64], ring: bool) -> (Vec<bool>, Vec<bool>) {
     let off = project::off_level_points(mesh, ctx);
-    let mut work = off.clone();
+    let (labels, thin) = thin::marks(mesh, ctx);
+    let mut work: Vec<bool> = off.iter().zip(&thin).map(|(&o, &t)| o && !t).collect();
+    let seed = work.clone();
     mark_corners(mesh, &mut work, |t| {
-        quality[t] < ctx.target || (ring && mesh.tets[t].iter().any(|&v| off[v as usize]))
+        let below = quality[t] < ctx.target
+            && !(thin_corner(&thin, mesh.tets[t])
+                && thin::across_thin_layer(mesh, ctx, &labels, t));
+        below || (ring && mesh.tets[t].iter().any(|&v| seed[v as usize]))
     });
     (work, off)
+}
+
+/// Whether a corner of `tet` is a corner of a tet across a thin layer (`thin`, per point).
+fn thin_corner(thin: &[bool], tet: [u32; 4]) -> bool {
+    tet.iter().any(|&v| thin[v as usize])
 }
 
 /// Sets `work` at the corners of every tet `t` for which `marks(t)` holds (in parallel:

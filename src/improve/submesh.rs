@@ -39,6 +39,9 @@ pub struct SubMesh {
     pub drift: Vec<f64>,
     /// Per point of the copy: on the rim (a tet outside the copy uses it).
     pub rim: Vec<bool>,
+    /// Per point of the copy: on the rim, what the whole mesh said of it
+    /// ([`super::thin::rim_marks`]); 0 elsewhere.
+    pub rim_marks: Vec<u8>,
     /// Points of the copy merged away (copy ids).
     pub removed: Vec<u32>,
     /// What the splices left untouched.
@@ -71,8 +74,8 @@ impl SubMesh {
         mesh: &TetMesh,
         work: &[bool],
         rings: usize,
-        quality: &[f64],
-        drift: &[f64],
+        (quality, drift): (&[f64], &[f64]),
+        marks: &[u8],
     ) -> SubMesh {
         let mut near = work.to_vec();
         for _ in 1..rings {
@@ -125,6 +128,11 @@ impl SubMesh {
             mesh: sub,
             quality: tets.par_iter().map(|&t| quality[t as usize]).collect(),
             drift: points.par_iter().map(|&v| drift[v as usize]).collect(),
+            rim_marks: points
+                .iter()
+                .zip(&rim)
+                .map(|(&v, &r)| if r { marks[v as usize] } else { 0 })
+                .collect(),
             rim,
             removed: Vec::new(),
             untouched: Untouched {
@@ -260,7 +268,13 @@ mod tests {
         let drift: Vec<f64> = (0..mesh.points.len()).map(|v| v as f64).collect();
         let work: Vec<bool> = (0..mesh.points.len()).map(|v| v % 97 == 0).collect();
         for rings in [1, 2, 3] {
-            let sub = SubMesh::cut(&mesh, &work, rings, &quality, &drift);
+            let sub = SubMesh::cut(
+                &mesh,
+                &work,
+                rings,
+                (&quality, &drift),
+                &vec![0; mesh.points.len()],
+            );
             assert!(sub.mesh.tets.len() < mesh.tets.len(), "{rings} rings");
             assert!(sub.rim.contains(&true) && sub.rim.contains(&false));
             let (mut back, mut q, mut d, mut removed) =
