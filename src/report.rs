@@ -151,6 +151,9 @@ pub struct Report {
     pub threads: usize,
     /// Stage timings.
     pub timings_seconds: Timings,
+    /// Every warning the run printed on stderr, in order, without the `tptd-mesh: warning: `
+    /// prefix (set by the caller after [`build_report`]; empty when there was none).
+    pub warnings: Vec<String>,
 }
 
 /// What the quality pass did, with the element quality before and after it (both `None` when
@@ -248,6 +251,7 @@ pub fn build_report(
         check: None,
         threads: run.threads,
         timings_seconds: timings,
+        warnings: Vec::new(),
     }
 }
 

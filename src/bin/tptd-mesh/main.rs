@@ -14,7 +14,8 @@
 //! step by step), [`critical`] (`--critical` and the check of the bounds against the critical
 //! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
 //! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
-//! output), [`surface`] (isosurface output).
+//! output), [`surface`] (isosurface output), [`warnings`] (every warning, printed and kept for
+//! the report).
 
 mod alloc;
 mod applies;
@@ -26,6 +27,7 @@ mod progress;
 mod run;
 mod summary;
 mod surface;
+mod warnings;
 
 #[global_allocator]
 static ALLOC: alloc::CappedAlloc = alloc::CappedAlloc;

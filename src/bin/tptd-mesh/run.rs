@@ -28,6 +28,7 @@ use crate::progress::{
 };
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
 use crate::surface::{read_curvilinear_input, write_level_surface};
+use crate::warnings::warn;
 use tptd::curvilinear::map_mesh;
 use tptd::surface::analysis::SurfaceAnalysis;
 use tptd::CurvilinearGrid;
@@ -98,6 +99,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     let mut report = make_report(&job, &grid, &w.facts, &w.stats, w.quality, timings);
     report.surface = w.surface;
     report.check = w.check;
+    report.warnings = crate::warnings::take();
     finish(&cli, &report, w.comparison.as_ref(), w.mesh_file)?;
     // The process ends here: let the OS reclaim the grid at exit instead of freeing hundreds
     // of megabytes page by page first.
@@ -402,26 +404,26 @@ pub(crate) fn read_grid(cli: &Cli, input_name: &str) -> Result<ScalarGrid> {
     Ok(grid)
 }
 
-/// Warns on stderr when the direction matrix is nearly singular (the mesh comes out nearly
+/// Warns ([`warn`]) when the direction matrix is nearly singular (the mesh comes out nearly
 /// flat); an exactly singular one was refused by the reader.
 fn warn_near_singular(grid: &ScalarGrid, job: &Job) {
     let k = tptd::grid::condition_number(&grid.direction);
     if k > tptd::grid::NEAR_SINGULAR_CONDITION {
-        eprintln!(
-            "tptd-mesh: warning: {}: the direction matrix is nearly singular (condition number \
+        warn(format_args!(
+            "{}: the direction matrix is nearly singular (condition number \
              {k:.2e}): the index axes are almost dependent, so the tetrahedra are nearly flat; \
              check the file's direction/orientation fields",
             job.input_name
-        );
+        ));
     }
 }
 
-/// Warns on stderr about each bound that equals grid values exactly.
+/// Warns ([`warn`]) about each bound that equals grid values exactly.
 fn warn_exact_bounds(grid: &ScalarGrid, job: &Job) {
     let (alpha, beta) = (job.opts.alpha, job.opts.beta);
     for (name, bound, lower) in [("alpha", alpha, true), ("beta", beta, false)] {
         if let Some(w) = bound_warning(&grid.values, name, bound, lower) {
-            eprintln!("tptd-mesh: warning: {}: {w}", job.input_name);
+            warn(format_args!("{}: {w}", job.input_name));
         }
     }
 }
