@@ -11,7 +11,7 @@
 //!
 //! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
 //! that do nothing are refused), [`run`] (the run,
-//! step by step), [`critical`] (`--critical` and the check of the bounds against the critical
+//! step by step), [`quality`] (`--quality` and what it left), [`critical`] (`--critical` and the check of the bounds against the critical
 //! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
 //! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
 //! output), [`surface`] (isosurface output), [`warnings`] (every warning, printed and kept for
@@ -24,6 +24,7 @@ mod critical;
 mod error;
 mod files;
 mod progress;
+mod quality;
 mod run;
 mod summary;
 mod surface;
