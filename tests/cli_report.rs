@@ -183,7 +183,15 @@ fn a_missed_target_is_said_in_one_line_for_regular_and_curvilinear_grids() {
     write_thin_layer(&dir.path().join("thin.npy"));
     for (input, alpha, beta) in [("g.vts", "0.5", "2"), ("thin.npy", "7.03", "7.21")] {
         let args = [
-            input, "--alpha", alpha, "--beta", beta, "--quality", "-o", "m.vtu", "--report",
+            input,
+            "--alpha",
+            alpha,
+            "--beta",
+            beta,
+            "--quality",
+            "-o",
+            "m.vtu",
+            "--report",
             "r.json",
         ];
         let o = run_in(dir.path(), &args);
@@ -248,10 +256,24 @@ fn assert_times_add_up(r: &Value) {
     let pass = &r["quality"]["pass"];
     let seconds = secs(&pass["seconds"]);
     assert!(seconds <= secs(&parts["pass"]) + 1e-6, "{t} {pass}");
-    assert!(secs(&parts["pass"]) - seconds <= 0.05 * seconds + 0.02, "{t} {pass}");
-    let by_stage: f64 = pass["stage_seconds"].as_object().unwrap().values().map(secs).sum();
-    assert!((by_stage - seconds).abs() <= 1e-6 * seconds.max(1.0), "{pass}");
-    assert!(secs(&pass["stage_seconds"]["other"]) <= 0.1 * seconds + 0.02, "{pass}");
+    assert!(
+        secs(&parts["pass"]) - seconds <= 0.05 * seconds + 0.02,
+        "{t} {pass}"
+    );
+    let by_stage: f64 = pass["stage_seconds"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(secs)
+        .sum();
+    assert!(
+        (by_stage - seconds).abs() <= 1e-6 * seconds.max(1.0),
+        "{pass}"
+    );
+    assert!(
+        secs(&pass["stage_seconds"]["other"]) <= 0.1 * seconds + 0.02,
+        "{pass}"
+    );
 }
 
 #[test]
@@ -272,8 +294,18 @@ fn a_time_budget_never_leaves_the_mesh_worse_and_the_times_add_up() {
     let npy = npy_bytes("<f4", "(64, 64, 64)", &data);
     fs::write(dir.path().join("z.npy"), npy).unwrap();
     let args = [
-        "z.npy", "--alpha", "0", "--beta", "10", "--quality", "--quality-time", "0.05", "-o",
-        "m.vtu", "--report", "r.json",
+        "z.npy",
+        "--alpha",
+        "0",
+        "--beta",
+        "10",
+        "--quality",
+        "--quality-time",
+        "0.05",
+        "-o",
+        "m.vtu",
+        "--report",
+        "r.json",
     ];
     let o = run_in(dir.path(), &args);
     assert_ok(&o);
@@ -282,13 +314,16 @@ fn a_time_budget_never_leaves_the_mesh_worse_and_the_times_add_up() {
     let (before, after) = (&q["before"], &q["after"]);
     // not worse: no more tets below 5°, and no more below 15° when those are as many
     let key = |s: &Value| (count(&s["below"][0]), count(&s["below"][2]));
-    assert!(key(&after) <= key(&before), "before {before}\nafter {after}");
+    assert!(key(after) <= key(before), "before {before}\nafter {after}");
     let pass = &q["pass"];
     if pass["out_of_time"] == Value::Bool(true) {
         let budget = &pass["budget"];
         let kept_before = budget["kept_before"] == Value::Bool(true);
         let kept = if kept_before { "before" } else { "after" };
-        assert_eq!(budget[kept]["below_floor"], q["outcome"]["below_floor"], "{budget}");
+        assert_eq!(
+            budget[kept]["below_floor"], q["outcome"]["below_floor"],
+            "{budget}"
+        );
         assert_eq!(
             stdout(&o).contains("the mesh from before the pass kept"),
             kept_before
@@ -302,7 +337,15 @@ fn a_time_budget_never_leaves_the_mesh_worse_and_the_times_add_up() {
     // and on a curvilinear grid, with the map
     write_sheared_vts(&dir.path().join("g.vts"));
     let args = [
-        "g.vts", "--alpha", "0.5", "--quality", "--check", "-o", "g.vtu", "--report", "g.json",
+        "g.vts",
+        "--alpha",
+        "0.5",
+        "--quality",
+        "--check",
+        "-o",
+        "g.vtu",
+        "--report",
+        "g.json",
     ];
     assert_ok(&run_in(dir.path(), &args));
     let r = read_json(&dir.path().join("g.json"));

@@ -196,24 +196,6 @@ pub struct StageSeconds {
     pub other: f64,
 }
 
-impl StageSeconds {
-    /// Adds `o`'s seconds to these.
-    fn add(&mut self, o: &StageSeconds) {
-        self.project += o.project;
-        self.mark += o.mark;
-        self.extract += o.extract;
-        self.local += o.local;
-        self.splice += o.splice;
-        self.finish += o.finish;
-        self.compare += o.compare;
-    }
-
-    /// The named stages' sum (all but [`StageSeconds::other`]).
-    fn named(&self) -> f64 {
-        self.project + self.mark + self.extract + self.local + self.splice + self.finish + self.compare
-    }
-}
-
 /// Adds the seconds since `*since` to `*to` and restarts the clock.
 fn lap(to: &mut f64, since: &mut Instant) {
     let now = Instant::now();

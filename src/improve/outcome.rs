@@ -8,7 +8,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::quality::tet_dihedral_range;
-use super::{improve_keeping_volume, runs_again_for_volume, ImproveReport, QualityOptions};
+use super::{
+    improve_keeping_volume, runs_again_for_volume, ImproveReport, QualityOptions, StageSeconds,
+};
 use crate::extract::{MeshOutput, Snapped};
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
@@ -177,6 +179,30 @@ pub(super) fn improve_keeping_better(
     report.seconds = start.elapsed().as_secs_f64();
     report.stage_seconds.other = (report.seconds - report.stage_seconds.named()).max(0.0);
     report
+}
+
+impl StageSeconds {
+    /// Adds `o`'s seconds to these.
+    pub(super) fn add(&mut self, o: &StageSeconds) {
+        self.project += o.project;
+        self.mark += o.mark;
+        self.extract += o.extract;
+        self.local += o.local;
+        self.splice += o.splice;
+        self.finish += o.finish;
+        self.compare += o.compare;
+    }
+
+    /// The named stages' sum (all but [`StageSeconds::other`]).
+    pub(super) fn named(&self) -> f64 {
+        self.project
+            + self.mark
+            + self.extract
+            + self.local
+            + self.splice
+            + self.finish
+            + self.compare
+    }
 }
 
 #[cfg(test)]

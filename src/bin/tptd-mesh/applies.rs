@@ -92,10 +92,11 @@ pub(crate) fn check(cli: &Cli, m: &ArgMatches) -> Result<(), String> {
     Ok(())
 }
 
-/// The format of `--transfer FILE` is known from its extension.
+/// The format of `--transfer FILE` is known from its extension (a directory is left to the
+/// run's check that the outputs can be written, which names it as one).
 fn check_transfer(transfer: Option<&Path>) -> Result<(), String> {
     match transfer {
-        Some(path) if TransferFormat::from_path(path).is_none() => Err(format!(
+        Some(path) if TransferFormat::from_path(path).is_none() && !path.is_dir() => Err(format!(
             "--transfer {}: unknown transfer-function format; use .json (ParaView preset) or .csv",
             path.display()
         )),

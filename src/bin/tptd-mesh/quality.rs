@@ -30,7 +30,9 @@ pub(crate) fn improve_mesh(
         return None;
     }
     let mapping = |p: [f64; 3]| curvilinear.map_or(p, |c| map_point(c, p));
-    let map = curvilinear.is_some().then_some(&mapping as tptd::improve::outcome::PointMap);
+    let map = curvilinear
+        .is_some()
+        .then_some(&mapping as tptd::improve::outcome::PointMap);
     let t = Instant::now();
     let before = (!cli.no_analysis).then(|| summarize_mapped(&out.mesh, curvilinear));
     let before_seconds = t.elapsed().as_secs_f64();
