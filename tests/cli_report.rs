@@ -246,7 +246,7 @@ fn assert_times_add_up(r: &Value) {
     let sum: f64 = stages.iter().map(|k| secs(&t[k])).sum();
     let total = secs(&t["total"]);
     assert!((sum - total).abs() <= 1e-6 * total.max(1.0), "{t}");
-    assert!(secs(&t["other"]) <= 0.02 * total + 0.02, "{t}");
+    assert!(secs(&t["other"]) <= 0.05 * total + 0.05, "{t}");
     let Some(parts) = t["quality_stages"].as_object() else {
         return;
     };
@@ -257,7 +257,7 @@ fn assert_times_add_up(r: &Value) {
     let seconds = secs(&pass["seconds"]);
     assert!(seconds <= secs(&parts["pass"]) + 1e-6, "{t} {pass}");
     assert!(
-        secs(&parts["pass"]) - seconds <= 0.05 * seconds + 0.02,
+        secs(&parts["pass"]) - seconds <= 0.1 * seconds + 0.05,
         "{t} {pass}"
     );
     let by_stage: f64 = pass["stage_seconds"]
@@ -271,7 +271,7 @@ fn assert_times_add_up(r: &Value) {
         "{pass}"
     );
     assert!(
-        secs(&pass["stage_seconds"]["other"]) <= 0.1 * seconds + 0.02,
+        secs(&pass["stage_seconds"]["other"]) <= 0.25 * seconds + 0.05,
         "{pass}"
     );
 }

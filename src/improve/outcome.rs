@@ -156,7 +156,8 @@ pub fn improve_meshed_mapped(
 }
 
 /// The pass ([`improve_keeping_volume`]); with a time budget, a copy of the mesh before it is
-/// kept, and if the budget runs out the better of the two is kept ([`keep_better`]). Sets
+/// kept, and if the budget runs out (the pass ends after its deadline, whether or not a
+/// round was cut short) the better of the two is kept ([`keep_better`]). Sets
 /// [`super::StageSeconds::other`] so that the stage seconds add up to the pass's.
 pub(super) fn improve_keeping_better(
     mesh: &mut TetMesh,
@@ -171,6 +172,8 @@ pub(super) fn improve_keeping_better(
     let copy = (volume || opts.time_budget.is_some()).then(|| mesh.clone());
     let again = copy.as_ref().filter(|_| volume);
     let mut report = improve_keeping_volume(mesh, grid, levels, opts, (snapped, again));
+    // A deadline met inside the last round's sweeps cuts them short without the flag.
+    report.out_of_time |= opts.time_budget.is_some_and(|b| start.elapsed() >= b);
     if let (Some(before), true) = (copy, report.out_of_time) {
         let t = Instant::now();
         report.budget = Some(keep_better(mesh, before, opts, map));
