@@ -11,6 +11,7 @@ use crate::decompose::CellCase;
 use crate::extract::{MeshStats, Method};
 use crate::facts::MeshFacts;
 use crate::improve::forced::ForcedReport;
+use crate::improve::outcome::TargetCounts;
 use crate::improve::quality::QualitySummary;
 use crate::improve::ImproveReport;
 use crate::mesh::BoundaryLabel;
@@ -66,28 +67,74 @@ impl Serialize for CaseCounts {
     }
 }
 
-/// Wall-clock time of each stage, in seconds.
+/// Wall-clock time of each stage, in seconds. The stages add up to `total`: `read + checks +
+/// mesh + quality + map + analysis + check + write + other`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Timings {
     /// Reading (or generating) the input volume.
     pub read: f64,
-    /// Meshing.
+    /// The checks before meshing: the arguments, the bounds against the grid values and the
+    /// critical values, the memory estimate.
+    pub checks: f64,
+    /// Meshing (with the warping of `--quality`).
     pub mesh: f64,
-    /// Betti numbers and dihedral angles (0 when skipped).
+    /// Betti numbers and dihedral angles (0 when skipped), and the demo's comparison with a
+    /// method of the other kind.
     pub analysis: f64,
-    /// The quality pass (`--quality` only).
+    /// The quality step (`--quality` only): the sum of `quality_stages`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub quality: Option<f64>,
+    /// The parts of the quality step (`--quality` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quality_stages: Option<QualityTimings>,
+    /// Mapping the mesh through a curvilinear grid's geometry (curvilinear inputs only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map: Option<f64>,
     /// The validity check (`--check` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<f64>,
     /// Writing the output mesh.
     pub write: f64,
-    /// Whole run.
+    /// The rest: `total` less the stages above.
+    pub other: f64,
+    /// Whole run (up to writing the report).
     pub total: f64,
     /// The mesh went to disk slab by slab while it was made: `mesh` then includes the
-    /// analysis (and `analysis` is 0).
+    /// analysis of the mesh (and `analysis` is only the demo's comparison).
     pub streamed: bool,
+}
+
+impl Timings {
+    /// Sets `other` to `total` less the stages, so that they add up.
+    pub fn close(&mut self) {
+        let stages = self.read
+            + self.checks
+            + self.mesh
+            + self.analysis
+            + self.quality.unwrap_or(0.0)
+            + self.map.unwrap_or(0.0)
+            + self.check.unwrap_or(0.0)
+            + self.write;
+        self.other = (self.total - stages).max(0.0);
+    }
+}
+
+/// The parts of the quality step (seconds; they add up to [`Timings::quality`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct QualityTimings {
+    /// The quality summary before the pass.
+    pub before: f64,
+    /// The pass ([`ImproveReport::seconds`], whose `stage_seconds` add up to it).
+    pub pass: f64,
+    /// What the pass left: the tets off the targets and the reasons of those below the floor.
+    pub outcome: f64,
+}
+
+impl QualityTimings {
+    /// The whole quality step.
+    pub fn total(&self) -> f64 {
+        self.before + self.pass + self.outcome
+    }
 }
 
 /// Smallest and largest dihedral angle, in degrees.
@@ -151,6 +198,9 @@ pub struct Report {
     pub threads: usize,
     /// Stage timings.
     pub timings_seconds: Timings,
+    /// Every warning the run printed on stderr, in order, without the `tptd-mesh: warning: `
+    /// prefix (set by the caller after [`build_report`]; empty when there was none).
+    pub warnings: Vec<String>,
 }
 
 /// What the quality pass did, with the element quality before and after it (both `None` when
@@ -172,6 +222,12 @@ pub struct QualitySection {
     /// The tets left below the floor after the pass, with their reasons (`None` with
     /// `--no-analysis`).
     pub forced: Option<ForcedReport>,
+    /// The floor (degrees): tets below it are counted apart and given a reason (`forced`).
+    pub floor_degrees: f64,
+    /// The tets of the mesh written that miss the targets, or are below the floor.
+    pub outcome: TargetCounts,
+    /// Some tet misses the targets ([`TargetCounts::missed`]).
+    pub target_missed: bool,
 }
 
 /// Everything about a run that is not derived from the mesh itself.
@@ -248,6 +304,7 @@ pub fn build_report(
         check: None,
         threads: run.threads,
         timings_seconds: timings,
+        warnings: Vec::new(),
     }
 }
 

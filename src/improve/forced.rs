@@ -25,12 +25,16 @@
 //!   thickness is measured, and both numbers are in the report.
 //! * `box_angle`: the tet has an edge (or a face) on a grid box plane and one on a level set,
 //!   and the level set meets the box at an interior dihedral angle below the floor at the tet.
-//! * `unexplained`: neither; the pass failed there.
+//! * `grid_mapping` (curvilinear grids only): the tet is above the floor in the grid's
+//!   parameter space, where the pass works and the reasons above are found, and the grid's
+//!   geometry map flattens it ([`classify_forced_mapped`]).
+//! * `unexplained`: none of these; the pass failed there.
 
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::field::Field;
+use super::outcome::PointMap;
 use super::quality::{cosine_extremes, tet_dihedral_range};
 use super::QualityOptions;
 use crate::critical::find::vertex_class;
@@ -50,6 +54,9 @@ pub enum ForcedReason {
     ThinLayer,
     /// A level set meets the grid box at an angle below the floor at the element.
     BoxAngle,
+    /// A curvilinear grid's geometry map flattens the element, which is above the floor in
+    /// the grid's parameter space (where the pass works).
+    GridMapping,
     /// No domain reason found: the pass failed there.
     Unexplained,
 }
@@ -90,6 +97,8 @@ pub struct ForcedCounts {
     pub thin_layer: usize,
     /// [`ForcedReason::BoxAngle`].
     pub box_angle: usize,
+    /// [`ForcedReason::GridMapping`].
+    pub grid_mapping: usize,
     /// [`ForcedReason::Unexplained`].
     pub unexplained: usize,
 }
@@ -113,6 +122,7 @@ impl ForcedReport {
         self.counts.near_critical
             + self.counts.thin_layer
             + self.counts.box_angle
+            + self.counts.grid_mapping
             + self.counts.unexplained
     }
 }
@@ -161,6 +171,21 @@ pub fn classify_forced(
     beta: f64,
     opts: &QualityOptions,
 ) -> ForcedReport {
+    classify_forced_mapped(mesh, grid, alpha, beta, opts, None)
+}
+
+/// [`classify_forced`] for a mesh made in a curvilinear grid's parameter space (`grid` its
+/// values), whose tets are measured after `map` (the grid's geometry map; `None`: as they
+/// are): a tet below the floor after `map` but not before it is [`ForcedReason::GridMapping`];
+/// the others get their reasons in parameter space. Positions are given after `map`.
+pub fn classify_forced_mapped(
+    mesh: &TetMesh,
+    grid: &ScalarGrid,
+    alpha: f64,
+    beta: f64,
+    opts: &QualityOptions,
+    map: Option<PointMap>,
+) -> ForcedReport {
     let floor = opts.forced_floor;
     let (lo, hi) = grid.value_range();
     let c = Classifier {
@@ -180,12 +205,22 @@ pub fn classify_forced(
         .into_par_iter()
         .filter_map(|t| {
             let p = tet_points(mesh, t);
+            let q = map.map_or(p, |m| p.map(m));
             // Most tets are far above the floor: their largest cosine tells, without `acos`.
-            if cosine_extremes(p).0 < clear_of_floor {
+            if cosine_extremes(q).0 < clear_of_floor {
                 return None;
             }
-            let (lo, hi) = tet_dihedral_range(p);
-            (lo < floor).then(|| (lo, hi, t, c.reason(t)))
+            let (lo, hi) = tet_dihedral_range(q);
+            if lo >= floor {
+                return None;
+            }
+            let flattened = map.is_some() && tet_dihedral_range(p).0 >= floor;
+            let reason = if flattened {
+                ForcedReason::GridMapping
+            } else {
+                c.reason(t)
+            };
+            Some((lo, hi, t, reason))
         })
         .collect();
     let mut counts = ForcedCounts::default();
@@ -194,6 +229,7 @@ pub fn classify_forced(
             ForcedReason::NearCritical => &mut counts.near_critical,
             ForcedReason::ThinLayer => &mut counts.thin_layer,
             ForcedReason::BoxAngle => &mut counts.box_angle,
+            ForcedReason::GridMapping => &mut counts.grid_mapping,
             ForcedReason::Unexplained => &mut counts.unexplained,
         } += 1;
     }
@@ -201,7 +237,14 @@ pub fn classify_forced(
     below.truncate(opts.forced_list_cap);
     let elements = below
         .into_par_iter()
-        .map(|(lo, hi, t, reason)| c.details(t, lo, hi, reason))
+        .map(|(lo, hi, t, reason)| {
+            let mut e = c.details(t, lo, hi, reason);
+            if let Some(m) = map {
+                let q = tet_points(mesh, t).map(m);
+                e.point = [0, 1, 2].map(|a| q.iter().map(|x| x[a]).sum::<f64>() / 4.0);
+            }
+            e
+        })
         .collect();
     ForcedReport {
         floor_degrees: floor,

@@ -1,14 +1,15 @@
 //! Options that would do nothing are refused, not ignored: an option of `--critical` while
 //! meshing, a meshing option with `--critical`, an option of another output format or
 //! another kind of input. Each is a usage error (exit 2) naming the option, as clap's own
-//! `requires` gives for the quality knobs without `--quality`. The output's extension and
-//! `-j` are checked here too, so that they are usage errors as well.
+//! `requires` gives for the quality knobs without `--quality`. The output's extension, the
+//! `--transfer` file's extension and `-j` are checked here too, so that they are usage
+//! errors as well.
 
 use std::path::{Path, PathBuf};
 
 use clap::parser::ValueSource;
 use clap::ArgMatches;
-use tptd::io::{is_curvilinear, MeshFormat, SurfaceFormat};
+use tptd::io::{is_curvilinear, MeshFormat, SurfaceFormat, TransferFormat};
 
 use crate::cli::Cli;
 
@@ -74,7 +75,7 @@ pub(crate) fn check(cli: &Cli, m: &ArgMatches) -> Result<(), String> {
                 flag(id)
             ));
         }
-        return Ok(());
+        return check_transfer(cli.transfer.as_deref());
     }
     if let Some(id) = first_given(m, &CRITICAL_ONLY) {
         return Err(format!("{} applies only with --critical", flag(id)));
@@ -89,6 +90,18 @@ pub(crate) fn check(cli: &Cli, m: &ArgMatches) -> Result<(), String> {
         return Err("--critical-tol does nothing with --no-critical-check".into());
     }
     Ok(())
+}
+
+/// The format of `--transfer FILE` is known from its extension (a directory is left to the
+/// run's check that the outputs can be written, which names it as one).
+fn check_transfer(transfer: Option<&Path>) -> Result<(), String> {
+    match transfer {
+        Some(path) if TransferFormat::from_path(path).is_none() && !path.is_dir() => Err(format!(
+            "--transfer {}: unknown transfer-function format; use .json (ParaView preset) or .csv",
+            path.display()
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// The output's format is known and the options of other formats are not given.

@@ -20,6 +20,7 @@ use crate::cli::Cli;
 use crate::error::{file_error, write_error};
 use crate::run::read_grid;
 use crate::summary::fmt_bound;
+use crate::warnings::warn;
 
 /// Runs `tptd-mesh INPUT --critical ...`.
 pub(crate) fn run(cli: Cli) -> Result<()> {
@@ -210,7 +211,7 @@ fn print_table(input: &str, points: &[CriticalPoint], secs: f64) -> std::io::Res
     Ok(())
 }
 
-/// Warns on stderr when `alpha` (`beta`) lies within `tol` of a value where `{f >= w}`
+/// Warns ([`warn`]) when `alpha` (`beta`) lies within `tol` of a value where `{f >= w}`
 /// (`{f <= w}`) changes topology, naming the points and the nearest safe bounds.
 pub(crate) fn warn_critical_bounds(
     grid: &ScalarGrid,
@@ -270,8 +271,8 @@ fn warn_face_saddles(grid: &ScalarGrid, b: &Bound) {
     let (bound, tol) = (b.value, b.tol);
     let flat = face_saddles_in(grid, bound - tol, bound + tol);
     if let Some((v, p)) = flat.first() {
-        eprintln!(
-            "tptd-mesh: warning: {}: --{} {} is within {tol:.4} of {} face saddle(s) of \
+        warn(format_args!(
+            "{}: --{} {} is within {tol:.4} of {} face saddle(s) of \
              the bilinear interpolant (e.g. {} at ({:.3}, {:.3}, {:.3}); a checkerboard face \
              with corners k, k+1 has its saddle at k+0.5): they are vertices of the \
              decomposition, so elements there get a vertex on the bound",
@@ -283,7 +284,7 @@ fn warn_face_saddles(grid: &ScalarGrid, b: &Bound) {
             p[0],
             p[1],
             p[2]
-        );
+        ));
     }
 }
 
@@ -303,8 +304,8 @@ fn warn_near_critical(b: &Bound, around: &[CriticalPoint], lower: bool, reach: f
                 format!("{x:.4} ({d:.4} from the nearest)")
             })
     };
-    eprintln!(
-        "tptd-mesh: warning: {}: --{} {} is within {tol:.4} of {} critical value(s) of \
+    warn(format_args!(
+        "{}: --{} {} is within {tol:.4} of {} critical value(s) of \
          the trilinear field (e.g. {} {} at ({:.3}, {:.3}, {:.3})): the domain pinches there \
          and its elements degenerate; nearest safer values: {} below, {} above",
         b.input,
@@ -318,5 +319,5 @@ fn warn_near_critical(b: &Bound, around: &[CriticalPoint], lower: bool, reach: f
         p[2],
         safe(near.safe_below),
         safe(near.safe_above),
-    );
+    ));
 }

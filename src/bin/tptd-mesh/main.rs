@@ -11,10 +11,11 @@
 //!
 //! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
 //! that do nothing are refused), [`run`] (the run,
-//! step by step), [`critical`] (`--critical` and the check of the bounds against the critical
+//! step by step), [`quality`] (`--quality` and what it left), [`critical`] (`--critical` and the check of the bounds against the critical
 //! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
 //! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
-//! output), [`surface`] (isosurface output).
+//! output), [`surface`] (isosurface output), [`warnings`] (every warning, printed and kept for
+//! the report).
 
 mod alloc;
 mod applies;
@@ -23,9 +24,11 @@ mod critical;
 mod error;
 mod files;
 mod progress;
+mod quality;
 mod run;
 mod summary;
 mod surface;
+mod warnings;
 
 #[global_allocator]
 static ALLOC: alloc::CappedAlloc = alloc::CappedAlloc;

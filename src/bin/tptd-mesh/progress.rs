@@ -4,12 +4,13 @@
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tptd::facts::{FactsSink, Tee};
-use tptd::improve::forced::{classify_forced, ForcedReport};
-use tptd::improve::{improve_meshed, ImproveReport, QualityOptions};
+use tptd::improve::forced::{classify_forced_mapped, ForcedReport};
+use tptd::improve::outcome::{improve_meshed_mapped, target_counts, PointMap, TargetCounts};
+use tptd::improve::{ImproveReport, QualityOptions};
 use tptd::io::SpilledMesh;
 use tptd::{
     mesh_interval_streamed, mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput,
@@ -81,17 +82,31 @@ pub(crate) fn mesh_streamed_with_progress(
     result
 }
 
+/// What [`improve_with_progress`] did and found, and the seconds of each part.
+pub(crate) struct Improved {
+    /// The pass.
+    pub(crate) report: ImproveReport,
+    /// The tets left below the floor with their reasons (when asked for).
+    pub(crate) forced: Option<ForcedReport>,
+    /// The tets left off the targets.
+    pub(crate) outcome: TargetCounts,
+    /// Seconds of the pass.
+    pub(crate) pass_seconds: f64,
+    /// Seconds of `forced` and `outcome`.
+    pub(crate) outcome_seconds: f64,
+}
+
 /// Runs the quality pass on `out`'s mesh (in `job`'s thread pool), with a spinner on stderr
-/// unless `quiet` or stderr is not a terminal; then, if `classify`, lists the tets left below
-/// the floor with their reasons.
+/// unless `quiet` or stderr is not a terminal; then counts the tets left off the targets and,
+/// if `classify`, lists those below the floor with their reasons. Quality is measured
+/// through `map` (a curvilinear grid's geometry map; `None`: as the mesh is).
 pub(crate) fn improve_with_progress(
     out: &mut MeshOutput,
-    grid: &ScalarGrid,
-    job: &Job,
+    (grid, job): (&ScalarGrid, &Job),
     opts: &QualityOptions,
-    quiet: bool,
-    classify: bool,
-) -> (ImproveReport, Option<ForcedReport>) {
+    (quiet, classify): (bool, bool),
+    map: Option<PointMap>,
+) -> Improved {
     let pb = if quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
     } else {
@@ -106,14 +121,24 @@ pub(crate) fn improve_with_progress(
         .threads
         .and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
     let work = |out: &mut MeshOutput| {
-        let r = improve_meshed(out, grid, alpha, beta, opts);
+        let t = Instant::now();
+        let report = improve_meshed_mapped(out, grid, alpha, beta, opts, map);
+        let pass_seconds = t.elapsed().as_secs_f64();
+        let t = Instant::now();
         let mesh = &out.mesh;
         pb.set_message(format!(
             "giving a reason for each element below {}°",
             opts.forced_floor
         ));
-        let f = classify.then(|| classify_forced(mesh, grid, alpha, beta, opts));
-        (r, f)
+        let forced = classify.then(|| classify_forced_mapped(mesh, grid, alpha, beta, opts, map));
+        let outcome = target_counts(mesh, opts, map);
+        Improved {
+            report,
+            forced,
+            outcome,
+            pass_seconds,
+            outcome_seconds: t.elapsed().as_secs_f64(),
+        }
     };
     let report = match pool {
         Some(pool) => pool.install(|| work(out)),

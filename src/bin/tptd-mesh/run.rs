@@ -3,31 +3,30 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use anyhow::Result;
 use tptd::check::{check_mesh, CheckOptions, CheckReport};
 use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
 use tptd::facts::{FactsSink, MeshFacts};
 use tptd::improve::quality::summarize;
-use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
 use tptd::io::{
     check_writable, read_volume, spill_for, write_mesh_pending, write_pending,
     write_spilled_pending, MeshFormat, PendingFile, SurfaceFormat,
 };
-use tptd::report::{build_report, QualitySection, Report, RunInfo, Timings};
+use tptd::report::{build_report, QualitySection, QualityTimings, Report, RunInfo, Timings};
 use tptd::{
     mesh_interval, MeshError, MeshOptions, MeshOutput, MeshStats, Method, Samples, ScalarGrid,
 };
 
 use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
-use crate::progress::{
-    improve_with_progress, mesh_streamed_with_progress, mesh_with_progress, Stage,
-};
+use crate::progress::{mesh_streamed_with_progress, mesh_with_progress, Stage};
+use crate::quality::improve_mesh;
 use crate::summary::{fmt_bound, fmt_interval, summary, DemoComparison};
 use crate::surface::{read_curvilinear_input, write_level_surface};
+use crate::warnings::warn;
 use tptd::curvilinear::map_mesh;
 use tptd::surface::analysis::SurfaceAnalysis;
 use tptd::CurvilinearGrid;
@@ -38,7 +37,7 @@ pub(crate) const DEMO_OUTPUT: &str = "tptd-demo.vtu";
 /// The checked arguments of a run.
 pub(crate) struct Job {
     /// The input as named in messages (`demo` for the demo volume).
-    input_name: String,
+    pub(crate) input_name: String,
     /// The mesh output path.
     pub(crate) output: PathBuf,
     /// The meshing options.
@@ -56,10 +55,12 @@ struct Written {
     comparison: Option<DemoComparison>,
     check: Option<CheckReport>,
     mesh_file: PendingFile,
-    /// Seconds of meshing, analysis, the quality pass, the check and writing.
+    /// Seconds of meshing, analysis (with the demo's comparison), the quality step (by part),
+    /// the curvilinear map, the check and writing.
     t_mesh: f64,
     t_analysis: f64,
-    t_quality: Option<f64>,
+    t_quality: Option<QualityTimings>,
+    t_map: Option<f64>,
     t_check: Option<f64>,
     t_write: f64,
 }
@@ -73,31 +74,40 @@ fn secs(t: Instant) -> f64 {
 pub(crate) fn run(cli: Cli) -> Result<()> {
     let t_total = Instant::now();
     let job = check_args(&cli)?;
+    let t_args = secs(t_total);
 
     let t = Instant::now();
     let (grid, curvilinear) = read_input(&cli, &job)?;
     let t_read = secs(t);
+    let t = Instant::now();
     let streaming = streams(&cli, &job, curvilinear.is_some());
     check_input(&cli, &job, &grid, curvilinear.is_some(), streaming)?;
+    let t_checks = t_args + secs(t);
 
     let w = if streaming {
         stream_to_disk(&cli, &job, &grid)?
     } else {
         mesh_in_memory(&cli, &job, &grid, curvilinear.as_ref())?
     };
-    let timings = Timings {
+    let mut timings = Timings {
         streamed: streaming,
         read: t_read,
+        checks: t_checks,
         mesh: w.t_mesh,
         analysis: w.t_analysis,
-        quality: w.t_quality,
+        quality: w.t_quality.as_ref().map(QualityTimings::total),
+        quality_stages: w.t_quality,
+        map: w.t_map,
         check: w.t_check,
         write: w.t_write,
+        other: 0.0,
         total: secs(t_total),
     };
+    timings.close();
     let mut report = make_report(&job, &grid, &w.facts, &w.stats, w.quality, timings);
     report.surface = w.surface;
     report.check = w.check;
+    report.warnings = crate::warnings::take();
     finish(&cli, &report, w.comparison.as_ref(), w.mesh_file)?;
     // The process ends here: let the OS reclaim the grid at exit instead of freeing hundreds
     // of megabytes page by page first.
@@ -130,19 +140,25 @@ fn stream_to_disk(cli: &Cli, job: &Job, grid: &ScalarGrid) -> Result<Written> {
     let stage = Stage::start(format!("writing {}", job.output.display()), cli.quiet);
     let mesh_file = write_spilled_pending(&job.output, &mut spill, &job.write);
     stage.finish();
+    let t_write = secs(t);
+    let t = Instant::now();
+    let comparison = compare_demo(cli, grid, job)?;
+    // Only the demo is compared: otherwise nothing is analysed here (the rest is `other`).
+    let t_analysis = if comparison.is_some() { secs(t) } else { 0.0 };
     Ok(Written {
         facts,
         stats,
         quality: None,
         surface: None,
-        comparison: compare_demo(cli, grid, job)?,
+        comparison,
         check: None,
         mesh_file: mesh_file.map_err(write_error)?,
         t_mesh,
-        t_analysis: 0.0,
+        t_analysis,
         t_quality: None,
+        t_map: None,
         t_check: None,
-        t_write: secs(t),
+        t_write,
     })
 }
 
@@ -157,22 +173,27 @@ fn mesh_in_memory(
     let mut out = mesh(grid, job, cli.quiet)?;
     let t_mesh = secs(t);
 
-    let (quality, t_quality) = improve_mesh(cli, grid, job, &mut out);
-    if let Some(c) = curvilinear {
-        map_mesh(&mut out.mesh, c).map_err(|e| file_error(&job.input_name, e))?;
-    }
+    let (quality, t_quality) = improve_mesh(cli, (grid, job), &mut out, curvilinear).unzip();
+    let t = Instant::now();
+    let t_map = match curvilinear {
+        Some(c) => {
+            map_mesh(&mut out.mesh, c).map_err(|e| file_error(&job.input_name, e))?;
+            Some(secs(t))
+        }
+        None => None,
+    };
 
     let t = Instant::now();
     let stage = Stage::start("analysing the mesh".into(), cli.quiet);
     let facts = MeshFacts::of(&out.mesh, !cli.no_analysis);
     let after = (cli.quality && !cli.no_analysis).then(|| summarize(&out.mesh));
     stage.finish();
-    let t_analysis = secs(t);
     let quality = quality.map(|mut q| {
         q.after = after;
         q
     });
     let comparison = compare_demo(cli, grid, job)?;
+    let t_analysis = secs(t);
     let (check, t_check) = check_output(cli, job, grid, curvilinear.is_some(), &out.mesh)?;
 
     // The mesh stays under its temporary name until the report is written too (`finish`).
@@ -193,6 +214,7 @@ fn mesh_in_memory(
         t_mesh,
         t_analysis,
         t_quality,
+        t_map,
         t_check,
         t_write,
     })
@@ -402,26 +424,26 @@ pub(crate) fn read_grid(cli: &Cli, input_name: &str) -> Result<ScalarGrid> {
     Ok(grid)
 }
 
-/// Warns on stderr when the direction matrix is nearly singular (the mesh comes out nearly
+/// Warns ([`warn`]) when the direction matrix is nearly singular (the mesh comes out nearly
 /// flat); an exactly singular one was refused by the reader.
 fn warn_near_singular(grid: &ScalarGrid, job: &Job) {
     let k = tptd::grid::condition_number(&grid.direction);
     if k > tptd::grid::NEAR_SINGULAR_CONDITION {
-        eprintln!(
-            "tptd-mesh: warning: {}: the direction matrix is nearly singular (condition number \
+        warn(format_args!(
+            "{}: the direction matrix is nearly singular (condition number \
              {k:.2e}): the index axes are almost dependent, so the tetrahedra are nearly flat; \
              check the file's direction/orientation fields",
             job.input_name
-        );
+        ));
     }
 }
 
-/// Warns on stderr about each bound that equals grid values exactly.
+/// Warns ([`warn`]) about each bound that equals grid values exactly.
 fn warn_exact_bounds(grid: &ScalarGrid, job: &Job) {
     let (alpha, beta) = (job.opts.alpha, job.opts.beta);
     for (name, bound, lower) in [("alpha", alpha, true), ("beta", beta, false)] {
         if let Some(w) = bound_warning(&grid.values, name, bound, lower) {
-            eprintln!("tptd-mesh: warning: {}: {w}", job.input_name);
+            warn(format_args!("{}: {w}", job.input_name));
         }
     }
 }
@@ -528,42 +550,6 @@ fn check_not_empty(grid: &ScalarGrid, job: &Job, tets: usize) -> Result<()> {
             fmt_interval(lo, hi)
         ),
     ))
-}
-
-/// With `--quality`: the quality pass (and the quality before it, unless `--no-analysis`),
-/// and the time of both.
-fn improve_mesh(
-    cli: &Cli,
-    grid: &ScalarGrid,
-    job: &Job,
-    out: &mut MeshOutput,
-) -> (Option<QualitySection>, Option<f64>) {
-    if !cli.quality {
-        return (None, None);
-    }
-    // The summary before is part of the step's time, so that the stages add up to the total.
-    let t = Instant::now();
-    let before = (!cli.no_analysis).then(|| summarize(&out.mesh));
-    let opts = QualityOptions {
-        min_angle: cli.min_angle,
-        max_angle: cli.max_angle,
-        time_budget: cli.quality_time.map(Duration::from_secs_f64),
-        boundary_collapse_ratio: cli.boundary_collapse_ratio,
-        split_sag: cli.split_sag,
-        ..QualityOptions::default()
-    };
-    let classify = !cli.no_analysis;
-    let (pass, forced) = improve_with_progress(out, grid, job, &opts, cli.quiet, classify);
-    let section = QualitySection {
-        target_degrees: [opts.min_angle, opts.max_angle],
-        boundary_collapse_ratio: Some(opts.boundary_collapse_ratio).filter(|r| r.is_finite()),
-        split_sag: Some(opts.split_sag).filter(|s| s.is_finite()),
-        before,
-        after: None,
-        pass,
-        forced,
-    };
-    (Some(section), Some(secs(t)))
 }
 
 /// For the demo (with analysis): the components the same interval has when meshed with a

@@ -3,8 +3,10 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use tptd::improve::forced::ForcedCounts;
 use tptd::improve::quality::BELOW_ANGLES;
-use tptd::report::Report;
+use tptd::improve::ImproveReport;
+use tptd::report::{QualitySection, Report};
 use tptd::CellCase;
 use tptd::Method;
 
@@ -165,11 +167,7 @@ fn quality_lines(s: &mut String, r: &Report) {
         p.projected,
         p.unprojected,
         p.rounds,
-        if p.out_of_time {
-            " (stopped by --quality-time)"
-        } else {
-            ""
-        }
+        stopped(p)
     );
     if !p.stages.is_empty() {
         let stages: Vec<String> = p
@@ -209,14 +207,85 @@ fn quality_lines(s: &mut String, r: &Report) {
         }
     }
     if let Some(f) = &q.forced {
-        let c = &f.counts;
         let _ = writeln!(
             s,
-            "            below {} deg after: {} near a critical value, {} in a thin layer, {} at a \
-             sharp box angle, {} unexplained",
-            f.floor_degrees, c.near_critical, c.thin_layer, c.box_angle, c.unexplained
+            "            below {} deg after: {}",
+            f.floor_degrees,
+            reasons(&f.counts)
         );
     }
+    if let Some(line) = target_line(q) {
+        let _ = writeln!(s, "  warning   {line}");
+    }
+}
+
+/// How the pass ended, when its time budget stopped it (empty otherwise).
+fn stopped(p: &ImproveReport) -> String {
+    if !p.out_of_time {
+        return String::new();
+    }
+    match &p.budget {
+        Some(k) if k.kept_before => {
+            " (stopped by --quality-time; the mesh from before the pass kept, it was better)".into()
+        }
+        _ => " (stopped by --quality-time)".into(),
+    }
+}
+
+/// The reasons of the tets below the floor, counted.
+fn reasons(c: &ForcedCounts) -> String {
+    let mapping = if c.grid_mapping > 0 {
+        format!(", {} flattened by the grid mapping", c.grid_mapping)
+    } else {
+        String::new()
+    };
+    format!(
+        "{} near a critical value, {} in a thin layer, {} at a sharp box angle{mapping}, {} \
+         unexplained",
+        c.near_critical, c.thin_layer, c.box_angle, c.unexplained
+    )
+}
+
+/// The one line that says the quality target was missed, with the counts and the reasons of
+/// the tets below the floor; `None` when it was met.
+pub(crate) fn target_line(q: &QualitySection) -> Option<String> {
+    let o = &q.outcome;
+    if !o.missed() {
+        return None;
+    }
+    let [lo, hi] = q.target_degrees;
+    let floor = q.floor_degrees;
+    let below_floor = match (&q.forced, o.below_floor) {
+        (_, 0) => format!("none below {floor}°"),
+        (Some(f), n) => format!("{n} below {floor}°: {}", reasons(&f.counts)),
+        (None, n) => format!("{n} below {floor}° (reasons not looked for: --no-analysis)"),
+    };
+    Some(format!(
+        "quality target missed: {} tets below {lo}°, {} above {hi}° (smallest angle {}°); {below_floor}",
+        o.below_min,
+        o.above_max,
+        fmt_angle(o.min_dihedral)
+    ))
+}
+
+/// The line that says a pass stopped by `--quality-time` had left the mesh worse than before
+/// it, so the mesh from before it was kept; `None` otherwise.
+pub(crate) fn budget_line(q: &QualitySection, seconds: Option<f64>) -> Option<String> {
+    let k = q.pass.budget.as_ref().filter(|k| k.kept_before)?;
+    let (a, b) = (&k.after, &k.before);
+    Some(format!(
+        "--quality-time {} s ran out with the mesh worse than before the pass ({} tets below {}° \
+         and {} off target, against {} and {} before; smallest angle {}° against {}°): the mesh \
+         from before the pass is kept",
+        seconds.map_or_else(|| "?".into(), |t| t.to_string()),
+        a.below_floor,
+        q.floor_degrees,
+        a.off_target,
+        b.below_floor,
+        b.off_target,
+        fmt_angle(a.min_dihedral),
+        fmt_angle(b.min_dihedral)
+    ))
 }
 
 /// The meshed cells by case.
@@ -241,23 +310,36 @@ fn cells_line(s: &mut String, r: &Report) {
 fn output_lines(s: &mut String, r: &Report, report_path: Option<&Path>) {
     let t = &r.timings_seconds;
     let middle = if t.streamed {
-        format!("mesh and analysis (streamed to disk) {:.3} s", t.mesh)
+        let demo = if t.analysis > 0.0 {
+            format!(", demo comparison {:.3} s", t.analysis)
+        } else {
+            String::new()
+        };
+        format!("mesh and analysis (streamed to disk) {:.3} s{demo}", t.mesh)
     } else {
-        let quality = t
-            .quality
-            .map_or_else(String::new, |q| format!("quality {q:.3} s, "));
+        let quality = match (t.quality, &t.quality_stages) {
+            (Some(q), Some(p)) => format!(
+                "quality {q:.3} s (before {:.3} s, pass {:.3} s, outcome {:.3} s), ",
+                p.before, p.pass, p.outcome
+            ),
+            _ => String::new(),
+        };
+        let map = t
+            .map
+            .map_or_else(String::new, |m| format!("map {m:.3} s, "));
         let check = t
             .check
             .map_or_else(String::new, |c| format!(", check {c:.3} s"));
         format!(
-            "mesh {:.3} s, {quality}analysis {:.3} s{check}",
+            "mesh {:.3} s, {quality}{map}analysis {:.3} s{check}",
             t.mesh, t.analysis
         )
     };
     let _ = writeln!(
         s,
-        "  time      read {:.3} s, {middle}, write {:.3} s, total {:.3} s",
-        t.read, t.write, t.total
+        "  time      read {:.3} s, checks {:.3} s, {middle}, write {:.3} s, other {:.3} s, total \
+         {:.3} s",
+        t.read, t.checks, t.write, t.other, t.total
     );
     if let Some(sf) = &r.surface {
         let _ = writeln!(
