@@ -166,8 +166,9 @@ pub struct ImproveReport {
     /// With targets above the default, the pass climbs to them in stages ([`improve`]): each
     /// stage's target and whether it was kept. Empty for a single pass.
     pub stages: Vec<Stage>,
-    /// When the time budget ran out: the mesh before the pass against the one it stopped at,
-    /// and which was kept ([`outcome::keep_better`]).
+    /// When the time budget ran out, or on a curvilinear grid (whose quality the pass measures
+    /// in parameter space): the mesh before the pass against the one it stopped at, through the
+    /// grid's map, and which was kept ([`outcome::keep_better`]).
     pub budget: Option<outcome::KeptBetter>,
 }
 

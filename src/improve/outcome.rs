@@ -141,8 +141,8 @@ pub fn keep_better(
 
 /// [`super::improve_meshed`] for a mesh whose quality is measured through `map` (a
 /// curvilinear grid's geometry map, [`crate::curvilinear::map_point`]; `None`: as it is):
-/// when the time budget runs out, the better of the mesh before the pass and the one it
-/// stopped at is kept by their quality through `map` ([`keep_better`]).
+/// when the time budget runs out, and always with a map, the better of the mesh before the
+/// pass and the one it stopped at is kept by their quality through `map` ([`keep_better`]).
 pub fn improve_meshed_mapped(
     out: &mut MeshOutput,
     grid: &ScalarGrid,
@@ -169,12 +169,14 @@ pub(super) fn improve_keeping_better(
 ) -> ImproveReport {
     let start = Instant::now();
     let volume = runs_again_for_volume(mesh, opts);
-    let copy = (volume || opts.time_budget.is_some()).then(|| mesh.clone());
+    let copy = (volume || opts.time_budget.is_some() || map.is_some()).then(|| mesh.clone());
     let again = copy.as_ref().filter(|_| volume);
     let mut report = improve_keeping_volume(mesh, grid, levels, opts, (snapped, again));
     // A deadline met inside the last round's sweeps cuts them short without the flag.
     report.out_of_time |= opts.time_budget.is_some_and(|b| start.elapsed() >= b);
-    if let (Some(before), true) = (copy, report.out_of_time) {
+    // The pass measures quality in the grid's parameter space; through a curvilinear map its
+    // result can be worse than its start, so it is compared there always.
+    if let (Some(before), true) = (copy, report.out_of_time || map.is_some()) {
         let t = Instant::now();
         report.budget = Some(keep_better(mesh, before, opts, map));
         report.stage_seconds.compare += t.elapsed().as_secs_f64();

@@ -273,11 +273,18 @@ pub(crate) fn target_line(q: &QualitySection) -> Option<String> {
 pub(crate) fn budget_line(q: &QualitySection, seconds: Option<f64>) -> Option<String> {
     let k = q.pass.budget.as_ref().filter(|k| k.kept_before)?;
     let (a, b) = (&k.after, &k.before);
+    let why = if q.pass.out_of_time {
+        format!(
+            "--quality-time {} s ran out",
+            seconds.map_or_else(|| "?".into(), |t| t.to_string())
+        )
+    } else {
+        "on the curvilinear grid the pass ended".to_string()
+    };
     Some(format!(
-        "--quality-time {} s ran out with the mesh worse than before the pass ({} tets below {}° \
+        "{why} with the mesh worse than before the pass ({} tets below {}° \
          and {} off target, against {} and {} before; smallest angle {}° against {}°): the mesh \
          from before the pass is kept",
-        seconds.map_or_else(|| "?".into(), |t| t.to_string()),
         a.below_floor,
         q.floor_degrees,
         a.off_target,
