@@ -114,7 +114,7 @@ pub fn critical_in_windows(grid: &ScalarGrid, windows: Windows) -> Vec<CriticalP
 
 /// Sorts by value, then kind, then index position (a total order on distinct points).
 pub fn sort_points(points: &mut [CriticalPoint]) {
-    points.par_sort_by(|a, b| {
+    points.par_sort_unstable_by(|a, b| {
         a.value
             .total_cmp(&b.value)
             .then(a.kind.cmp(&b.kind))

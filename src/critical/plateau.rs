@@ -12,11 +12,19 @@ use crate::grid::ScalarGrid;
 /// Label of grid vertices that belong to no plateau.
 pub const NO_REGION: u32 = u32::MAX;
 
-/// Grid vertices per chunk of [`Plateaus`]' labels (`1 << CHUNK_BITS`).
+/// A plateau vertex whose plateau is not numbered yet (only while the labels are made).
+const UNCLAIMED: u32 = u32::MAX - 1;
+
+/// Grid vertices per chunk of [`Plateaus`]' sparse labels (`1 << CHUNK_BITS`).
 const CHUNK_BITS: u32 = 20;
 
-/// The plateaus of a grid (or those of the values a filter accepts): memory is proportional
-/// to the vertices on plateaus, not to the grid.
+/// Labels are kept for every grid vertex (4 bytes each, constant-time lookups) when at least
+/// one vertex in `DENSE_FRACTION` is on a plateau, else for the plateau vertices only (8
+/// bytes each, lookups by binary search).
+const DENSE_FRACTION: usize = 8;
+
+/// The plateaus of a grid (or those with a value in some windows). Memory follows the
+/// plateau vertices, not the grid, unless they are a large part of it.
 ///
 /// Invariants: `regions` lists every maximal edge-connected set of at least two vertices of
 /// equal value (vertex indices ascending), ordered by their smallest vertex; a vertex is on a
@@ -25,31 +33,71 @@ const CHUNK_BITS: u32 = 20;
 pub struct Plateaus {
     /// The plateaus' vertices (ascending grid indices), ordered by their smallest vertex.
     pub regions: Vec<Vec<usize>>,
-    /// Per chunk of grid vertices: the in-chunk offsets of its plateau
-    /// vertices, ascending.
+    /// Per chunk of `1 << chunk_bits` grid vertices: the in-chunk offsets of its plateau
+    /// vertices, ascending (empty with dense labels).
     offsets: Vec<Vec<u32>>,
-    /// Per chunk: the plateau number of each vertex of `offsets`.
-    ids: Vec<Vec<u32>>,
+    labels: Labels,
     /// Chunks hold `1 << chunk_bits` grid vertices ([`CHUNK_BITS`]; smaller in tests).
     chunk_bits: u32,
+    /// Number of plateau vertices.
+    flat: usize,
+}
+
+/// The plateau numbers: of every grid vertex, or per chunk of the vertices in `offsets`.
+enum Labels {
+    Dense(Vec<u32>),
+    Sparse(Vec<Vec<u32>>),
 }
 
 impl Plateaus {
     /// The plateau number of grid vertex `idx`, [`NO_REGION`] when it is on none.
     #[inline]
     pub fn label(&self, idx: usize) -> u32 {
-        match self.slot(idx) {
-            Some((c, s)) => self.ids[c][s],
-            None => NO_REGION,
+        let l = match &self.labels {
+            Labels::Dense(l) => l[idx],
+            Labels::Sparse(ids) => self.slot(idx).map_or(NO_REGION, |(c, s)| ids[c][s]),
+        };
+        // only while the labels are being made
+        if l == UNCLAIMED {
+            NO_REGION
+        } else {
+            l
         }
     }
 
     /// Number of grid vertices on plateaus.
     pub fn num_flat(&self) -> usize {
-        self.offsets.iter().map(Vec::len).sum()
+        self.flat
     }
 
-    /// The chunk and position of plateau vertex `idx` in `offsets`/`ids`.
+    /// Whether labels are held for every grid vertex (many plateau vertices).
+    pub fn is_dense(&self) -> bool {
+        matches!(self.labels, Labels::Dense(_))
+    }
+
+    /// Labels `idx` with `id` if it is a plateau vertex without a label yet; whether it was.
+    #[inline]
+    fn claim(&mut self, idx: usize, id: u32) -> bool {
+        let slot = match &mut self.labels {
+            Labels::Dense(l) => &mut l[idx],
+            Labels::Sparse(_) => {
+                let Some((c, s)) = self.slot(idx) else {
+                    return false;
+                };
+                let Labels::Sparse(ids) = &mut self.labels else {
+                    unreachable!()
+                };
+                &mut ids[c][s]
+            }
+        };
+        let fresh = *slot == UNCLAIMED;
+        if fresh {
+            *slot = id;
+        }
+        fresh
+    }
+
+    /// The chunk and position of plateau vertex `idx` in `offsets`.
     #[inline]
     fn slot(&self, idx: usize) -> Option<(usize, usize)> {
         let c = idx >> self.chunk_bits;
@@ -125,43 +173,60 @@ fn plateaus_chunked(grid: &ScalarGrid, windows: &[(f64, f64)], chunk_bits: u32) 
             out
         })
         .collect();
-    let ids = offsets.iter().map(|o| vec![NO_REGION; o.len()]).collect();
+    let flat: usize = offsets.iter().map(Vec::len).sum();
     let mut p = Plateaus {
         regions: Vec::new(),
         offsets,
-        ids,
+        labels: Labels::Sparse(Vec::new()),
         chunk_bits,
+        flat,
     };
-    let mut stack = Vec::new();
-    for c in 0..p.offsets.len() {
-        for s in 0..p.offsets[c].len() {
-            if p.ids[c][s] != NO_REGION {
-                continue;
+    let dense = flat >= n / DENSE_FRACTION;
+    if dense {
+        // the plateau vertices marked in the dense labels, then their list dropped
+        let mut l = vec![NO_REGION; n];
+        for (c, o) in p.offsets.iter().enumerate() {
+            for &off in o {
+                l[(c << chunk_bits) + off as usize] = UNCLAIMED;
             }
-            let start = (c << chunk_bits) + p.offsets[c][s] as usize;
-            let id = p.regions.len() as u32;
-            let v = grid.values.get(start);
-            let mut region = vec![start];
-            p.ids[c][s] = id;
-            stack.push(start);
-            while let Some(i) = stack.pop() {
-                for m in nbrs(i) {
-                    // an equal neighbour of a kept value is a plateau vertex: it has a slot
-                    if grid.values.get(m) != v {
-                        continue;
-                    }
-                    let Some((cm, sm)) = p.slot(m) else {
-                        continue;
-                    };
-                    if p.ids[cm][sm] == NO_REGION {
-                        p.ids[cm][sm] = id;
-                        region.push(m);
-                        stack.push(m);
-                    }
+        }
+        p.offsets = Vec::new();
+        p.labels = Labels::Dense(l);
+    } else {
+        p.labels = Labels::Sparse(p.offsets.iter().map(|o| vec![UNCLAIMED; o.len()]).collect());
+    }
+    // plateau numbers in the order of the smallest vertex, as the vertices are visited
+    let mut stack = Vec::new();
+    let mut grow = |p: &mut Plateaus, start: usize| {
+        let id = p.regions.len() as u32;
+        if !p.claim(start, id) {
+            return;
+        }
+        let v = grid.values.get(start);
+        let mut region = vec![start];
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            for m in nbrs(i) {
+                // an equal neighbour of a kept value is a plateau vertex
+                if grid.values.get(m) == v && p.claim(m, id) {
+                    region.push(m);
+                    stack.push(m);
                 }
             }
-            region.sort_unstable();
-            p.regions.push(region);
+        }
+        region.sort_unstable();
+        p.regions.push(region);
+    };
+    if dense {
+        for i in 0..n {
+            grow(&mut p, i);
+        }
+    } else {
+        for c in 0..p.offsets.len() {
+            for s in 0..p.offsets[c].len() {
+                let start = (c << chunk_bits) + p.offsets[c][s] as usize;
+                grow(&mut p, start);
+            }
         }
     }
     p
@@ -218,10 +283,19 @@ mod tests {
             })
             .collect();
         let grid = ScalarGrid::new(dims, values).unwrap();
-        for (lo, hi) in [(f64::NEG_INFINITY, f64::INFINITY), (1.0, 2.0), (3.5, 3.6)] {
+        let mut modes = [false; 2];
+        for (lo, hi) in [
+            (f64::NEG_INFINITY, f64::INFINITY),
+            (1.0, 2.0),
+            (4.0, 4.0),
+            (3.5, 3.6),
+        ] {
             let expected = brute_force(&grid, lo, hi);
             for bits in [2, 5, 7, CHUNK_BITS] {
                 let p = plateaus_chunked(&grid, &[(lo, hi)], bits);
+                let many = 8 * p.num_flat() >= grid.num_vertices();
+                assert_eq!(p.is_dense(), many);
+                modes[p.is_dense() as usize] |= p.num_flat() > 0;
                 assert_eq!(p.regions, expected, "[{lo}, {hi}] chunks of 2^{bits}");
                 let flat: usize = expected.iter().map(Vec::len).sum();
                 assert_eq!(p.num_flat(), flat);
@@ -234,5 +308,6 @@ mod tests {
                 }
             }
         }
+        assert_eq!(modes, [true, true], "sparse and dense labels both tested");
     }
 }
