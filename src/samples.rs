@@ -175,6 +175,40 @@ impl Samples {
         })
     }
 
+    /// Smallest and largest sample in `range` (`(inf, -inf)` when empty), compared in the
+    /// storage type (integer rows vectorise); for skipping rows that cannot reach a value.
+    #[inline]
+    pub fn min_max_in(&self, range: std::ops::Range<usize>) -> (f64, f64) {
+        // one pass of plain min/max folds: LLVM vectorises them for the integer types
+        fn ints<T: Copy + Ord + Into<f64>>(v: &[T], top: T, bottom: T) -> (f64, f64) {
+            if v.is_empty() {
+                return (f64::INFINITY, f64::NEG_INFINITY);
+            }
+            let (a, b) = v
+                .iter()
+                .fold((top, bottom), |(a, b), &x| (a.min(x), b.max(x)));
+            (a.into(), b.into())
+        }
+        match self {
+            Samples::U8(v) => ints(&v[range], u8::MAX, u8::MIN),
+            Samples::I16(v) => ints(&v[range], i16::MAX, i16::MIN),
+            Samples::U16(v) => ints(&v[range], u16::MAX, u16::MIN),
+            Samples::F32(v) => {
+                let (a, b) = v[range]
+                    .iter()
+                    .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| {
+                        (a.min(x), b.max(x))
+                    });
+                (a.into(), b.into())
+            }
+            Samples::F64(v) => v[range]
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                }),
+        }
+    }
+
     /// Copies the samples from `start` on into `out` as `f64` values.
     #[inline]
     pub fn read_into(&self, start: usize, out: &mut [f64]) {

@@ -507,3 +507,64 @@ fn output_is_the_same_for_any_thread_count() {
     assert_eq!(one, run(2));
     assert_eq!(one, run(3));
 }
+
+#[test]
+fn windowed_search_equals_the_filtered_full_search() {
+    use tptd::critical::face::face_saddles_in;
+    use tptd::critical::find::{all_critical, critical_in_windows};
+    // a smooth field quantised to integers (plateaus of every size, some reaching the box),
+    // long along x so that the skipped blocks of rows and their last partial block are used,
+    // in uint8 and float64 storage (the row ranges are computed per storage type)
+    let f = Field::from_fn([75, 23, 19], |x, y, z| {
+        let s = (x * 0.21).sin() * 6.0 + (y * 0.37).cos() * 4.0 + (z * 0.29 + x * 0.05).sin() * 5.0;
+        (s + 15.0).round()
+    });
+    // and a zero background with sparse spikes 1..=8 (most blocks of a row are skipped, and
+    // a block reaches a window through one corner in one of its rows or planes)
+    let mut rng = Rng::new(77);
+    let spikes: Vec<f64> = (0..f.values.len())
+        .map(|_| {
+            let v = rng.int(0, 160);
+            if v <= 8 {
+                v as f64
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let u8_of = |v: &[f64]| v.iter().map(|&x| x as u8).collect::<Vec<u8>>();
+    let grids = [
+        grid_of(&f),
+        ScalarGrid::new(f.dims, u8_of(&f.values)).unwrap(),
+        ScalarGrid::new(f.dims, spikes.clone()).unwrap(),
+        ScalarGrid::new(f.dims, u8_of(&spikes)).unwrap(),
+    ];
+    for grid in &grids {
+        let all = all_critical(grid);
+        assert!(all.iter().filter(|p| p.kind.is_region()).count() > 0);
+        let in_windows = |v: f64, w: &[(f64, f64)]| w.iter().any(|&(a, b)| a <= v && v <= b);
+        for windows in [
+            vec![(15.0, 15.0)],
+            vec![(3.2, 7.5), (20.0, 21.0)],
+            vec![(14.4, 14.6), (25.5, 40.0)],
+            vec![(-1.0, 0.5)],
+            vec![(5.0, 5.0)],
+            vec![(7.5, 8.0), (1.2, 1.8)],
+        ] {
+            let expected: Vec<CriticalPoint> = all
+                .iter()
+                .filter(|p| in_windows(p.value, &windows))
+                .cloned()
+                .collect();
+            assert_eq!(critical_in_windows(grid, &windows), expected, "{windows:?}");
+            for &(lo, hi) in &windows {
+                let every = face_saddles_in(grid, f64::NEG_INFINITY, f64::INFINITY);
+                let kept: Vec<_> = every
+                    .into_iter()
+                    .filter(|s| lo <= s.0 && s.0 <= hi)
+                    .collect();
+                assert_eq!(face_saddles_in(grid, lo, hi), kept, "[{lo}, {hi}]");
+            }
+        }
+    }
+}

@@ -383,3 +383,37 @@ fn a_ring_region_is_placed_on_the_ring_with_its_centroid_apart() {
     let at = format!("{:.3}, {:.3}, {:.3}", pos[0], pos[1], pos[2]);
     assert!(stdout.contains(&at), "{stdout}");
 }
+
+#[test]
+fn critical_memory_is_estimated_before_the_work() {
+    // 40³ float64: about 6 MB plain, 26 MB with persistence, 160 MB with the spectrum
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("g.npy");
+    write_npy(&input, [40, 40, 40], |i, j, k| {
+        (i as f64 * 0.3).sin() + (j as f64 * 0.25).cos() + (k as f64 * 0.2).sin()
+    });
+    let inp = input.to_str().unwrap();
+    let spectrum = dir.path().join("s.csv");
+    let (ok, _, stderr) = run(&[inp, "--critical", "--memory-limit", "20M"]);
+    assert!(ok, "{stderr}");
+    for (extra, what) in [
+        ("--persistence", "with persistence"),
+        ("--spectrum", "and the contour spectrum"),
+    ] {
+        let mut args = vec![inp, "--critical", "--memory-limit", "20M", extra];
+        if extra == "--spectrum" {
+            args.push(spectrum.to_str().unwrap());
+        }
+        let out = Command::new(BIN).args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.contains(&format!("finding the critical points {what} needs about"))
+                && stderr.contains("the memory limit is 20.0 MiB"),
+            "{stderr}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    assert!(!spectrum.exists());
+}

@@ -86,9 +86,14 @@ pub fn face_saddles_in(grid: &crate::ScalarGrid, lo: f64, hi: f64) -> Vec<(f64, 
         .into_par_iter()
         .flat_map_iter(|k| {
             let mut out = Vec::new();
+            let ck = k.min(cd[2] - 1);
+            let rows = super::find::RowRanges::new(grid, ck);
             for j in 0..grid.dims[1] {
-                for i in 0..grid.dims[0] {
-                    let c = [i.min(cd[0] - 1), j.min(cd[1] - 1), k.min(cd[2] - 1)];
+                // every face visited from here has its corners in cell row `(j, k)` (clamped),
+                // those of `i` in cell `i` (clamped: the last block reaches the box)
+                let hit = |a: f64, b: f64| b >= lo && a <= hi;
+                for i in rows.live_x(grid, j.min(cd[1] - 1), grid.dims[0], hit) {
+                    let c = [i.min(cd[0] - 1), j.min(cd[1] - 1), ck];
                     let v = grid.cell_values(c[0], c[1], c[2]);
                     // the low faces of the cell at (i, j, k) (the high box faces from the last cell)
                     for f in 0..6 {

@@ -80,11 +80,11 @@ pub fn all_critical(grid: &ScalarGrid) -> Vec<CriticalPoint> {
 }
 
 /// Value windows `[lo, hi]`: only points with a value inside one are looked for.
-type Windows<'a> = &'a [(f64, f64)];
+pub(crate) type Windows<'a> = &'a [(f64, f64)];
 
 /// Whether some window meets `[lo, hi]`.
 #[inline]
-fn meets(w: Windows, lo: f64, hi: f64) -> bool {
+pub(crate) fn meets(w: Windows, lo: f64, hi: f64) -> bool {
     w.iter().any(|&(a, b)| lo <= b && hi >= a)
 }
 
@@ -97,17 +97,16 @@ pub fn critical_in_windows(grid: &ScalarGrid, windows: Windows) -> Vec<CriticalP
         .into_par_iter()
         .flat_map_iter(|k| {
             let mut out = Vec::new();
-            vertices_in_slab(grid, k, windows, &mut out);
-            faces_in_slab(grid, k, windows, &mut out);
+            let rows = RowRanges::new(grid, k);
+            vertices_in_slab(grid, k, windows, &rows, &mut out);
+            faces_in_slab(grid, k, windows, &rows, &mut out);
             if k + 1 < nz {
-                cells_in_slab(grid, k, windows, &mut out);
+                cells_in_slab(grid, k, windows, &rows, &mut out);
             }
             out
         })
         .collect();
-    all.extend(super::region::critical_regions(grid, &|v| {
-        meets(windows, v, v)
-    }));
+    all.extend(super::region::critical_regions(grid, windows));
     all.retain(|p| meets(windows, p.value, p.value));
     sort_points(&mut all);
     all
@@ -115,7 +114,7 @@ pub fn critical_in_windows(grid: &ScalarGrid, windows: Windows) -> Vec<CriticalP
 
 /// Sorts by value, then kind, then index position (a total order on distinct points).
 pub fn sort_points(points: &mut [CriticalPoint]) {
-    points.par_sort_by(|a, b| {
+    points.par_sort_unstable_by(|a, b| {
         a.value
             .total_cmp(&b.value)
             .then(a.kind.cmp(&b.kind))
@@ -202,8 +201,104 @@ pub fn vertex_class(grid: &ScalarGrid, p: [usize; 3]) -> Option<LinkClass> {
     })
 }
 
-fn vertices_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<CriticalPoint>) {
+/// The value ranges of the grid rows (along x) of planes `k` and `k + 1`: a row of faces or
+/// cells whose rows' values cannot reach a window is skipped without reading its corners.
+pub(crate) struct RowRanges {
+    /// `(min, max)` of row `j` of plane `k` at `[j]`, of plane `k + 1` at `[ny + j]`.
+    ranges: Vec<(f64, f64)>,
+    ny: usize,
+    k: usize,
+    planes: usize,
+}
+
+/// Grid positions along x per block of [`RowRanges::live_x`].
+const X_BLOCK: usize = 32;
+
+impl RowRanges {
+    /// The row ranges of planes `k` and `k + 1` (the latter when it exists).
+    pub(crate) fn new(grid: &ScalarGrid, k: usize) -> RowRanges {
+        let [nx, ny, nz] = grid.dims;
+        let planes = if k + 1 < nz { 2 } else { 1 };
+        let ranges = (0..planes * ny)
+            .map(|r| {
+                let start = grid.index(0, r % ny, k + r / ny);
+                grid.values.min_max_in(start..start + nx)
+            })
+            .collect();
+        RowRanges {
+            ranges,
+            ny,
+            k,
+            planes,
+        }
+    }
+
+    /// The range of row `j` of plane `k` alone.
+    #[inline]
+    pub(crate) fn row(&self, j: usize) -> (f64, f64) {
+        self.ranges[j]
+    }
+
+    /// The range of rows `j`, `j + 1` of planes `k`, `k + 1` (those that exist): every face
+    /// and cell whose smallest corner is in row `j` of plane `k` has its corners there.
+    #[inline]
+    pub(crate) fn quad(&self, j: usize) -> (f64, f64) {
+        let mut r = (f64::INFINITY, f64::NEG_INFINITY);
+        for dk in 0..self.planes {
+            for jj in j..(j + 2).min(self.ny) {
+                let x = self.ranges[dk * self.ny + jj];
+                r = (r.0.min(x.0), r.1.max(x.1));
+            }
+        }
+        r
+    }
+
+    /// The x positions `0..len` of row `j` of plane `k` whose faces or cells may have a value
+    /// `hit` accepts (`hit(lo, hi)`: whether `[lo, hi]` meets the values looked for). Rows
+    /// whose [`RowRanges::quad`] misses are skipped whole, then blocks of [`X_BLOCK`]
+    /// positions whose corners (x from the block's start − 1 to its end + 1, rows `j`, `j + 1`,
+    /// planes `k`, `k + 1`) miss.
+    pub(crate) fn live_x<'a>(
+        &'a self,
+        grid: &'a ScalarGrid,
+        j: usize,
+        len: usize,
+        hit: impl Fn(f64, f64) -> bool + 'a,
+    ) -> impl Iterator<Item = usize> + 'a {
+        let (lo, hi) = self.quad(j);
+        let len = if hit(lo, hi) { len } else { 0 };
+        let nx = grid.dims[0];
+        (0..len)
+            .step_by(X_BLOCK)
+            .filter(move |&i0| {
+                // one position before the block too: a clamped cell at the box starts there
+                let (start, end) = (i0.saturating_sub(1), (i0 + X_BLOCK + 1).min(nx));
+                let mut r = (f64::INFINITY, f64::NEG_INFINITY);
+                for dk in 0..self.planes {
+                    for jj in j..(j + 2).min(self.ny) {
+                        let s = grid.index(0, jj, self.k + dk);
+                        let x = grid.values.min_max_in(s + start..s + end);
+                        r = (r.0.min(x.0), r.1.max(x.1));
+                    }
+                }
+                hit(r.0, r.1)
+            })
+            .flat_map(move |i0| i0..(i0 + X_BLOCK).min(len))
+    }
+}
+
+fn vertices_in_slab(
+    grid: &ScalarGrid,
+    k: usize,
+    w: Windows,
+    rows: &RowRanges,
+    out: &mut Vec<CriticalPoint>,
+) {
     for j in 0..grid.dims[1] {
+        let (lo, hi) = rows.row(j);
+        if !meets(w, lo, hi) {
+            continue;
+        }
         for i in 0..grid.dims[0] {
             let v = grid.value(i, j, k);
             if !meets(w, v, v) {
@@ -231,11 +326,17 @@ fn vertices_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<Criti
 }
 
 /// Face saddles of the faces whose smallest corner lies in slab `k`.
-fn faces_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<CriticalPoint>) {
+fn faces_in_slab(
+    grid: &ScalarGrid,
+    k: usize,
+    w: Windows,
+    rows: &RowRanges,
+    out: &mut Vec<CriticalPoint>,
+) {
     let dims = grid.dims;
     let stride = [1, dims[0], dims[0] * dims[1]];
     for j in 0..dims[1] {
-        for i in 0..dims[0] {
+        for i in rows.live_x(grid, j, dims[0], |lo, hi| meets(w, lo, hi)) {
             let p = [i, j, k];
             for axis in 0..3 {
                 let fits = (0..3).all(|a| a == axis || p[a] + 1 < dims[a]);
@@ -289,10 +390,16 @@ fn faces_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<Critical
     }
 }
 
-fn cells_in_slab(grid: &ScalarGrid, k: usize, w: Windows, out: &mut Vec<CriticalPoint>) {
+fn cells_in_slab(
+    grid: &ScalarGrid,
+    k: usize,
+    w: Windows,
+    rows: &RowRanges,
+    out: &mut Vec<CriticalPoint>,
+) {
     let cd = grid.cell_dims();
     for j in 0..cd[1] {
-        for i in 0..cd[0] {
+        for i in rows.live_x(grid, j, cd[0], |lo, hi| meets(w, lo, hi)) {
             let v = grid.cell_values(i, j, k);
             let (lo, hi) = v
                 .iter()

@@ -5,8 +5,9 @@
 //! * [`vertex`]: grid vertices from their six edge-connected neighbours (the 64-entry table).
 //! * [`face`]: face saddles by Lemma 4 of “Exploring scalar fields using critical isovalues”.
 //! * [`body`]: saddles inside cells.
-//! * [`region`]: plateaus (edge-connected equal values): flood fill and the neighbourhood
-//!   graph of “Critical regions”.
+//! * [`plateau`]: plateaus (edge-connected equal values) by flood fill, labels kept for their
+//!   vertices only.
+//! * [`region`]: which plateaus are critical: the neighbourhood graph of “Critical regions”.
 //! * [`complex`]: the second route, the TPTD tetrahedral complex of the grid (a
 //!   piecewise-linear field whose level sets have the trilinear topology): Betti numbers of
 //!   its superlevel and sublevel sets.
@@ -25,6 +26,7 @@ pub mod complex;
 pub mod face;
 pub mod find;
 pub mod persistence;
+pub mod plateau;
 pub mod region;
 pub mod safe;
 pub mod spectrum;

@@ -25,79 +25,11 @@ use rustc_hash::FxHashMap;
 use rayon::prelude::*;
 
 use super::find::make_point;
+use super::plateau::{plateaus_in, Plateaus};
 use super::vertex::LinkClass;
 use super::{CriticalKind, CriticalPoint, RegionInfo};
 use crate::grid::{corner_offset, face_corners, ScalarGrid};
 use crate::trilinear::face_saddle_of;
-
-/// Label of grid vertices that belong to no plateau.
-pub const NO_REGION: u32 = u32::MAX;
-
-/// The plateaus of the grid: vertex lists (ascending index) of every maximal edge-connected set
-/// of at least two vertices with equal values, ordered by their smallest vertex, and the
-/// plateau number of every grid vertex ([`NO_REGION`] for none).
-pub fn plateaus(grid: &ScalarGrid) -> (Vec<Vec<usize>>, Vec<u32>) {
-    plateaus_where(grid, &|_| true)
-}
-
-/// [`plateaus`] restricted to the values `keep` accepts (other vertices get [`NO_REGION`]).
-pub fn plateaus_where(
-    grid: &ScalarGrid,
-    keep: &(dyn Fn(f64) -> bool + Sync),
-) -> (Vec<Vec<usize>>, Vec<u32>) {
-    let n = grid.num_vertices();
-    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
-    let nbrs = |idx: usize| {
-        let p = grid.vertex_ijk(idx);
-        (0..6).filter_map(move |d| {
-            let (a, side) = (d / 2, d % 2);
-            if side == 0 {
-                (p[a] > 0).then(|| idx - stride[a])
-            } else {
-                (p[a] + 1 < grid.dims[a]).then(|| idx + stride[a])
-            }
-        })
-    };
-    let flat: Vec<bool> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            // the vertex and its six neighbours (itself where there is none), one access
-            let mut idx = [i; 7];
-            let mut count = 1;
-            for m in nbrs(i) {
-                idx[count] = m;
-                count += 1;
-            }
-            let v = grid.values.gather(idx);
-            keep(v[0]) && v[1..count].iter().any(|&w| w == v[0])
-        })
-        .collect();
-    let mut labels = vec![NO_REGION; n];
-    let mut out = Vec::new();
-    let mut stack = Vec::new();
-    for s in 0..n {
-        if !flat[s] || labels[s] != NO_REGION {
-            continue;
-        }
-        let id = out.len() as u32;
-        let v = grid.values.get(s);
-        let mut region = vec![s];
-        labels[s] = id;
-        stack.push(s);
-        while let Some(i) = stack.pop() {
-            for m in nbrs(i) {
-                if labels[m] == NO_REGION && grid.values.get(m) == v {
-                    labels[m] = id;
-                    region.push(m);
-                    stack.push(m);
-                }
-            }
-        }
-        region.sort_unstable();
-        out.push(region);
-    }
-    (out, labels)
-}
 
 /// Union–find over a small number of nodes.
 struct Uf(Vec<usize>);
@@ -118,29 +50,26 @@ impl Uf {
     }
 }
 
-/// The critical plateaus of the grid whose value `keep` accepts, classified.
-pub fn critical_regions(
-    grid: &ScalarGrid,
-    keep: &(dyn Fn(f64) -> bool + Sync),
-) -> Vec<CriticalPoint> {
-    let (regions, labels) = plateaus_where(grid, keep);
-    regions
+/// The critical plateaus of the grid with a value in one of `windows`, classified.
+pub fn critical_regions(grid: &ScalarGrid, windows: &[(f64, f64)]) -> Vec<CriticalPoint> {
+    let p = plateaus_in(grid, windows);
+    p.regions
         .par_iter()
         .enumerate()
-        .filter_map(|(id, r)| classify_region(grid, &labels, id as u32, r))
+        .filter_map(|(id, r)| classify_region(grid, &p, id as u32, r))
         .collect()
 }
 
-/// Classifies plateau number `id` (vertex indices `region`, ascending; `labels` from
-/// [`plateaus`]); `None` when it is regular.
+/// Classifies plateau number `id` of `labels` (vertex indices `region`, ascending); `None`
+/// when it is regular.
 pub fn classify_region(
     grid: &ScalarGrid,
-    labels: &[u32],
+    labels: &Plateaus,
     id: u32,
     region: &[usize],
 ) -> Option<CriticalPoint> {
     let v = grid.values.get(region[0]);
-    let in_region = |idx: usize| labels[idx] == id;
+    let in_region = |idx: usize| labels.label(idx) == id;
     // a plateau whose exits all go up (down) is a minimum (maximum): no graph needed, a
     // contractible one has one connected part around it
     let (up, down) = exit_sides(grid, &in_region, region, v);
@@ -332,7 +261,7 @@ struct Parts {
 /// change one filtration only (a lower pocket below a box plateau opens a hole in `{f >= w}`).
 fn region_point(
     grid: &ScalarGrid,
-    labels: &[u32],
+    labels: &Plateaus,
     id: u32,
     region: &[usize],
     v: f64,
@@ -422,7 +351,13 @@ fn nearest_vertex(grid: &ScalarGrid, region: &[usize], point: [f64; 3]) -> [usiz
 /// Whether the plateau is cube-complex contractible as far as Euler characteristics tell
 /// (`χ(R) = 1`) and, when it touches the box, meets the box in one piece with `χ = 1`: then its
 /// neighbourhood is a ball (half-ball) and its link a sphere (disk).
-fn is_simple(grid: &ScalarGrid, labels: &[u32], id: u32, region: &[usize], on_box: bool) -> bool {
+fn is_simple(
+    grid: &ScalarGrid,
+    labels: &Plateaus,
+    id: u32,
+    region: &[usize],
+    on_box: bool,
+) -> bool {
     let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
     let (mut chi, mut chi_box, mut vb) = (0i64, 0i64, 0usize);
     for &r in region {
@@ -432,7 +367,7 @@ fn is_simple(grid: &ScalarGrid, labels: &[u32], id: u32, region: &[usize], on_bo
         for c in 1..8usize {
             let fits = (0..3).all(|a| (c >> a) & 1 == 0 || p[a] + 1 < grid.dims[a]);
             let off: usize = (0..3).map(|a| ((c >> a) & 1) * stride[a]).sum();
-            if fits && labels[r + off] == id {
+            if fits && labels.label(r + off) == id {
                 present |= 1 << c;
             }
         }

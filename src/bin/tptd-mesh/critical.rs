@@ -46,6 +46,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         threads: cli.threads.map(|n| n as usize),
         persistence: cli.persistence || cli.min_persistence.is_some(),
     };
+    check_memory(&grid, &input, opts.persistence, cli.spectrum.is_some())?;
     let points = find_critical_with_options(&grid, &opts).map_err(|e| file_error(&input, e))?;
     let secs = t.elapsed().as_secs_f64();
     // built before any file is written, so that bad parameters leave no output
@@ -70,6 +71,33 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         stdout_result(print_table(&input, &points, secs))?;
     }
     Ok(())
+}
+
+/// Checks the memory estimate of the critical points (with persistence and the contour
+/// spectrum when asked for) before the work (see [`tptd::memory::critical_bytes`]).
+fn check_memory(grid: &ScalarGrid, input: &str, persistence: bool, spectrum: bool) -> Result<()> {
+    let need = tptd::memory::critical_bytes(
+        grid.num_vertices() as u64,
+        grid.num_cells() as u64,
+        grid.values.bytes_per_sample() as u64,
+        persistence,
+        spectrum,
+    );
+    let what = match (persistence, spectrum) {
+        (false, false) => "finding the critical points",
+        (true, false) => "finding the critical points with persistence",
+        (false, true) => "finding the critical points and the contour spectrum",
+        (true, true) => "finding the critical points with persistence and the contour spectrum",
+    };
+    tptd::memory::check(need, what).map_err(|e| {
+        file_error(
+            input,
+            format_args!(
+                "{e}; crop the volume, leave out --spectrum and --persistence or raise \
+                 --memory-limit"
+            ),
+        )
+    })
 }
 
 /// A failed write on stdout as an error, except a closed pipe (e.g. `| head`): that is not an
