@@ -254,6 +254,8 @@ const SLABS_PER_THREAD: usize = 4;
 /// What every cell of one run shares.
 struct Ctx<'a> {
     grid: &'a ScalarGrid,
+    /// [`NEAR_TIE`] × the data range: face and body points this near a level are put on it.
+    near_tie: f64,
     interval: Interval,
     planner: Planner<'a>,
     /// Per grid vertex, the level it is snapped to (empty: no warping).
@@ -270,6 +272,20 @@ impl Ctx<'_> {
             _ => (SNAP_NONE, val),
         }
     }
+
+    /// Clipping value of a face or body point of the decomposition with value `val`: on the
+    /// level when within [`Ctx::near_tie`] of it. The grid's values are (`without_near_ties`),
+    /// but these points' values are computed from them: a face saddle at -3e-19 with alpha 0
+    /// put the cuts of its edges within rounding of it, and tets between them were inverted
+    /// or flat. On the level they follow the ties rule like tied grid values.
+    #[inline]
+    fn point_value(&self, val: f64) -> f64 {
+        let iv = &self.interval;
+        [iv.alpha, iv.beta]
+            .into_iter()
+            .find(|&l| l.is_finite() && (val - l).abs() <= self.near_tie)
+            .unwrap_or(val)
+    }
 }
 
 fn run(
@@ -281,8 +297,10 @@ fn run(
     let (tied, alpha, beta) = without_near_ties(grid, opts.alpha, opts.beta);
     let grid = tied.as_ref().unwrap_or(grid);
     let [_, _, cz] = grid.cell_dims();
+    let (lo, hi) = grid.value_range();
     let mut ctx = Ctx {
         grid,
+        near_tie: NEAR_TIE * (hi - lo),
         interval: Interval::new(alpha, beta, &grid.values),
         planner: Planner {
             grid,
@@ -503,7 +521,7 @@ fn clip_cell(
                 let key = local_key(base, stride, id);
                 let (snap, val) = match id {
                     0..=7 => ctx.corner((key >> 3) as usize, pts.val[id]),
-                    _ => (SNAP_NONE, pts.val[id]),
+                    _ => (SNAP_NONE, ctx.point_value(pts.val[id])),
                 };
                 ClipVertex {
                     key,

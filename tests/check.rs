@@ -274,3 +274,44 @@ fn trilinear_volume(g: &ScalarGrid, (a, b): (f64, f64)) -> f64 {
     }
     inside as f64 / (n * n * n) as f64
 }
+
+/// `z - 20 sin(x/9) cos(y/7)` on a crop of the 64³ grid that has a face saddle at
+/// -3.4e-19 on the bottom face of cell (56, 54, 0): within rounding of the level 0.
+fn saddle_at_rounding(n: [usize; 3], at: [usize; 3]) -> ScalarGrid {
+    let mut values = Vec::new();
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let [x, y, z] = [i + at[0], j + at[1], k + at[2]].map(|c| c as f64);
+                values.push(z - 20.0 * (x / 9.0).sin() * (y / 7.0).cos());
+            }
+        }
+    }
+    ScalarGrid::new(n, values).unwrap()
+}
+
+#[test]
+fn a_face_saddle_within_rounding_of_a_level_gives_a_valid_mesh() {
+    // The cuts of the saddle's edges fell within rounding of it: inverted and flat tets, a
+    // boundary crossing itself, and the quality pass panicked on the 64³ field.
+    let cell = saddle_at_rounding([2, 2, 2], [56, 54, 0]);
+    let crop = saddle_at_rounding([12, 12, 6], [50, 48, 0]);
+    for (name, g) in [("cell", &cell), ("crop", &crop)] {
+        for method in [Method::Ctd, Method::Tptd, Method::Std] {
+            let m = mesh_interval(g, &MeshOptions::new(0.0, 10.0, method))
+                .unwrap()
+                .mesh;
+            assert_valid(&format!("{name} {method:?}"), &m, g, (0.0, 10.0));
+        }
+    }
+    let mut out = mesh_interval(
+        &crop,
+        &MeshOptions {
+            warp: DEFAULT_WARP,
+            ..MeshOptions::new(0.0, 10.0, Method::Ctd)
+        },
+    )
+    .unwrap();
+    improve_meshed(&mut out, &crop, 0.0, 10.0, &QualityOptions::default());
+    assert_valid("crop, quality", &out.mesh, &crop, (0.0, 10.0));
+}
