@@ -131,11 +131,13 @@ pub fn check(need: u64, what: impl Into<String>) -> Result<(), MemoryError> {
     }
 }
 
-/// Estimated peak bytes of reading `voxels` samples of `file_size` bytes each in the file,
-/// held as `storage_size` bytes each ([`crate::Samples`]): the samples, a reordered (or
-/// rescaled) copy of them, and the file's bytes where a format holds them in memory.
-pub fn read_bytes(voxels: u64, file_size: u64, storage_size: u64) -> u64 {
-    voxels.saturating_mul(2 * storage_size + file_size)
+/// Estimated peak bytes of reading `voxels` samples held as `storage_size` bytes each
+/// ([`crate::Samples`]), with `held` bytes of the file already in memory (a format read
+/// whole with its header, or decompressed): the file's samples are read straight into their
+/// storage and widened in place, and a C-order `.npy` is reordered one block at a time, so
+/// the samples themselves are the peak.
+pub fn read_bytes(voxels: u64, storage_size: u64, held: u64) -> u64 {
+    voxels.saturating_mul(storage_size).saturating_add(held)
 }
 
 /// Estimated bytes of the grid (`bytes_per_sample` per voxel) plus a mesh of `tets`

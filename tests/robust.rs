@@ -399,7 +399,7 @@ fn a_failed_report_writes_no_mesh_either() {
 fn the_memory_cap_gives_one_line_at_every_stage() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    // 40³ f64 (512 kB): reading needs about 1.5 MB, meshing the ball about 10 MB
+    // 40³ f64 (512 kB): reading needs about 512 kB, meshing the ball about 10 MB
     write_npy(&d.join("v.npy"), [40, 40, 40], |i, j, k| {
         let (x, y, z) = (i as f64 - 19.6, j as f64 - 20.2, k as f64 - 19.9);
         (x * x + y * y + z * z).sqrt()
@@ -426,7 +426,7 @@ fn the_memory_cap_gives_one_line_at_every_stage() {
     assert!(e.contains("reading 64000 samples needs about"), "{e}");
     // the samples do not fit: refused after the header, before the data are decoded
     let mut a = args.to_vec();
-    a.extend(["--memory-limit", "1200K"]);
+    a.extend(["--memory-limit", "400K"]);
     let o = run_in(d, &a);
     let e = assert_one_line_failure(&o, d, &before, "v.npy");
     assert!(e.contains("reading 64000 samples needs about"), "{e}");

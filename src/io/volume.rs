@@ -296,9 +296,13 @@ impl SampleBuf {
     /// Room for `count` samples of file type `ty`, after checking the memory estimate
     /// ([`crate::memory::read_bytes`]): a volume that cannot fit is an error naming `path`.
     pub(crate) fn new(path: &Path, ty: SampleType, count: usize) -> Result<Self, ReadError> {
+        Self::beside(path, ty, count, 0)
+    }
+
+    /// [`SampleBuf::new`] while `held` bytes of the file are in memory.
+    fn beside(path: &Path, ty: SampleType, count: usize, held: usize) -> Result<Self, ReadError> {
         let storage = storage_of(ty);
-        let need =
-            crate::memory::read_bytes(count as u64, ty.size() as u64, storage.bytes() as u64);
+        let need = crate::memory::read_bytes(count as u64, storage.bytes() as u64, held as u64);
         crate::memory::check(need, format!("reading {count} samples"))
             .map_err(|e| ReadError::invalid(path, format!("{e}; crop or downsample the volume")))?;
         let cannot = |e| ReadError::invalid(path, format!("cannot hold {count} samples: {e}"));
@@ -405,7 +409,7 @@ pub(crate) fn checked_decode(
     endian: Endian,
 ) -> Result<Samples, ReadError> {
     let count = bytes.len() / ty.size();
-    let mut buf = SampleBuf::new(path, ty, count)?;
+    let mut buf = SampleBuf::beside(path, ty, count, bytes.len())?;
     buf.bytes_mut().copy_from_slice(&bytes[..count * ty.size()]);
     Ok(buf.finish(endian))
 }
