@@ -136,7 +136,7 @@ def run(binary, path, alpha, beta, tag, quality):
     t0 = time.perf_counter()
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     wall = time.perf_counter() - t0
-    err = [ln for ln in p.stderr.splitlines() if "error" in ln]
+    err = [ln.replace(REPO + os.sep, "") for ln in p.stderr.splitlines() if "error" in ln]
     failed = p.returncode != 0 and any("fails --check" in ln for ln in err)
     rerun = None
     if failed:
@@ -169,7 +169,7 @@ def run(binary, path, alpha, beta, tag, quality):
         "check_level": chk.get("level"),
         "check_winding": chk.get("winding"),
         "betti": chk.get("betti"),
-        "warnings": r.get("warnings", []),
+        "warnings": [w.replace(REPO + os.sep, "") for w in r.get("warnings", [])],
     }
     q = r.get("quality")
     if quality and q:
