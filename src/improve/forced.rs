@@ -14,7 +14,8 @@
 //!   wide.) A tet whose longest edge `L` crosses the neck has a dihedral angle of about `w / L`
 //!   there, so with no vertex insertion the floor cannot hold when `w < L · floor` (radians).
 //! * `thin_layer`: the domain between the alpha and beta level sets is thinner at the tet than
-//!   `L · floor` (`L` its longest edge). The thickness `h` is the smaller of the shortest
+//!   `L · floor` (`L` its longest edge), or than both `L · sin(min_angle)` and the embedding
+//!   guard's distance (where the pass leaves such tets alone, `thin.rs`). The thickness `h` is the smaller of the shortest
 //!   distance between a corner on alpha and one on beta (a bound: that segment crosses the
 //!   layer) and the shortest chord of the layer through the centroid, measured along the
 //!   gradient there and the 13 lattice directions (exact across a flat layer, an upper bound
@@ -33,6 +34,7 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::embed::GUARD_DISTANCE;
 use super::field::Field;
 use super::outcome::PointMap;
 use super::quality::{cosine_extremes, tet_dihedral_range};
@@ -156,6 +158,8 @@ struct Classifier<'a> {
     range: f64,
     /// The floor, radians.
     floor: f64,
+    /// The sine of the pass's smallest target angle ([`QualityOptions::min_angle`]).
+    target_sine: f64,
     tol: f64,
     /// Per point: bit `1 << label` of the boundary triangles around it.
     labels: Vec<u8>,
@@ -194,6 +198,7 @@ pub fn classify_forced_mapped(
         levels: [alpha, beta],
         range: (hi - lo).max(f64::MIN_POSITIVE),
         floor: floor.to_radians(),
+        target_sine: opts.min_angle.to_radians().sin(),
         tol: opts.forced_critical_tol,
         labels: mesh.vertex_label_bits(),
     };
@@ -303,14 +308,21 @@ impl Classifier<'_> {
         let index = tet_points(self.mesh, t).map(|q| self.field.to_index(q));
         let limit = longest_edge(&index) * self.floor;
         let near_critical = self.near_critical(&index, limit);
-        // A chord of the layer shorter than `limit` has both its ends within `limit`.
-        let layer_thickness = || self.layer_thickness(self.mesh.tets[t], &index, limit);
+        // A layer is thin where the pass leaves it alone (`thin.rs`): thinner than the
+        // longest edge times the target's sine and than the guard distance; or where even
+        // the floor cannot hold.
+        let thin = (longest_edge(&index) * self.target_sine)
+            .min(GUARD_DISTANCE)
+            .max(limit);
+        // A chord of the layer shorter than `thin` has both its ends within `thin`.
+        let layer_thickness = || self.layer_thickness(self.mesh.tets[t], &index, thin);
         let box_angle = || self.box_angle(self.mesh.tets[t], &index);
-        self.decide(near_critical, limit, layer_thickness, box_angle)
+        self.decide(near_critical, thin, layer_thickness, box_angle)
     }
 
-    /// The reason, given whether a critical point explains the tet, its floor-scaled longest
-    /// edge `limit`, and (computed only if needed) its layer thickness and box angle.
+    /// The reason, given whether a critical point explains the tet, the layer thickness
+    /// `limit` below which it is thin, and (computed only if needed) its layer thickness and
+    /// box angle.
     fn decide(
         &self,
         near_critical: bool,
@@ -764,6 +776,7 @@ mod tests {
             levels: [alpha, beta],
             range: 1.0,
             floor: 5f64.to_radians(),
+            target_sine: 15f64.to_radians().sin(),
             tol: 1e-5,
             labels: Vec::new(),
         }
@@ -860,6 +873,7 @@ mod tests {
             levels: [3.5, 5.5],
             range: 7.0,
             floor: 15f64.to_radians(),
+            target_sine: opts.min_angle.to_radians().sin(),
             tol: opts.forced_critical_tol,
             labels: mesh.vertex_label_bits(),
         };
@@ -869,7 +883,10 @@ mod tests {
             let limit = longest_edge(&index) * c.floor;
             let tol = e.critical_distance.is_some_and(|d| d <= c.tol);
             let neck = e.neck_width.is_some_and(|w| w < limit);
-            let full = c.decide(tol || neck, limit, || e.layer_thickness, || e.box_angle);
+            let thin = (longest_edge(&index) * c.target_sine)
+                .min(GUARD_DISTANCE)
+                .max(limit);
+            let full = c.decide(tol || neck, thin, || e.layer_thickness, || e.box_angle);
             assert_eq!(e.reason, full, "{e:?}");
             by_tol += tol as usize;
             by_neck += (neck && !tol) as usize;
@@ -893,6 +910,7 @@ mod tests {
             levels: [0.01, f64::INFINITY],
             range: 1.0,
             floor: 5f64.to_radians(),
+            target_sine: 15f64.to_radians().sin(),
             tol: 1e-5,
             labels: Vec::new(),
         };
