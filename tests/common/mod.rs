@@ -8,6 +8,7 @@ pub mod files;
 pub mod invariants;
 pub mod mc33;
 pub mod mc33_table;
+pub mod output;
 pub mod reference;
 
 /// splitmix64: tiny, seedable, good enough for test data.
