@@ -10,18 +10,10 @@ use std::process::{Command, Output};
 
 use common::external::{gmsh_reading, require_gmsh};
 use common::files::{listing, write_npy};
-use common::output::{assert_ok, read_json, stderr, stdout};
+use common::output::{assert_ok, read_json, run_in, stderr, stdout};
 use serde_json::Value;
 
 const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
-
-fn run_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
 
 /// A smooth blob: distance from an off-centre point plus a wobble, so generic values (no grid
 /// value equals the bounds used below) and some ambiguous faces.

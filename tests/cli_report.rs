@@ -7,21 +7,11 @@ mod common;
 
 use std::fs;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use common::files::{npy_bytes, write_npy};
-use common::output::{assert_ok, read_json, stderr, stdout};
+use common::output::{assert_ok, read_json, run_in, stderr, stdout};
 use serde_json::Value;
-
-const BIN: &str = env!("CARGO_BIN_EXE_tptd-mesh");
-
-fn run_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
 
 /// The warnings on stderr, without their prefix.
 fn stderr_warnings(o: &Output) -> Vec<String> {

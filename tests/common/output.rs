@@ -1,10 +1,19 @@
-//! What a run of a binary printed, and the JSON files it wrote.
+//! Running `tptd-mesh`: what a run printed, and the JSON files it wrote.
 
 use std::fs;
 use std::path::Path;
-use std::process::Output;
+use std::process::{Command, Output};
 
 use serde_json::Value;
+
+/// Runs `tptd-mesh` in `dir` with `args`.
+pub fn run_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tptd-mesh"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
 
 pub fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
