@@ -9,7 +9,9 @@
 //!    `t < eps` of its length from `v` (`t = |f(v) − λ| / |f(u) − f(v)|`), and the trilinear
 //!    level set also passes within `eps` (index units) of `v` (on a diagonal of the
 //!    decomposition the linear crossing can be much closer than the trilinear one, and the
-//!    quality pass must then move the snapped vertex that far to put it on its level);
+//!    quality pass must then move the snapped vertex that far to put it on its level), and
+//!    the interval's other level does not pass within 0.4 voxel of `v` (a thin layer, which
+//!    the quality pass leaves as it is: a snap there would shift the layer's volume);
 //! 2. **regular:** in the link of `v` in the complex (the decomposition of its eight cells),
 //!    the closed set `S` where the field is at least the level (on the domain side) is a
 //!    disk. Then the domain's part in the star of `v` is a ball glued to the rest along `S`
@@ -314,7 +316,42 @@ fn candidate_level(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], eps: f64) 
             found = snap;
         }
     }
+    if found != SNAP_NONE && other_level_near(grid, iv, ijk, found) {
+        return SNAP_NONE;
+    }
     found
+}
+
+/// How close (index units, along an edge from the vertex) the other level of the interval may
+/// pass a vertex that is snapped to one level: the quality pass's guard distance
+/// (`improve::embed::GUARD_DISTANCE`), within which it leaves a thin layer as it is.
+const THIN_LAYER: f64 = 0.4;
+
+/// Whether the level other than `snap` crosses an edge from interior vertex `ijk` to one of
+/// its 26 neighbours (a superset of its link) within [`THIN_LAYER`] of it, linearly along the
+/// edge. Such a vertex lies in a layer thinner than the quality pass works in: snapping it
+/// would move one side of the layer by a good part of the layer's thickness (the 3 %-of-std
+/// band of a smooth random field, 24³: +0.50 % of the volume from warping alone, +0.25 %
+/// without these snaps), and the pass, which leaves the layer's tets alone, could not give
+/// that volume back.
+fn other_level_near(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], snap: u8) -> bool {
+    let other = if snap == SNAP_ALPHA {
+        SNAP_BETA
+    } else {
+        SNAP_ALPHA
+    };
+    let level = level_of(other, iv);
+    if !level.is_finite() {
+        return false;
+    }
+    let f = grid.value(ijk[0], ijk[1], ijk[2]);
+    let (e, side) = (iv.effective(f), domain_side(f, other, iv));
+    let d = (e - level).abs();
+    neighbours26().any(|o| {
+        let u = grid.values.get(neighbour(grid, ijk, o));
+        let len = ((o[0] * o[0] + o[1] * o[1] + o[2] * o[2]) as f64).sqrt();
+        domain_side(u, other, iv) != side && d * len < THIN_LAYER * (u - e).abs()
+    })
 }
 
 /// Step 2: the link of candidate `v` (interior), from the decomposition of the cells
@@ -997,6 +1034,58 @@ mod tests {
             })
             .sum();
         pairs / 2
+    }
+
+    /// A smooth random field: seeded white noise blurred by three box filters of width 5 along
+    /// each axis (close to a Gaussian of 2.4 voxels), scaled to unit standard deviation.
+    fn smooth(n: usize, seed: u64) -> ScalarGrid {
+        let mut v: Vec<f64> = noise([n; 3], seed, 0.0).values.iter().collect();
+        let at = |i: usize, j: usize, k: usize| i + n * (j + n * k);
+        for axis in 0..3 {
+            for _ in 0..3 {
+                let w = v.clone();
+                for k in 0..n {
+                    for j in 0..n {
+                        for i in 0..n {
+                            let c = [i, j, k];
+                            let sum: f64 = (0..5)
+                                .map(|d| {
+                                    let mut q = c;
+                                    q[axis] = (c[axis] + n + d - 2) % n;
+                                    w[at(q[0], q[1], q[2])]
+                                })
+                                .sum();
+                            v[at(i, j, k)] = sum / 5.0;
+                        }
+                    }
+                }
+            }
+        }
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        let v: Vec<f64> = v.iter().map(|x| (x - mean) / sd).collect();
+        ScalarGrid::new([n; 3], v).unwrap()
+    }
+
+    #[test]
+    fn warping_leaves_thin_layers_alone() {
+        // A band 3 % of the standard deviation wide of a smooth field is a layer about a
+        // tenth of a voxel thick: a snap there moves one side of the layer by a good part of
+        // its thickness, and the quality pass, which leaves such layers alone, cannot give
+        // the volume back. Snapping every close vertex moved 0.44 % of the volume of these
+        // four fields (97 snaps); without the snaps in thin layers, 0.24 % (51).
+        let (mut moved, mut volume) = (0.0, 0.0);
+        for seed in 0..4u64 {
+            let g = smooth(22, seed);
+            let o = MeshOptions::new(0.2987, 0.3287, Method::Ctd);
+            volume += mesh_interval(&g, &o).unwrap().mesh.volume();
+            let warped = mesh_interval(&g, &o.clone().warp(0.3)).unwrap();
+            moved += warped.snapped.iter().map(|s| s.volume).sum::<f64>();
+        }
+        assert!(
+            moved.abs() <= 3e-3 * volume,
+            "warping moved {moved} of {volume}"
+        );
     }
 
     #[test]
