@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The full test suite. Installs what the tests need when it is missing:
+# The full test suite, then the README's commands. Installs what the tests need when it is missing:
 # gmsh and CalculiX (Debian packages), numpy, meshio and VTK (PyPI).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,3 +19,6 @@ if ! python3 -c "import numpy, meshio, vtk" >/dev/null 2>&1; then
 fi
 
 cargo test --all-targets "$@"
+
+# Every command of the README, on small generated data (scripts/check_readme.sh).
+scripts/check_readme.sh

@@ -6,10 +6,10 @@
 //!   the memory the kernel reports available (`MemAvailable` in `/proc/meminfo`), otherwise
 //!   none. The process-wide limit is also what a capping global allocator (the binary's)
 //!   enforces.
-//! * **Estimates**, measured on this project's machine (README, *Performance*): the samples
-//!   take their storage type's bytes per voxel ([`crate::Samples`]: 1 for `uint8`, 8 for
-//!   `float64`) plus, while the file is read, a reordered copy and the file's bytes; the mesh
-//!   and its analysis take about
+//! * **Estimates**, measured on this project's machine (docs/QUALITY-LOG.md, *Memory and
+//!   scale*): the samples take their storage type's bytes per voxel ([`crate::Samples`]: 1 for
+//!   `uint8`, 8 for `float64`) plus, while the file is read, a reordered copy and the file's
+//!   bytes; the mesh and its analysis take about
 //!   [`BYTES_PER_TET`] bytes per tetrahedron; the number of tetrahedra is estimated from the
 //!   cells inside the interval and the cells a bound crosses ([`estimate_tets`]).
 //! * **Fallible sections** ([`fallible`]): a capping allocator returns null inside them, so
@@ -25,13 +25,13 @@ use rayon::prelude::*;
 use crate::grid::ScalarGrid;
 
 /// Bytes per output tetrahedron of meshing plus analysis (peak RSS minus the grid, 69–84 B
-/// measured on the README's four volumes, rounded up).
+/// measured on the four benchmark runs of docs/QUALITY-LOG.md, *Memory and scale*, rounded up).
 pub const BYTES_PER_TET: u64 = 90;
 
 /// Tetrahedra per cell entirely inside the interval (the 6-fold split).
 const TETS_PER_INSIDE_CELL: f64 = 6.0;
 
-/// Tetrahedra per cell a bound crosses (11.5–12.2 measured on the README's volumes).
+/// Tetrahedra per cell a bound crosses (11.5–12.2 measured on the benchmark volumes).
 const TETS_PER_CROSSING_CELL: f64 = 12.5;
 
 /// Cells visited at most by [`estimate_tets`] (whole z layers are sampled beyond that).

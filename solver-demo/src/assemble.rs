@@ -3,9 +3,9 @@
 //! Element matrices `K_ab = k V grad(phi_a) . grad(phi_b)` and loads `F_a = int s phi_a`
 //! (exact for a constant `s`, 4-point degree-2 quadrature for a function) are computed in
 //! parallel. Two assemblies give the same CSR matrix (`sprs`) up to rounding:
-//! * [`assemble`] (the default, measured faster: see the README) builds each row in
-//!   parallel from the tets around its node, in tet order, and sums equal columns in that
-//!   order;
+//! * [`assemble`] (the default, measured faster: docs/QUALITY-LOG.md, *Solver demo*) builds
+//!   each row in parallel from the tets around its node, in tet order, and sums equal columns
+//!   in that order;
 //! * [`assemble_triplets`] concatenates the chunks' triplets in chunk order and lets `sprs`
 //!   sum duplicates (`TriMat::to_csr`).
 //!

@@ -1,4 +1,5 @@
-//! Critical points and critical regions of the piecewise-trilinear field (seeds 002 and 004),
+//! Critical points and critical regions of the piecewise-trilinear field (after “Exploring
+//! scalar fields using critical isovalues” and “Detecting critical regions in scalar fields”),
 //! with a persistence for each, and the contour spectrum (Betti numbers of `{f >= w}` between
 //! consecutive critical values).
 //!

@@ -11,8 +11,9 @@
 //! contractible, and of the sublevel sets `{f <= w}` when its lower link is not. Inside the box
 //! the two agree (Alexander duality on the sphere); on the box they may not (a box vertex whose
 //! inward neighbour is lower and whose neighbours on the box are higher opens a hole in
-//! `{f >= w}` but changes nothing in `{f <= w}`). [`VERTEX_TABLE`] is the 64-entry table of seed
-//! 002 for interior vertices, derived here by [`link_class`] rather than typed in.
+//! `{f >= w}` but changes nothing in `{f <= w}`). [`VERTEX_TABLE`] is the 64-entry table of
+//! “Exploring scalar fields using critical isovalues” for interior vertices, derived here by
+//! [`link_class`] rather than typed in.
 //!
 //! Directions: `2 * axis + side`, side 0 = towards lower index (`-x`, `+x`, `-y`, `+y`, `-z`,
 //! `+z`). Octant `o` (bit `a` set = positive side along axis `a`) is the triangle
