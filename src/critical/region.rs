@@ -24,7 +24,6 @@ use rustc_hash::FxHashMap;
 
 use rayon::prelude::*;
 
-use super::find::make_point;
 use super::plateau::{plateaus_in, Plateaus};
 use super::vertex::LinkClass;
 use super::{CriticalKind, CriticalPoint, RegionInfo};
@@ -294,7 +293,7 @@ fn region_point(
         lower: [nn.min(255) as u8, 0, 0],
     };
     let at = nearest_vertex(grid, region, centroid).map(|x| x as f64);
-    let mut pt = make_point(grid, kind, v, at, class, false);
+    let mut pt = CriticalPoint::new(grid, kind, v, at, class, false);
     pt.on_box = on_box;
     pt.superlevel = superlevel;
     pt.sublevel = sublevel;
