@@ -13,7 +13,8 @@ use crate::improve::quality::{
     cosine_extremes, cosines_to_degrees, dihedral_range, widest, NO_COSINES,
 };
 use crate::mesh::{TetMesh, VOLUME_BLOCK};
-use crate::topology::{betti, tet_links, triangle_links, Dsu};
+use crate::topology::{betti, tet_links, triangle_links};
+use crate::union_find::UnionFind;
 use crate::weld::{MeshChunk, MeshSink};
 
 /// What the report says about a mesh.
@@ -53,8 +54,8 @@ impl MeshFacts {
 
 /// Union–find of the tets' and the boundary triangles' vertices, grown chunk by chunk.
 struct Components {
-    solid: Dsu,
-    surface: Dsu,
+    solid: UnionFind,
+    surface: UnionFind,
     used: Vec<bool>,
     on_boundary: Vec<bool>,
 }
@@ -89,8 +90,8 @@ impl Components {
         if !self.used.iter().any(|&u| u) {
             return [0, 0, 0];
         }
-        let b0 = self.solid.roots(&self.used);
-        let surfaces = self.surface.roots(&self.on_boundary);
+        let b0 = self.solid.count_roots(&self.used);
+        let surfaces = self.surface.count_roots(&self.on_boundary);
         let vb = self.on_boundary.iter().filter(|&&x| x).count() as i64;
         crate::topology::betti_from_counts(b0, surfaces, vb, boundary_triangles as i64)
     }
@@ -124,8 +125,8 @@ impl FactsSink {
             partials: Vec::new(),
             cos_range: NO_COSINES,
             components: analyse.then(|| Components {
-                solid: Dsu::new(0),
-                surface: Dsu::new(0),
+                solid: UnionFind::new(0),
+                surface: UnionFind::new(0),
                 used: Vec::new(),
                 on_boundary: Vec::new(),
             }),

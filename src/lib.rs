@@ -34,6 +34,7 @@ pub mod samples;
 pub mod surface;
 pub mod topology;
 pub(crate) mod trilinear;
+pub mod union_find;
 pub(crate) mod warp;
 pub mod weld;
 

@@ -5,40 +5,7 @@
 //! b1 = b0 + b2 − χ. Requires the mesher's invariants (closed manifold boundary).
 
 use crate::mesh::TetMesh;
-
-/// Union–find over `n` elements.
-pub(crate) struct Dsu(Vec<u32>);
-
-impl Dsu {
-    pub(crate) fn new(n: usize) -> Self {
-        Dsu((0..n as u32).collect())
-    }
-    pub(crate) fn find(&mut self, mut x: u32) -> u32 {
-        while self.0[x as usize] != x {
-            let p = self.0[self.0[x as usize] as usize];
-            self.0[x as usize] = p;
-            x = p;
-        }
-        x
-    }
-    /// Adds singletons up to `n` elements.
-    pub(crate) fn grow(&mut self, n: usize) {
-        let from = self.0.len() as u32;
-        self.0.extend(from..n as u32);
-    }
-    /// Number of roots among the elements flagged in `used`.
-    pub(crate) fn roots(&mut self, used: &[bool]) -> usize {
-        (0..used.len() as u32)
-            .filter(|&i| used[i as usize] && self.find(i) == i)
-            .count()
-    }
-    pub(crate) fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            self.0[ra.max(rb) as usize] = ra.min(rb);
-        }
-    }
-}
+use crate::union_find::UnionFind;
 
 /// Number of connected components among the `used` elements of `0..n` linked by the pairs
 /// `links` yields for each item. Items are split among threads, each building its own
@@ -58,7 +25,7 @@ fn count_components<T: Sync>(
     let mut d = items
         .par_chunks(chunk)
         .map(|c| {
-            let mut d = Dsu::new(n);
+            let mut d = UnionFind::new(n);
             for t in c {
                 for (a, b) in links(t) {
                     d.union(a, b);
@@ -75,10 +42,8 @@ fn count_components<T: Sync>(
             }
             a
         })
-        .unwrap_or_else(|| Dsu::new(n));
-    (0..n as u32)
-        .filter(|&i| used[i as usize] && d.find(i) == i)
-        .count()
+        .unwrap_or_else(|| UnionFind::new(n));
+    d.count_roots(used)
 }
 
 /// The pairs that join a tet's corners (a spanning star).

@@ -62,6 +62,7 @@ use crate::extract::Snapped;
 use crate::geom::interval_volume;
 use crate::grid::{corner_offset, ScalarGrid};
 use crate::keys::{local_key, vertex_key, VertexKey, CORNER};
+use crate::union_find::UnionFind;
 
 /// A link vertex: key, index-space position, value.
 #[derive(Clone, Copy, Debug)]
@@ -657,7 +658,7 @@ impl Link {
     /// (joined by down-down edges) another, both nonempty; outside cells join their nodes.
     fn sides_connected(&self, cls: &[u8]) -> bool {
         let side = |c: u8| (c == DOWN) as usize;
-        let mut uf: Vec<usize> = (0..self.nodes.len()).collect();
+        let mut uf = UnionFind::new(self.nodes.len());
         for t in &self.tris {
             for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
                 let joined = match (cls[a], cls[b]) {
@@ -666,18 +667,18 @@ impl Link {
                     _ => true,
                 };
                 if joined {
-                    union(&mut uf, a, b);
+                    uf.union(a as u32, b as u32);
                 }
             }
         }
         for g in &self.groups {
             for &i in &g[1..] {
-                union(&mut uf, g[0], i);
+                uf.union(g[0] as u32, i as u32);
             }
         }
         let mut roots = [None, None];
         for i in 0..uf.len() {
-            let r = find(&mut uf, i);
+            let r = uf.find(i as u32);
             match roots[side(cls[i])] {
                 None => roots[side(cls[i])] = Some(r),
                 Some(r0) if r0 != r => return false,
@@ -685,21 +686,6 @@ impl Link {
             }
         }
         roots.iter().all(Option::is_some) && cls.contains(&UP)
-    }
-}
-
-fn find(uf: &mut [usize], mut i: usize) -> usize {
-    while uf[i] != i {
-        uf[i] = uf[uf[i]];
-        i = uf[i];
-    }
-    i
-}
-
-fn union(uf: &mut [usize], a: usize, b: usize) {
-    let (ra, rb) = (find(uf, a), find(uf, b));
-    if ra != rb {
-        uf[ra.max(rb)] = ra.min(rb);
     }
 }
 

@@ -2,6 +2,7 @@
 //! groups, the boundary nodes, and the solvability check.
 
 use tptd::io::MeshFile;
+use tptd::union_find::UnionFind;
 use tptd::TetMesh;
 
 use crate::SolveError;
@@ -118,14 +119,6 @@ pub fn boundary_nodes(mesh: &TetMesh) -> Vec<u32> {
         .collect()
 }
 
-fn find(parent: &mut [u32], mut v: u32) -> u32 {
-    while parent[v as usize] != v {
-        parent[v as usize] = parent[parent[v as usize] as usize];
-        v = parent[v as usize];
-    }
-    v
-}
-
 /// Checks that the system is non-singular: every node is in a tet and every connected part
 /// of the mesh has a Dirichlet node.
 ///
@@ -138,14 +131,13 @@ pub fn check_solvable(mesh: &TetMesh, dirichlet: &[f64]) -> Result<(), SolveErro
         ));
     }
     let n = mesh.points.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut parts = UnionFind::new(n);
     let mut used = vec![false; n];
     for t in &mesh.tets {
         used[t[0] as usize] = true;
         for &v in &t[1..] {
             used[v as usize] = true;
-            let (a, b) = (find(&mut parent, t[0]), find(&mut parent, v));
-            parent[a.max(b) as usize] = a.min(b);
+            parts.union(t[0], v);
         }
     }
     if let Some(v) = used.iter().position(|u| !u) {
@@ -157,12 +149,12 @@ pub fn check_solvable(mesh: &TetMesh, dirichlet: &[f64]) -> Result<(), SolveErro
     let mut fixed = vec![false; n];
     for v in 0..n as u32 {
         if !dirichlet[v as usize].is_nan() {
-            let r = find(&mut parent, v);
+            let r = parts.find(v);
             fixed[r as usize] = true;
         }
     }
     for v in 0..n as u32 {
-        if !fixed[find(&mut parent, v) as usize] {
+        if !fixed[parts.find(v) as usize] {
             return Err(SolveError::Singular(format!(
                 "the connected part of the mesh containing node {} has no Dirichlet node",
                 v + 1

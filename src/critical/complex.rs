@@ -17,6 +17,7 @@ use crate::decompose::plan::{plan_cell, Planner};
 use crate::decompose::{decompose_cell, NUM_LOCAL};
 use crate::grid::ScalarGrid;
 use crate::keys::{local_key, CORNER, FACE};
+use crate::union_find::UnionFind;
 use crate::Method;
 
 /// The TPTD complex over dense vertex ids.
@@ -126,15 +127,6 @@ pub fn build_complex(grid: &ScalarGrid) -> Complex {
     }
 }
 
-fn find(p: &mut [u32], mut x: u32) -> u32 {
-    while p[x as usize] != x {
-        let g = p[p[x as usize] as usize];
-        p[x as usize] = g;
-        x = g;
-    }
-    x
-}
-
 impl Complex {
     /// Betti numbers `[b0, b1, b2]` of `{f >= w}` (`superlevel`) or `{f <= w}`, for a level `w`
     /// that is no vertex value.
@@ -190,7 +182,7 @@ impl Complex {
         if above {
             qs.reverse();
         }
-        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut sets = UnionFind::new(n);
         let mut added = vec![false; n];
         let mut touch = self.on_box.clone();
         let mut count = 0i64;
@@ -207,7 +199,7 @@ impl Complex {
                     if !added[y as usize] {
                         continue;
                     }
-                    let (rx, ry) = (find(&mut parent, x), find(&mut parent, y));
+                    let (rx, ry) = (sets.find(x), sets.find(y));
                     if rx == ry {
                         continue;
                     }
@@ -219,7 +211,7 @@ impl Complex {
                         (!tx) as i64 + (!ty) as i64 - (!(tx || ty)) as i64
                     };
                     let (lo, hi) = (rx.min(ry), rx.max(ry));
-                    parent[hi as usize] = lo;
+                    sets.link(lo, hi);
                     touch[lo as usize] = tx || ty;
                 }
             }

@@ -124,31 +124,6 @@ pub fn sort_points(points: &mut [CriticalPoint]) {
     });
 }
 
-/// A critical point at index position `index` (`class`: how its neighbourhood splits).
-pub fn make_point(
-    grid: &ScalarGrid,
-    kind: CriticalKind,
-    value: f64,
-    index: [f64; 3],
-    class: LinkClass,
-    degenerate: bool,
-) -> CriticalPoint {
-    let on_box = (0..3).any(|a| index[a] == 0.0 || index[a] == (grid.dims[a] - 1) as f64);
-    CriticalPoint {
-        value,
-        kind,
-        position: grid.to_physical(index),
-        index,
-        on_box,
-        superlevel: degenerate || class.superlevel(),
-        sublevel: degenerate || class.sublevel(),
-        degenerate,
-        persistence: None,
-        region: None,
-        keys: Vec::new(),
-    }
-}
-
 /// Strides of the six neighbour directions (`2 * axis + side`) and whether each exists.
 #[inline]
 fn neighbours(grid: &ScalarGrid, p: [usize; 3]) -> [Option<usize>; 6] {
@@ -318,7 +293,7 @@ fn vertices_in_slab(
                 CriticalKind::Saddle
             };
             let index = [i as f64, j as f64, k as f64];
-            let mut pt = make_point(grid, kind, grid.value(i, j, k), index, class, false);
+            let mut pt = CriticalPoint::new(grid, kind, grid.value(i, j, k), index, class, false);
             pt.keys = vec![vertex_key(grid.index(i, j, k), CORNER)];
             out.push(pt);
         }
@@ -375,7 +350,7 @@ fn faces_in_slab(
                     j as f64 + local[1],
                     k as f64 + local[2],
                 ];
-                let mut pt = make_point(
+                let mut pt = CriticalPoint::new(
                     grid,
                     CriticalKind::FaceSaddle,
                     s.value,
@@ -426,7 +401,7 @@ fn cells_in_slab(
                         true,
                     ),
                 };
-                let mut pt = make_point(
+                let mut pt = CriticalPoint::new(
                     grid,
                     CriticalKind::BodySaddle,
                     s.value,

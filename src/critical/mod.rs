@@ -41,6 +41,9 @@ pub use transfer::{transfer_function, TransferDesign, TransferFunction, Transfer
 
 use serde::Serialize;
 
+use crate::grid::ScalarGrid;
+use vertex::LinkClass;
+
 /// What kind of critical point or region.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -153,6 +156,35 @@ pub struct CriticalPoint {
     /// for a point, every vertex for a region. Used to look up the persistence.
     #[serde(skip)]
     pub keys: Vec<u64>,
+}
+
+impl CriticalPoint {
+    /// A critical point at index position `index` (`class`: how its neighbourhood splits;
+    /// `degenerate`: the kind of change is not known, so the point counts for both
+    /// filtrations), with no persistence, region or keys yet.
+    pub fn new(
+        grid: &ScalarGrid,
+        kind: CriticalKind,
+        value: f64,
+        index: [f64; 3],
+        class: LinkClass,
+        degenerate: bool,
+    ) -> Self {
+        let on_box = (0..3).any(|a| index[a] == 0.0 || index[a] == (grid.dims[a] - 1) as f64);
+        Self {
+            value,
+            kind,
+            position: grid.to_physical(index),
+            index,
+            on_box,
+            superlevel: degenerate || class.superlevel(),
+            sublevel: degenerate || class.sublevel(),
+            degenerate,
+            persistence: None,
+            region: None,
+            keys: Vec::new(),
+        }
+    }
 }
 
 /// Why critical points could not be computed.

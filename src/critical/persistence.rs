@@ -24,6 +24,7 @@ use crate::grid::ScalarGrid;
 use crate::keys::local_key;
 use crate::keys::CORNER;
 use crate::trilinear::{body_saddles, face_saddle};
+use crate::union_find::UnionFind;
 
 /// The extra vertices (saddles) and extra edges (over dense ids; grid vertex `i` is id `i`,
 /// extra vertex `e` is `n + e`) of the cells with saddles.
@@ -156,15 +157,6 @@ fn ordered(x: f64) -> u64 {
     }
 }
 
-fn find(p: &mut [u32], mut x: u32) -> u32 {
-    while p[x as usize] != x {
-        let g = p[p[x as usize] as usize];
-        p[x as usize] = g;
-        x = g;
-    }
-    x
-}
-
 /// The persistence of every vertex id of the graph (0 where nothing is born or dies).
 fn vertex_persistence(grid: &ScalarGrid, g: &Graph) -> Vec<f64> {
     let n = grid.num_vertices();
@@ -207,7 +199,7 @@ fn sweep(
 ) -> Vec<f64> {
     let mut pers = vec![0.0f64; order.len()];
     let total = order.len();
-    let mut parent: Vec<u32> = (0..total as u32).collect();
+    let mut sets = UnionFind::new(total);
     // birth vertex of each root; u32::MAX = not yet processed
     let mut birth = vec![u32::MAX; total];
     let before = |a: u32, b: u32| {
@@ -226,7 +218,7 @@ fn sweep(
     };
     for &(_, x) in seq {
         let xi = x as usize;
-        neighbour_roots(grid, g, xi, &birth, &mut parent, &mut roots);
+        neighbour_roots(grid, g, xi, &birth, &mut sets, &mut roots);
         if roots.is_empty() {
             birth[xi] = x;
             pers[xi] = f64::INFINITY;
@@ -245,10 +237,10 @@ fn sweep(
                     pers[b].max(span)
                 };
                 pers[xi] = pers[xi].max(span);
-                parent[r as usize] = elder;
+                sets.link(elder, r);
             }
         }
-        parent[xi] = elder;
+        sets.link(elder, x);
         birth[xi] = birth[elder as usize];
     }
     pers
@@ -262,14 +254,14 @@ fn neighbour_roots(
     g: &Graph,
     xi: usize,
     birth: &[u32],
-    parent: &mut [u32],
+    sets: &mut UnionFind,
     roots: &mut Vec<u32>,
 ) {
     roots.clear();
     let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
-    let visit = |y: u32, parent: &mut [u32], roots: &mut Vec<u32>| {
+    let visit = |y: u32, sets: &mut UnionFind, roots: &mut Vec<u32>| {
         if birth[y as usize] != u32::MAX {
-            let r = find(parent, y);
+            let r = sets.find(y);
             if !roots.contains(&r) {
                 roots.push(r);
             }
@@ -279,15 +271,15 @@ fn neighbour_roots(
         let p = grid.vertex_ijk(xi);
         for a in 0..3 {
             if p[a] > 0 {
-                visit((xi - stride[a]) as u32, parent, roots);
+                visit((xi - stride[a]) as u32, sets, roots);
             }
             if p[a] + 1 < grid.dims[a] {
-                visit((xi + stride[a]) as u32, parent, roots);
+                visit((xi + stride[a]) as u32, sets, roots);
             }
         }
     }
     for &y in &g.adj[g.start[xi] as usize..g.start[xi + 1] as usize] {
-        visit(y, parent, roots);
+        visit(y, sets, roots);
     }
 }
 

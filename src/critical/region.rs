@@ -24,31 +24,12 @@ use rustc_hash::FxHashMap;
 
 use rayon::prelude::*;
 
-use super::find::make_point;
 use super::plateau::{plateaus_in, Plateaus};
 use super::vertex::LinkClass;
 use super::{CriticalKind, CriticalPoint, RegionInfo};
 use crate::grid::{corner_offset, face_corners, ScalarGrid};
 use crate::trilinear::face_saddle_of;
-
-/// Union–find over a small number of nodes.
-struct Uf(Vec<usize>);
-
-impl Uf {
-    fn find(&mut self, mut x: usize) -> usize {
-        while self.0[x] != x {
-            self.0[x] = self.0[self.0[x]];
-            x = self.0[x];
-        }
-        x
-    }
-    fn union(&mut self, a: usize, b: usize) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            self.0[ra.max(rb)] = ra.min(rb);
-        }
-    }
-}
+use crate::union_find::UnionFind;
 
 /// The critical plateaus of the grid with a value in one of `windows`, classified.
 pub fn critical_regions(grid: &ScalarGrid, windows: &[(f64, f64)]) -> Vec<CriticalPoint> {
@@ -210,9 +191,9 @@ impl LinkGraph {
     /// The connected parts above and below, and which of them do not reach the grid box.
     fn parts(&self, grid: &ScalarGrid) -> Parts {
         let n = self.sign.len();
-        let mut uf = Uf((0..n).collect());
+        let mut uf = UnionFind::new(n);
         for &(a, b) in &self.links {
-            uf.union(a, b);
+            uf.union(a as u32, b as u32);
         }
         // which nodes lie on the grid box (both ends on one box plane)
         let mut on_box_node = vec![false; n];
@@ -223,12 +204,12 @@ impl LinkGraph {
         }
         let mut touch = vec![false; n];
         for i in 0..n {
-            let r = uf.find(i);
+            let r = uf.find(i as u32) as usize;
             touch[r] |= on_box_node[i];
         }
         let mut parts = Parts::default();
         for i in 0..n {
-            if uf.find(i) == i {
+            if uf.find(i as u32) as usize == i {
                 let (count, free) = if self.sign[i] {
                     (&mut parts.np, &mut parts.np_free)
                 } else {
@@ -312,7 +293,7 @@ fn region_point(
         lower: [nn.min(255) as u8, 0, 0],
     };
     let at = nearest_vertex(grid, region, centroid).map(|x| x as f64);
-    let mut pt = make_point(grid, kind, v, at, class, false);
+    let mut pt = CriticalPoint::new(grid, kind, v, at, class, false);
     pt.on_box = on_box;
     pt.superlevel = superlevel;
     pt.sublevel = sublevel;

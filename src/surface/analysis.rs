@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::geom::{cross, sub};
 use crate::mesh::TriSurface;
-use crate::topology::Dsu;
+use crate::union_find::{ParityUnionFind, UnionFind};
 
 /// The analysis of a triangle surface (the `surface` section of the JSON report).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -67,56 +67,10 @@ struct EdgeStats {
     not_closed: Vec<bool>,
 }
 
-/// Union–find over triangles with the parity "orientation flipped relative to the root".
-struct ParityDsu {
-    parent: Vec<u32>,
-    parity: Vec<bool>,
-}
-
-impl ParityDsu {
-    fn find(&mut self, x: u32) -> (u32, bool) {
-        let mut path = Vec::new();
-        let mut r = x;
-        while self.parent[r as usize] != r {
-            path.push(r);
-            r = self.parent[r as usize];
-        }
-        // compress: parity of each path node relative to the root
-        let mut acc = false;
-        for &n in path.iter().rev() {
-            acc ^= self.parity[n as usize];
-            self.parity[n as usize] = acc;
-            self.parent[n as usize] = r;
-        }
-        (
-            r,
-            if path.is_empty() {
-                false
-            } else {
-                self.parity[x as usize]
-            },
-        )
-    }
-
-    /// Requires `parity(a) ^ parity(b) == p`; returns false on a contradiction.
-    fn relate(&mut self, a: u32, b: u32, p: bool) -> bool {
-        let (ra, pa) = self.find(a);
-        let (rb, pb) = self.find(b);
-        if ra == rb {
-            return pa ^ pb == p;
-        }
-        self.parent[rb as usize] = ra;
-        self.parity[rb as usize] = pa ^ pb ^ p;
-        true
-    }
-}
-
 fn edge_stats(s: &TriSurface, edges: &[Edge]) -> EdgeStats {
     let n = s.triangles.len();
-    let mut dsu = ParityDsu {
-        parent: (0..n as u32).collect(),
-        parity: vec![false; n],
-    };
+    // triangles, with the parity "orientation flipped relative to the root"
+    let mut dsu = ParityUnionFind::new(n);
     let mut bad = Vec::new();
     let mut st = EdgeStats {
         edges: 0,
@@ -174,7 +128,7 @@ fn link_components(edges: &[(u32, u32, u32)]) -> usize {
     let mut ids: Vec<u32> = edges.iter().flat_map(|e| [e.1, e.2]).collect();
     ids.sort_unstable();
     ids.dedup();
-    let mut d = Dsu::new(ids.len());
+    let mut d = UnionFind::new(ids.len());
     let local = |v: u32| ids.binary_search(&v).expect("listed") as u32;
     for e in edges {
         d.union(local(e.1), local(e.2));
@@ -204,7 +158,7 @@ fn area(s: &TriSurface) -> f64 {
 pub fn analyse_surface(s: &TriSurface) -> SurfaceAnalysis {
     let edges = sorted_edges(s);
     let st = edge_stats(s, &edges);
-    let mut d = Dsu::new(s.points.len());
+    let mut d = UnionFind::new(s.points.len());
     for t in &s.triangles {
         d.union(t[0], t[1]);
         d.union(t[0], t[2]);

@@ -1,6 +1,7 @@
 //! Mesh invariants checked independently of the mesher's own analyses.
 
 use std::collections::{HashMap, HashSet};
+use tptd::union_find::UnionFind;
 use tptd::{BoundaryLabel, TetMesh};
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -291,26 +292,6 @@ pub fn check_labels(mesh: &TetMesh, alpha: f64, beta: f64, extent: [f64; 3]) {
     );
 }
 
-struct Dsu(Vec<usize>);
-impl Dsu {
-    fn new(n: usize) -> Self {
-        Dsu((0..n).collect())
-    }
-    fn find(&mut self, mut x: usize) -> usize {
-        while self.0[x] != x {
-            self.0[x] = self.0[self.0[x]];
-            x = self.0[x];
-        }
-        x
-    }
-    fn union(&mut self, a: usize, b: usize) {
-        let (a, b) = (self.find(a), self.find(b));
-        if a != b {
-            self.0[a] = b;
-        }
-    }
-}
-
 /// Betti numbers of the mesh, computed from its simplices: b0 = components of tets through
 /// shared faces; χ = V − E + F − T; b2 = components of the boundary surface − b0 (valid for a
 /// compact 3-manifold in R³); b1 = b0 + b2 − χ.
@@ -319,7 +300,7 @@ pub fn mesh_betti(mesh: &TetMesh) -> [usize; 3] {
     if nt == 0 {
         return [0, 0, 0];
     }
-    let mut dsu = Dsu::new(nt);
+    let mut dsu = UnionFind::new(nt);
     let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
     let mut edges: HashSet<[u32; 2]> = HashSet::new();
     let mut verts: HashSet<u32> = HashSet::new();
@@ -327,7 +308,7 @@ pub fn mesh_betti(mesh: &TetMesh) -> [usize; 3] {
         for (f, _) in tet_faces(t) {
             let s = sorted3(f);
             if let Some(&o) = faces.get(&s) {
-                dsu.union(ti, o);
+                dsu.union(ti as u32, o as u32);
             } else {
                 faces.insert(s, ti);
             }
@@ -339,22 +320,22 @@ pub fn mesh_betti(mesh: &TetMesh) -> [usize; 3] {
             }
         }
     }
-    let b0 = (0..nt).filter(|&t| dsu.find(t) == t).count();
+    let b0 = (0..nt as u32).filter(|&t| dsu.find(t) == t).count();
     let chi = verts.len() as i64 - edges.len() as i64 + faces.len() as i64 - nt as i64;
     let nb = mesh.boundary.len();
-    let mut bd = Dsu::new(nb);
+    let mut bd = UnionFind::new(nb);
     let mut by_edge: HashMap<[u32; 2], usize> = HashMap::new();
     for (bi, &[a, b, c]) in mesh.boundary.iter().enumerate() {
         for (u, v) in [(a, b), (b, c), (c, a)] {
             let e = [u.min(v), u.max(v)];
             if let Some(&o) = by_edge.get(&e) {
-                bd.union(bi, o);
+                bd.union(bi as u32, o as u32);
             } else {
                 by_edge.insert(e, bi);
             }
         }
     }
-    let bcomps = (0..nb).filter(|&t| bd.find(t) == t).count();
+    let bcomps = (0..nb as u32).filter(|&t| bd.find(t) == t).count();
     let b2 = bcomps as i64 - b0 as i64;
     let b1 = b0 as i64 + b2 - chi;
     // a negative value (impossible for a valid mesh) is reported as usize::MAX
