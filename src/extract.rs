@@ -15,7 +15,7 @@ use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM
 use crate::grid::{cell_box_planes, corner_offset, Samples, ScalarGrid};
 use crate::keys::local_key;
 use crate::mesh::TetMesh;
-use crate::warp::snap_vertices;
+use crate::warp::{snap_vertices, Snapped};
 use crate::weld::{Gather, MeshSink, Slab, Welder};
 
 pub use crate::decompose::plan::Method;
@@ -162,17 +162,6 @@ pub struct MeshOutput {
     pub stats: MeshStats,
     /// The grid vertices that warping put on a level ([`MeshOptions::warp`]), by grid index.
     pub snapped: Vec<Snapped>,
-}
-
-/// A grid vertex that warping put on a level, and the volume that moved (the mesh's volume
-/// with the snap less that without it, in index units: cells of volume 1). The quality pass
-/// gives it back ([`crate::improve::improve_meshed`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Snapped {
-    /// Grid index of the vertex.
-    pub vertex: usize,
-    /// Volume the snap added (negative: took).
-    pub volume: f64,
 }
 
 /// Meshes `{alpha < f < beta}` (its closure) of the piecewise-trilinear field on `grid`.

@@ -42,10 +42,11 @@ pub use curvilinear::{mesh_curvilinear, CurvilinearError};
 pub use decompose::CellCase;
 pub use extract::{
     mesh_interval, mesh_interval_streamed, mesh_interval_with_progress, MeshError, MeshOptions,
-    MeshOutput, MeshStats, Method, Snapped,
+    MeshOutput, MeshStats, Method,
 };
 pub use grid::{CurvilinearGrid, ScalarGrid};
 pub use mesh::{BoundaryLabel, TetMesh, TriSurface};
 pub use samples::{SampleStorage, Samples};
 pub use surface::{analysis::analyse_surface, level_surface, SurfaceOptions};
+pub use warp::Snapped;
 pub use weld::{MeshChunk, MeshSink};

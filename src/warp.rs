@@ -58,11 +58,21 @@ use rustc_hash::FxHashMap;
 use crate::clip::{Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
 use crate::decompose::decompose_cell;
 use crate::decompose::plan::{plan_cell, Layout, Planner};
-use crate::extract::Snapped;
 use crate::geom::interval_volume;
 use crate::grid::{corner_offset, ScalarGrid};
 use crate::keys::{local_key, vertex_key, VertexKey, CORNER};
 use crate::union_find::UnionFind;
+
+/// A grid vertex that warping put on a level, and the volume that moved (the mesh's volume
+/// with the snap less that without it, in index units: cells of volume 1). The quality pass
+/// gives it back ([`crate::improve::improve_meshed`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Snapped {
+    /// Grid index of the vertex.
+    pub vertex: usize,
+    /// Volume the snap added (negative: took).
+    pub volume: f64,
+}
 
 /// A link vertex: key, index-space position, value.
 #[derive(Clone, Copy, Debug)]

@@ -42,9 +42,10 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::extract::{MeshOutput, Snapped};
+use crate::extract::MeshOutput;
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
+use crate::warp::Snapped;
 use field::Field;
 use local::LocalMesh;
 use quality::biased_min_sine;

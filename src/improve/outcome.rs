@@ -11,9 +11,10 @@ use super::quality::tet_dihedral_range;
 use super::{
     improve_keeping_volume, runs_again_for_volume, ImproveReport, QualityOptions, StageSeconds,
 };
-use crate::extract::{MeshOutput, Snapped};
+use crate::extract::MeshOutput;
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
+use crate::warp::Snapped;
 
 /// A map of the mesh's points to the space its quality is measured in (a curvilinear grid's
 /// geometry map: the pass works in the grid's parameter space, the mesh is written mapped).

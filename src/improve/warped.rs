@@ -13,9 +13,9 @@
 use rayon::prelude::*;
 
 use super::field::Field;
-use crate::extract::Snapped;
 use crate::geom::signed_volume;
 use crate::mesh::TetMesh;
+use crate::warp::Snapped;
 
 /// Adds the volume (physical units) of each snapped grid vertex of `snapped` to its point's
 /// `drift`.
