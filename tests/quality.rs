@@ -777,3 +777,18 @@ fn ends_near_its_volume(name: &str, f: &Field, opts: &QualityOptions) {
     let change = volume_change(&o.before, &o.after).abs();
     assert!(change < 4e-3, "{name}: volume change {change}");
 }
+
+#[test]
+fn a_pass_of_no_rounds_leaves_the_warped_mesh_valid() {
+    // `max_rounds: 0` once ran the off-level round anyway, on no tet qualities, and panicked.
+    let field = sphere(12, 4.3);
+    let q = QualityOptions {
+        max_rounds: 0,
+        ..QualityOptions::default()
+    };
+    let o = mesh_and_improve_with(&field, -1.0, 0.0, &q);
+    // No projection either: the snapped nodes stay at their grid vertices.
+    check_mesh(&o.after);
+    check_labels(&o.after, -1.0, 0.0, extent(&field));
+    assert_eq!(mesh_betti(&o.after), mesh_betti(&o.before));
+}

@@ -560,6 +560,9 @@ fn run_rounds(
     state: &mut PassState,
     report: &mut ImproveReport,
 ) {
+    if rounds == 0 {
+        return; // none asked for (the first round's projection included)
+    }
     // Only the last round retries and polishes its stuck regions (its regions are small).
     let shifted = Ctx {
         slab_offset: 0.5 * local::SLAB,
