@@ -22,7 +22,7 @@ mod reference;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::check::{check_mesh, CheckOptions, LevelSummary, Problem, WindingSummary};
+use crate::check::{check_mesh, CheckOptions, LevelSummary, Problem, ProblemKind, WindingSummary};
 use crate::geom::signed_volume;
 use crate::grid::ScalarGrid;
 use crate::improve::quality::{dihedral_angles, summarize, ABOVE_ANGLES, BELOW_ANGLES};
@@ -195,6 +195,41 @@ pub fn inspect(file: &str, mut mesh: TetMesh, opts: &InspectOptions) -> Inspecti
         matches_reference: reference.map(|r| report.betti == Some(r.betti)),
         trilinear_volume: reference.map(|r| r.volume),
         volume_error: reference.map(|r| report.volume / r.volume.estimate - 1.0),
+    }
+}
+
+/// The rows of `tptd-mesh --inspect` the checker's problems are shown in.
+pub const PROBLEM_GROUPS: [&str; 5] = [
+    "conformity",
+    "orientation",
+    "manifold boundary",
+    "embedding",
+    "level sets",
+];
+
+/// The entry of [`PROBLEM_GROUPS`] a problem kind belongs to.
+pub fn problem_group(kind: ProblemKind) -> &'static str {
+    use ProblemKind::*;
+    match kind {
+        BadIndex
+        | NonFinitePoint
+        | LabelCount
+        | TooLarge
+        | DuplicateTet
+        | FaceInThreeOrMoreTets
+        | TetsOnSameSideOfFace
+        | BoundaryFaceUnlisted
+        | ListedFaceNotBoundary
+        | BoundaryTriangleInward => PROBLEM_GROUPS[0],
+        InvertedTet | DegenerateTet => PROBLEM_GROUPS[1],
+        OpenBoundaryEdge
+        | NonManifoldBoundaryEdge
+        | NonManifoldBoundaryVertex
+        | InconsistentBoundaryOrientation => PROBLEM_GROUPS[2],
+        BoundarySelfIntersection | BoundaryOverlap | WindingNumber | VolumeMismatch => {
+            PROBLEM_GROUPS[3]
+        }
+        OffLevel | OutsideGrid | BoxTriangleOffBox => PROBLEM_GROUPS[4],
     }
 }
 
