@@ -426,3 +426,96 @@ fn the_json_matches_numpy_through_meshio() {
         close(&i["dihedral"]["max"], &np["max"]);
     }
 }
+
+/// Meshes the closed surface `s.off` with the PyPI `tetgen` package (TetGen 1.6 inside;
+/// `-pq1.2`) and writes what it returns as `py.1.node`/`py.1.ele` (numbered from 1).
+const PY_TETGEN: &str = r#"
+import sys
+import numpy as np
+import tetgen
+lines = [l.split() for l in open(sys.argv[1]) if l.strip()]
+nv, nf = int(lines[1][0]), int(lines[1][1])
+v = np.array([[float(x) for x in l] for l in lines[2:2 + nv]])
+f = np.array([[int(x) for x in l[1:4]] for l in lines[2 + nv:2 + nv + nf]], dtype=np.int32)
+nodes, elems, *_ = tetgen.TetGen(v, f).tetrahedralize(switches="pq1.2Q")
+with open("py.1.node", "w") as out:
+    out.write(f"{len(nodes)} 3 0 0\n")
+    for i, p in enumerate(nodes):
+        out.write(f"{i + 1} {float(p[0])!r} {float(p[1])!r} {float(p[2])!r}\n")
+with open("py.1.ele", "w") as out:
+    out.write(f"{len(elems)} 4 0\n")
+    for i, t in enumerate(elems):
+        out.write(f"{i + 1} {t[0] + 1} {t[1] + 1} {t[2] + 1} {t[3] + 1}\n")
+"#;
+
+/// Real TetGen on our boundary surface (`-pq1.2`): the PyPI `tetgen` package from Python,
+/// and Debian's `tetgen` program (which writes its own `.node`/`.ele`/`.face`), each when
+/// installed (a note otherwise). Its mesh has our volume (the same boundary, up to the
+/// facets TetGen merges), the reference Betti numbers, and is a valid embedding within the
+/// level-set bound.
+#[test]
+fn real_tetgen_on_our_boundary_surface() {
+    let dir = meshed();
+    let d = dir.path();
+    let mesh = read_mesh(&d.join("m.msh")).unwrap().mesh;
+    // the torus reaches the box at x = 0: the caps close the surface
+    let closed = tptd::SurfaceOptions {
+        caps: true,
+        beta: BETA.parse().unwrap(),
+    };
+    let s = tptd::level_surface(&mesh, &closed);
+    let mut off = format!("OFF\n{} {} 0\n", s.points.len(), s.triangles.len());
+    for p in &s.points {
+        writeln!(off, "{} {} {}", p[0], p[1], p[2]).unwrap();
+    }
+    for t in &s.triangles {
+        writeln!(off, "3 {} {} {}", t[0], t[1], t[2]).unwrap();
+    }
+    fs::write(d.join("s.off"), off).unwrap();
+    let mut peers = Vec::new();
+    let py = Command::new(python())
+        .current_dir(d)
+        .args(["-c", PY_TETGEN, "s.off"])
+        .output();
+    match py {
+        Ok(o) if o.status.success() => peers.push("py.1.ele"),
+        Ok(o) => eprintln!(
+            "note: TetGen from Python (PyPI tetgen) not run: {}",
+            String::from_utf8_lossy(&o.stderr)
+                .lines()
+                .last()
+                .unwrap_or("")
+        ),
+        Err(e) => eprintln!("note: no python3 for TetGen: {e}"),
+    }
+    match Command::new("tetgen")
+        .current_dir(d)
+        .args(["-pq1.2Q", "s.off"])
+        .output()
+    {
+        Ok(o) if o.status.success() => peers.push("s.1.ele"),
+        Ok(o) => panic!("tetgen failed: {}", String::from_utf8_lossy(&o.stderr)),
+        Err(_) => eprintln!("note: Debian's tetgen is not installed (apt-get install tetgen)"),
+    }
+    if peers.is_empty() {
+        eprintln!("note: neither TetGen is installed; skipping the TetGen comparison");
+        return;
+    }
+    let names = [&["m.msh"][..], &peers].concat();
+    let (all, out) = inspect(d, &names, &with_volume());
+    let ours = all[0]["volume"].as_f64().unwrap();
+    for i in &all[1..] {
+        let name = &i["file"];
+        assert_eq!(i["valid"], true, "{name}: {}\n{out}", i["problems"]);
+        assert_eq!(i["matches_reference"], true, "{name}\n{out}");
+        assert_eq!(i["betti"], serde_json::json!([1, 1, 0]));
+        let v = i["volume"].as_f64().unwrap();
+        // TetGen merges facets within 0.1° of coplanar and may triangulate them anew
+        assert!(
+            (v - ours).abs() <= 1e-4 * ours,
+            "{name}: volume {v} vs ours {ours}"
+        );
+        assert!(i["nodes"].as_u64().unwrap() >= s.points.len() as u64);
+    }
+    eprintln!("{out}");
+}
