@@ -141,22 +141,50 @@ fn group_cell(i: &Inspection, group: &str) -> String {
     cell
 }
 
-/// The rows of the table: a name and one cell per mesh.
-fn rows(all: &[Inspection], with_volume: bool) -> Vec<(String, Vec<String>)> {
-    let col = |f: &dyn Fn(&Inspection) -> String| all.iter().map(f).collect::<Vec<_>>();
+/// A row: its name and one cell per mesh.
+type Row = (String, Vec<String>);
+
+/// The cells of one row, one per mesh.
+fn col(all: &[Inspection], f: &dyn Fn(&Inspection) -> String) -> Vec<String> {
+    all.iter().map(f).collect()
+}
+
+/// The rows of the table: counts and quality, the checker's verdict, the reference.
+fn rows(all: &[Inspection], with_volume: bool) -> Vec<Row> {
+    let mut r = quality_rows(all);
+    let groups = if with_volume { 5 } else { 4 };
+    for g in &PROBLEM_GROUPS[..groups] {
+        r.push((g.to_string(), col(all, &|i| group_cell(i, g))));
+    }
+    r.push((
+        "Betti numbers".into(),
+        col(all, &|i| {
+            i.betti.map_or("- (boundary open)".into(), |b| joined(&b))
+        }),
+    ));
+    if with_volume {
+        r.extend(reference_rows(all));
+    }
+    r.push(("valid".into(), col(all, &|i| yes_no(i.valid))));
+    r
+}
+
+/// Counts, volume, dihedral angles and the other quality measures.
+fn quality_rows(all: &[Inspection]) -> Vec<Row> {
     let (below, above) = QUALITY_THRESHOLDS;
     let pct = |p: &[f64]| joined(&p.iter().map(|x| format!("p{x}")).collect::<Vec<_>>());
     let dihedral = |f: &dyn Fn(&tptd::inspect::Dihedral) -> String| {
-        col(&|i| i.dihedral.as_ref().map_or("-".into(), f))
+        col(all, &|i| i.dihedral.as_ref().map_or("-".into(), f))
     };
-    let mut r = vec![
-        ("nodes".into(), col(&|i| i.nodes.to_string())),
-        ("tets".into(), col(&|i| i.tets.to_string())),
+    let q = |f: &dyn Fn(&tptd::inspect::Quality) -> String| col(all, &|i| f(&i.quality));
+    vec![
+        ("nodes".into(), col(all, &|i| i.nodes.to_string())),
+        ("tets".into(), col(all, &|i| i.tets.to_string())),
         (
             "boundary faces".into(),
-            col(&|i| i.boundary_faces.to_string()),
+            col(all, &|i| i.boundary_faces.to_string()),
         ),
-        ("volume".into(), col(&|i| num(i.volume))),
+        ("volume".into(), col(all, &|i| num(i.volume))),
         (
             "dihedral min max".into(),
             dihedral(&|d| angles(&[d.min, d.max])),
@@ -171,60 +199,48 @@ fn rows(all: &[Inspection], with_volume: bool) -> Vec<(String, Vec<String>)> {
         ),
         (
             format!("tets min angle < {}", joined(&below)),
-            col(&|i| joined(&i.quality.below)),
+            q(&|q| joined(&q.below)),
         ),
         (
             format!("tets max angle > {}", joined(&above)),
-            col(&|i| joined(&i.quality.above)),
+            q(&|q| joined(&q.above)),
         ),
         (
             "radius ratio min".into(),
-            col(&|i| format!("{:.4}", i.quality.min_radius_ratio)),
+            q(&|q| format!("{:.4}", q.min_radius_ratio)),
         ),
+        ("SICN min".into(), q(&|q| format!("{:.4}", q.min_sicn))),
+        ("gamma min".into(), q(&|q| format!("{:.4}", q.min_gamma))),
+    ]
+}
+
+/// Against the trilinear interval: topology, labels, level distance, volume.
+fn reference_rows(all: &[Inspection]) -> Vec<Row> {
+    vec![
         (
-            "SICN min".into(),
-            col(&|i| format!("{:.4}", i.quality.min_sicn)),
-        ),
-        (
-            "gamma min".into(),
-            col(&|i| format!("{:.4}", i.quality.min_gamma)),
-        ),
-    ];
-    let groups = if with_volume { 5 } else { 4 };
-    for g in &PROBLEM_GROUPS[..groups] {
-        r.push((g.to_string(), col(&|i| group_cell(i, g))));
-    }
-    r.push((
-        "Betti numbers".into(),
-        col(&|i| i.betti.map_or("- (boundary open)".into(), |b| joined(&b))),
-    ));
-    if with_volume {
-        r.push((
             "matches reference".into(),
-            col(&|i| yes_no(i.matches_reference == Some(true))),
-        ));
-        r.push((
+            col(all, &|i| yes_no(i.matches_reference == Some(true))),
+        ),
+        (
             "boundary labels".into(),
-            col(&|i| {
+            col(all, &|i| {
                 i.labels
                     .as_ref()
                     .map_or("-".into(), |l| l.source.replace('_', " "))
             }),
-        ));
-        r.push((
+        ),
+        (
             "level distance max (vox)".into(),
-            col(&|i| i.level.as_ref().map_or("-".into(), level_cell)),
-        ));
-        r.push((
+            col(all, &|i| i.level.as_ref().map_or("-".into(), level_cell)),
+        ),
+        (
             "volume vs trilinear".into(),
-            col(&|i| {
+            col(all, &|i| {
                 i.volume_error
                     .map_or("-".into(), |e| format!("{:+.3} %", 100.0 * e))
             }),
-        ));
-    }
-    r.push(("valid".into(), col(&|i| yes_no(i.valid))));
-    r
+        ),
+    ]
 }
 
 fn yes_no(b: bool) -> String {
