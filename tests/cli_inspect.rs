@@ -9,7 +9,7 @@ use std::fs;
 use std::path::Path;
 use std::process::Command;
 
-use common::external::{python, require_python_with, run};
+use common::external::{python, require_gmsh, require_python_with, run};
 use common::files::{listing, write_npy};
 use common::output::{assert_ok, read_json, run_in, stderr, stdout};
 use serde_json::Value;
@@ -370,6 +370,31 @@ fn options_that_do_not_apply_are_refused() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert_eq!(err.lines().count(), 1, "{err}");
         assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}
+
+/// Gmsh's own binary `.msh` 4.1 (converted from ours by `gmsh -bin`) and ours in binary give
+/// the numbers of our ASCII file.
+#[test]
+fn binary_msh_from_gmsh_and_from_us_give_the_same_numbers() {
+    if !require_gmsh() {
+        return;
+    }
+    let dir = meshed();
+    let d = dir.path();
+    let args = ["vol.npy", "--beta", BETA, "-q", "-o", "b.msh"];
+    assert_ok(&run_in(
+        d,
+        &[&args[..], &["--msh-version", "4.1-binary"]].concat(),
+    ));
+    let (ok, out) = run(Command::new("gmsh")
+        .current_dir(d)
+        .args(["m.msh", "-0", "-bin", "-format", "msh41", "-o", "g.msh"]));
+    assert!(ok, "{out}");
+    let (all, _) = inspect(d, &["m.msh", "b.msh", "g.msh"], &with_volume());
+    for i in &all[1..] {
+        same_numbers(&all[0], i);
+        assert_eq!(all[0]["labels"], i["labels"]);
     }
 }
 

@@ -1,5 +1,6 @@
 //! Mesh input by file extension: [`read_mesh`] is the twin of [`super::write_mesh`] and
-//! chooses among the readers `msh_read` (`.msh` 4.1 and 2.2), `inp_read` (`.inp`),
+//! chooses among the readers `msh_read` (`.msh` 4.1 and 2.2), `msh_read_binary` (binary
+//! `.msh` 4.1), `inp_read` (`.inp`),
 //! `vtu_read` (`.vtu`), `tetgen_read` (TetGen `.node`/`.ele`/`.face`) and `medit_read`
 //! (Medit `.mesh`). All return a [`MeshFile`]: the [`TetMesh`] plus the named node groups
 //! and volume regions a solver needs for boundary conditions and materials.
@@ -115,7 +116,8 @@ pub fn mesh_files(path: &Path) -> Vec<std::path::PathBuf> {
 }
 
 /// Reads a tetrahedral mesh with its groups from `path`, by extension (case-insensitive):
-/// `.msh` (Gmsh ASCII 4.1 or 2.2, see `msh_read`), `.inp` (Abaqus/CalculiX, see
+/// `.msh` (Gmsh ASCII 4.1 or 2.2, see `msh_read`, or binary 4.1, see `msh_read_binary`),
+/// `.inp` (Abaqus/CalculiX, see
 /// `inp_read`), `.vtu` (VTK XML, see `vtu_read`), `.mesh` (Medit ASCII, as fTetWild, CGAL
 /// and MMG write it, see `medit_read`), `.node` or `.ele` (TetGen: both files of the same
 /// name, and its `.face` when present, see `tetgen_read`).
@@ -126,7 +128,15 @@ pub fn mesh_files(path: &Path) -> Vec<std::path::PathBuf> {
 pub fn read_mesh(path: &Path) -> Result<MeshFile, MeshReadError> {
     let file = path.display().to_string();
     let reader = match Format::of(path) {
-        Some(Format::Msh) => super::msh_read::parse_msh,
+        Some(Format::Msh) => {
+            return parse_bytes(path, |b| {
+                if super::msh_read_binary::is_binary_msh(b) {
+                    super::msh_read_binary::parse_msh_binary(b)
+                } else {
+                    super::msh_read::parse_msh(&String::from_utf8_lossy(b))
+                }
+            })
+        }
         Some(Format::Inp) => super::inp_read::parse_inp,
         Some(Format::Medit) => super::medit_read::parse_medit,
         Some(Format::Vtu) => return super::vtu_read::read_vtu(path),
@@ -141,13 +151,20 @@ pub(crate) fn parse_file<T>(
     path: &Path,
     parse: impl FnOnce(&str) -> Result<T, ParseError>,
 ) -> Result<T, MeshReadError> {
+    parse_bytes(path, |b| parse(&String::from_utf8_lossy(b)))
+}
+
+/// Reads `path` and parses its bytes with `parse`, the errors naming the file.
+pub(crate) fn parse_bytes<T>(
+    path: &Path,
+    parse: impl FnOnce(&[u8]) -> Result<T, ParseError>,
+) -> Result<T, MeshReadError> {
     let file = path.display().to_string();
-    let text = std::fs::read(path).map_err(|source| MeshReadError::Io {
+    let bytes = std::fs::read(path).map_err(|source| MeshReadError::Io {
         file: file.clone(),
         source,
     })?;
-    let text = String::from_utf8_lossy(&text);
-    parse(&text).map_err(|e| MeshReadError::Invalid {
+    parse(&bytes).map_err(|e| MeshReadError::Invalid {
         file,
         line: e.line,
         message: e.message,

@@ -44,6 +44,7 @@ mod inp_read;
 mod medit_read;
 mod mesh_in;
 mod msh_read;
+mod msh_read_binary;
 mod tetgen_read;
 mod vtu_read;
 pub use mesh_in::{mesh_files, read_mesh, MeshFile, MeshReadError, NodeGroup, MESH_EXTENSIONS};
