@@ -1,7 +1,7 @@
 //! Inspection of any tetrahedral mesh, however made (ours, TetGen's, fTetWild's, CGAL's):
 //! counts, volume, element quality, and the library checker's verdict ([`check_mesh`]); with
 //! the volume it models, its topology and volume against the trilinear interval
-//! ([`reference`]) and its boundary's distance to the level sets. `tptd-mesh --inspect` prints
+//! ([`reference()`]) and its boundary's distance to the level sets. `tptd-mesh --inspect` prints
 //! it, one column per mesh.
 //!
 //! * **Orientation convention**: a mesh none of whose tets is positive and some negative is
