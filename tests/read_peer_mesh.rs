@@ -322,3 +322,62 @@ fn hand_written_vtu_skips_lower_cells_and_refuses_others() {
         assert!(e.contains(want), "{e}");
     }
 }
+
+/// `mesh` as Medit text, and as TetGen `.node` and `.ele` text (numbered from 1).
+fn peer_texts(mesh: &tptd::TetMesh) -> (String, String, String) {
+    use std::fmt::Write as _;
+    let (mut medit, mut node, mut ele) = (String::new(), String::new(), String::new());
+    let n = mesh.points.len();
+    write!(
+        medit,
+        "MeshVersionFormatted 2\nDimension 3\nVertices\n{n}\n"
+    )
+    .unwrap();
+    writeln!(node, "{n} 3 0 0").unwrap();
+    for (i, p) in mesh.points.iter().enumerate() {
+        writeln!(medit, "{} {} {} 0", p[0], p[1], p[2]).unwrap();
+        writeln!(node, "{} {} {} {}", i + 1, p[0], p[1], p[2]).unwrap();
+    }
+    write!(medit, "Tetrahedra\n{}\n", mesh.tets.len()).unwrap();
+    writeln!(ele, "{} 4 0", mesh.tets.len()).unwrap();
+    for (i, t) in mesh.tets.iter().enumerate() {
+        let [a, b, c, d] = t.map(|v| v + 1);
+        writeln!(medit, "{a} {b} {c} {d} 1").unwrap();
+        writeln!(ele, "{} {a} {b} {c} {d}", i + 1).unwrap();
+    }
+    medit.push_str("End\n");
+    (medit, node, ele)
+}
+
+#[test]
+fn peer_files_read_back_and_cut_short_are_errors_not_panics() {
+    let mesh = small_mesh();
+    let (medit, node, ele) = peer_texts(&mesh);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (m, nf, ef) = (d.join("a.mesh"), d.join("a.node"), d.join("a.ele"));
+    fs_write(&m, &medit);
+    fs_write(&nf, &node);
+    fs_write(&ef, &ele);
+    for path in [&m, &nf] {
+        let f = read_mesh(path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(f.mesh.points, mesh.points);
+        assert_eq!(f.mesh.tets, mesh.tets);
+    }
+    for k in 1..30 {
+        for (path, text) in [(&m, &medit), (&nf, &node), (&ef, &ele)] {
+            let cut = k * text.len() / 30;
+            fs_write(path, &text[..cut]);
+            // a cut after the last entry (before Medit's `End`) still reads: only the
+            // form of the errors is checked
+            if let Err(e) = read_mesh(path) {
+                assert!(!e.to_string().contains('\n'), "{e}");
+            }
+            fs_write(path, text);
+        }
+    }
+}
+
+fn fs_write(path: &Path, text: &str) {
+    std::fs::write(path, text).unwrap();
+}
