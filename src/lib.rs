@@ -25,6 +25,7 @@ pub mod facts;
 pub(crate) mod geom;
 pub mod grid;
 pub mod improve;
+pub mod inspect;
 pub mod io;
 pub(crate) mod keys;
 pub mod memory;

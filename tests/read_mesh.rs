@@ -1,4 +1,5 @@
-//! Mesh readers: writer → reader round trips (`.msh` 4.1 and 2.2, `.inp`) and bad files.
+//! Mesh readers: writer → reader round trips (`.msh` 4.1, 2.2 and binary 4.1, `.inp`) and bad
+//! files.
 
 use std::path::Path;
 
@@ -91,6 +92,7 @@ fn msh_and_inp_round_trip_through_the_readers() {
     for (name, version) in [
         ("a.msh", Some(MshVersion::V41)),
         ("b.msh", Some(MshVersion::V22)),
+        ("d.msh", Some(MshVersion::V41Binary)),
         ("c.inp", None),
     ] {
         let path = dir.path().join(name);
@@ -101,12 +103,32 @@ fn msh_and_inp_round_trip_through_the_readers() {
 }
 
 #[test]
-fn binary_msh_is_refused_with_one_line() {
-    let mut bytes = Vec::new();
-    write_msh(&shell(), &mut bytes, MshVersion::V41Binary).unwrap();
+fn binary_msh_reads_as_its_ascii_twin_and_bad_ones_give_one_line() {
+    let mesh = shell();
     let dir = tempfile::tempdir().unwrap();
-    let e = error_of(dir.path(), "bin.msh", &bytes);
-    assert!(e.contains("binary .msh is not read"), "{e}");
+    let (mut ascii, mut bytes) = (Vec::new(), Vec::new());
+    write_msh(&mesh, &mut ascii, MshVersion::V41).unwrap();
+    write_msh(&mesh, &mut bytes, MshVersion::V41Binary).unwrap();
+    let (a, b) = (dir.path().join("a.msh"), dir.path().join("b.msh"));
+    std::fs::write(&a, &ascii).unwrap();
+    std::fs::write(&b, &bytes).unwrap();
+    assert_eq!(read_mesh(&a).unwrap(), read_mesh(&b).unwrap());
+    // A version other than 4.1, a data size other than 8 and a bad int 1 are one line each.
+    for (head, want) in [
+        ("$MeshFormat\n2.2 1 8\n", "version 2.2"),
+        ("$MeshFormat\n4.1 1 4\n", "data size"),
+        ("$MeshFormat\n4.1 1 8\nxxxx\n", "not 1"),
+    ] {
+        let e = error_of(dir.path(), "h.msh", head.as_bytes());
+        assert!(e.contains(want), "{e}");
+    }
+    // Cut anywhere: an error, never a panic.
+    for cut in (1..40).map(|k| k * bytes.len() / 41) {
+        std::fs::write(&b, &bytes[..cut]).unwrap();
+        if let Err(e) = read_mesh(&b) {
+            assert!(!e.to_string().contains('\n'), "{e}");
+        }
+    }
 }
 
 /// The error of reading `text` as `name`; checks it is one line naming the file.
@@ -130,7 +152,7 @@ fn bad_files_give_one_line_errors() {
         (
             "b.msh",
             "$MeshFormat\n4.1 1 8\n$EndMeshFormat\n".into(),
-            "binary",
+            "not 1",
         ),
         (
             "v.msh",

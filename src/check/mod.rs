@@ -362,6 +362,16 @@ pub fn check_mesh(mesh: &TetMesh, opts: &CheckOptions) -> CheckReport {
     report
 }
 
+/// The faces of one tet of `mesh` (its boundary as its tets give it), each oriented out of
+/// its tet when the tet is positive, in the checker's order. Every index must be in range.
+pub(crate) fn boundary_faces(mesh: &TetMesh) -> Vec<[u32; 3]> {
+    let mut scratch = Problems::new(0);
+    conformity::faces(mesh, &mut scratch)
+        .into_iter()
+        .map(|f| f.tri)
+        .collect()
+}
+
 /// Indices in range, points finite, labels as many as triangles, not too many tets; false
 /// when the other checks cannot run.
 fn basics(mesh: &TetMesh, problems: &mut Problems) -> bool {

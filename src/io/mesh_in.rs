@@ -1,7 +1,9 @@
 //! Mesh input by file extension: [`read_mesh`] is the twin of [`super::write_mesh`] and
-//! chooses among the readers `msh_read` (`.msh` 4.1 and 2.2) and
-//! `inp_read` (`.inp`). Both return a [`MeshFile`]: the [`TetMesh`] plus the named
-//! node groups and volume regions a solver needs for boundary conditions and materials.
+//! chooses among the readers `msh_read` (`.msh` 4.1 and 2.2), `msh_read_binary` (binary
+//! `.msh` 4.1), `inp_read` (`.inp`),
+//! `vtu_read` (`.vtu`), `tetgen_read` (TetGen `.node`/`.ele`/`.face`) and `medit_read`
+//! (Medit `.mesh`). All return a [`MeshFile`]: the [`TetMesh`] plus the named node groups
+//! and volume regions a solver needs for boundary conditions and materials.
 
 use std::path::Path;
 
@@ -55,7 +57,7 @@ pub enum MeshReadError {
         source: std::io::Error,
     },
     /// The content is malformed, truncated, inconsistent or unsupported.
-    #[error("{file}: line {line}: {message}")]
+    #[error("{file}: {}{message}", at_line(*.line))]
     Invalid {
         /// The file.
         file: String,
@@ -64,40 +66,118 @@ pub enum MeshReadError {
         /// What is wrong.
         message: String,
     },
-    /// The extension is not `.msh` or `.inp`.
-    #[error("{file}: unknown mesh format (expected .msh or .inp)")]
+    /// The extension is not one of [`MESH_EXTENSIONS`].
+    #[error("{file}: unknown mesh format (expected {MESH_EXTENSIONS})")]
     UnknownFormat {
         /// The file.
         file: String,
     },
+    /// A `.vtu` file the VTK XML reader refused (malformed, truncated or unsupported).
+    #[error(transparent)]
+    Vtk(#[from] super::volume::ReadError),
+}
+
+/// The mesh file extensions [`read_mesh`] reads, for messages.
+pub const MESH_EXTENSIONS: &str = ".msh, .inp, .vtu, .mesh, .node or .ele";
+
+/// The readers, by lower-case extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Msh,
+    Inp,
+    Vtu,
+    Medit,
+    TetGen,
+}
+
+impl Format {
+    fn of(path: &Path) -> Option<Format> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        Some(match ext.as_deref()? {
+            "msh" => Format::Msh,
+            "inp" => Format::Inp,
+            "vtu" => Format::Vtu,
+            "mesh" => Format::Medit,
+            "node" | "ele" => Format::TetGen,
+            _ => return None,
+        })
+    }
+}
+
+/// The files [`read_mesh`] reads for `path`: `path` itself, or for TetGen the `.node`, the
+/// `.ele` and (when it exists) the `.face` of the same name. Nothing is opened.
+pub fn mesh_files(path: &Path) -> Vec<std::path::PathBuf> {
+    match Format::of(path) {
+        Some(Format::TetGen) => super::tetgen_read::tetgen_files(path),
+        _ => vec![path.to_path_buf()],
+    }
 }
 
 /// Reads a tetrahedral mesh with its groups from `path`, by extension (case-insensitive):
-/// `.msh` (Gmsh ASCII 4.1 or 2.2, see `msh_read`) or `.inp` (Abaqus/CalculiX, see
-/// `inp_read`).
+/// `.msh` (Gmsh ASCII 4.1 or 2.2, see `msh_read`, or binary 4.1, see `msh_read_binary`),
+/// `.inp` (Abaqus/CalculiX, see
+/// `inp_read`), `.vtu` (VTK XML, see `vtu_read`), `.mesh` (Medit ASCII, as fTetWild, CGAL
+/// and MMG write it, see `medit_read`), `.node` or `.ele` (TetGen: both files of the same
+/// name, and its `.face` when present, see `tetgen_read`).
 ///
 /// # Errors
-/// [`MeshReadError`]: unknown extension, unreadable file or malformed content.
+/// [`MeshReadError`]: unknown extension, unreadable file or malformed content; one line
+/// naming the file (for TetGen, the file of the pair where the problem is).
 pub fn read_mesh(path: &Path) -> Result<MeshFile, MeshReadError> {
     let file = path.display().to_string();
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    let reader = match ext.as_deref() {
-        Some("msh") => super::msh_read::parse_msh,
-        Some("inp") => super::inp_read::parse_inp,
-        _ => return Err(MeshReadError::UnknownFormat { file }),
+    let reader = match Format::of(path) {
+        Some(Format::Msh) => {
+            return parse_bytes(path, |b| {
+                if super::msh_read_binary::is_binary_msh(b) {
+                    super::msh_read_binary::parse_msh_binary(b)
+                } else {
+                    super::msh_read::parse_msh(&String::from_utf8_lossy(b))
+                }
+            })
+        }
+        Some(Format::Inp) => super::inp_read::parse_inp,
+        Some(Format::Medit) => super::medit_read::parse_medit,
+        Some(Format::Vtu) => return super::vtu_read::read_vtu(path),
+        Some(Format::TetGen) => return super::tetgen_read::read_tetgen(path),
+        None => return Err(MeshReadError::UnknownFormat { file }),
     };
-    let text = std::fs::read(path).map_err(|source| MeshReadError::Io {
+    parse_file(path, reader)
+}
+
+/// Reads `path` as text and parses it with `parse`, the errors naming the file.
+pub(crate) fn parse_file<T>(
+    path: &Path,
+    parse: impl FnOnce(&str) -> Result<T, ParseError>,
+) -> Result<T, MeshReadError> {
+    parse_bytes(path, |b| parse(&String::from_utf8_lossy(b)))
+}
+
+/// Reads `path` and parses its bytes with `parse`, the errors naming the file.
+pub(crate) fn parse_bytes<T>(
+    path: &Path,
+    parse: impl FnOnce(&[u8]) -> Result<T, ParseError>,
+) -> Result<T, MeshReadError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| MeshReadError::Io {
         file: file.clone(),
         source,
     })?;
-    let text = String::from_utf8_lossy(&text);
-    reader(&text).map_err(|e| MeshReadError::Invalid {
+    parse(&bytes).map_err(|e| MeshReadError::Invalid {
         file,
         line: e.line,
         message: e.message,
     })
+}
+
+/// `line N: ` for a line number, nothing for 0 (a problem not tied to a line).
+fn at_line(line: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!("line {line}: ")
+    }
 }
 
 /// A parse error without the file name (added by [`read_mesh`]).
@@ -184,7 +264,7 @@ pub(crate) fn label_of(name: &str) -> Option<BoundaryLabel> {
 /// Checks the assembled mesh: at least one tet, every tet's nodes distinct.
 pub(crate) fn check_mesh(mesh: &TetMesh) -> Result<(), ParseError> {
     if mesh.tets.is_empty() {
-        return Err(perr(0, "no tetrahedra (element type 4 / C3D4) in the file"));
+        return Err(perr(0, "no tetrahedra in the file"));
     }
     for (t, tet) in mesh.tets.iter().enumerate() {
         if (0..4).any(|a| (a + 1..4).any(|b| tet[a] == tet[b])) {

@@ -21,6 +21,7 @@ pub use spill::SpilledMesh;
 pub mod stl;
 pub mod transfer_out;
 mod volume;
+mod vtk_xml;
 pub mod vts;
 pub mod vtu;
 mod write_common;
@@ -37,8 +38,13 @@ pub use mesh_out::{
 pub use transfer_out::{write_transfer, TransferFormat, TransferTable};
 pub use volume::{is_curvilinear, read_curvilinear, read_volume, ReadError};
 
-// Mesh readers (the twins of the writers above), used by `solver-demo`.
+// Mesh readers (the twins of the writers above, and TetGen's and Medit's formats), used by
+// `solver-demo` and `inspect`.
 mod inp_read;
+mod medit_read;
 mod mesh_in;
 mod msh_read;
-pub use mesh_in::{read_mesh, MeshFile, MeshReadError, NodeGroup};
+mod msh_read_binary;
+mod tetgen_read;
+mod vtu_read;
+pub use mesh_in::{mesh_files, read_mesh, MeshFile, MeshReadError, NodeGroup, MESH_EXTENSIONS};

@@ -1,4 +1,5 @@
-//! Gmsh ASCII `.msh` reader (formats 4.1 and 2.2), the twin of [`super::msh`].
+//! Gmsh ASCII `.msh` reader (formats 4.1 and 2.2), the twin of [`super::msh`]; binary 4.1 is
+//! read by [`super::msh_read_binary`] into the same [`State`].
 //!
 //! Reads `$MeshFormat`, `$PhysicalNames`, `$Entities` (4.1), `$Nodes`, `$Elements` and a
 //! one-component `$NodeData` named `f`; other sections are skipped. Elements: 4-node
@@ -18,29 +19,29 @@ use super::mesh_in::{
 };
 
 /// Gmsh element types this reader knows.
-const LINE: u32 = 1;
-const TRIANGLE: u32 = 2;
-const TETRAHEDRON: u32 = 4;
-const POINT: u32 = 15;
+pub(super) const LINE: u32 = 1;
+pub(super) const TRIANGLE: u32 = 2;
+pub(super) const TETRAHEDRON: u32 = 4;
+pub(super) const POINT: u32 = 15;
 
 /// Everything read so far.
 #[derive(Default)]
-struct State {
+pub(super) struct State {
     /// Major version: 2 or 4.
-    version: u32,
+    pub(super) version: u32,
     /// Physical names by (dimension, tag).
-    names: FxHashMap<(u32, i64), String>,
+    pub(super) names: FxHashMap<(u32, i64), String>,
     /// Physical tags of the 4.1 entities, by (dimension, entity tag).
-    entity_phys: FxHashMap<(u32, i64), Vec<i64>>,
+    pub(super) entity_phys: FxHashMap<(u32, i64), Vec<i64>>,
     /// Node tag → index.
-    index: FxHashMap<u64, u32>,
-    points: Vec<[f64; 3]>,
-    values: Option<Vec<f64>>,
-    tets: Vec<[u32; 4]>,
+    pub(super) index: FxHashMap<u64, u32>,
+    pub(super) points: Vec<[f64; 3]>,
+    pub(super) values: Option<Vec<f64>>,
+    pub(super) tets: Vec<[u32; 4]>,
     /// Physical tag of each tet (0 = none).
-    tet_phys: Vec<i64>,
+    pub(super) tet_phys: Vec<i64>,
     /// Triangles with the physical tag of a group they belong to (one entry per group).
-    tris: Vec<([u32; 3], i64)>,
+    pub(super) tris: Vec<([u32; 3], i64)>,
 }
 
 /// Parses the text of a `.msh` file (see the module documentation).
@@ -79,9 +80,9 @@ fn mesh_format(l: &mut Lines) -> Result<u32, ParseError> {
         return Err(l.err("malformed $MeshFormat line"));
     }
     if f[1] != "0" {
-        return Err(l.err(
-            "binary .msh is not read (write ASCII, --msh-version 4.1, or convert: gmsh FILE -0 -format msh41)",
-        ));
+        return Err(
+            l.err("binary .msh other than 4.1 is not read (convert: gmsh FILE -0 -format msh41)")
+        );
     }
     match f[0] {
         "4.1" => Ok(4),
@@ -112,7 +113,7 @@ fn fields<'a>(l: &mut Lines<'a>, what: &str) -> Result<Vec<&'a str>, ParseError>
     Ok(l.expect(what)?.split_whitespace().collect())
 }
 
-fn physical_names(l: &mut Lines, st: &mut State) -> Result<(), ParseError> {
+pub(super) fn physical_names(l: &mut Lines, st: &mut State) -> Result<(), ParseError> {
     let n = count(l, "the number of physical names")?;
     for _ in 0..n {
         let line = l.expect("a physical name")?;
@@ -349,7 +350,7 @@ fn name_of(st: &State, dim: u32, tag: i64) -> String {
         .unwrap_or_else(|| tag.to_string())
 }
 
-fn finish(st: State) -> Result<MeshFile, ParseError> {
+pub(super) fn finish(st: State) -> Result<MeshFile, ParseError> {
     let mut out = MeshFile::default();
     let mut group_of: FxHashMap<i64, usize> = FxHashMap::default();
     for &(tri, p) in &st.tris {

@@ -13,9 +13,8 @@ use tptd::io::{is_curvilinear, MeshFormat, SurfaceFormat, TransferFormat};
 
 use crate::cli::Cli;
 
-/// Options (clap ids) that only `--critical` uses.
-const CRITICAL_ONLY: [&str; 10] = [
-    "json",
+/// Options (clap ids) that only `--critical` uses (`--json` also applies with `--inspect`).
+const CRITICAL_ONLY: [&str; 9] = [
     "spectrum",
     "transfer",
     "transfer_design",
@@ -67,6 +66,15 @@ fn first_given<'a>(m: &ArgMatches, ids: &[&'a str]) -> Option<&'a str> {
 /// One line naming the first option that does nothing (or the output, or `-j`).
 pub(crate) fn check(cli: &Cli, m: &ArgMatches) -> Result<(), String> {
     crate::run::check_threads(cli.threads).map_err(|e| e.to_string())?;
+    if !cli.inspect.is_empty() {
+        return check_inspect(cli, m);
+    }
+    if given(m, "volume") {
+        return Err("--volume applies only with --inspect".into());
+    }
+    if given(m, "json") && !cli.critical {
+        return Err("--json applies only with --critical or --inspect".into());
+    }
     if cli.critical {
         if let Some(id) = first_given(m, &MESH_ONLY) {
             return Err(format!(
@@ -88,6 +96,51 @@ pub(crate) fn check(cli: &Cli, m: &ArgMatches) -> Result<(), String> {
     check_input(cli, m)?;
     if cli.no_critical_check && given(m, "critical_tol") {
         return Err("--critical-tol does nothing with --no-critical-check".into());
+    }
+    Ok(())
+}
+
+/// Options (clap ids) that apply with `--inspect`.
+const INSPECT_OPTIONS: [&str; 9] = [
+    "inspect",
+    "volume",
+    "alpha",
+    "beta",
+    "spacing",
+    "json",
+    "threads",
+    "quiet",
+    "memory_limit",
+];
+
+/// With `--inspect`: only its options, the interval and `--spacing` only with `--volume`,
+/// and with `--volume` an interval.
+fn check_inspect(cli: &Cli, m: &ArgMatches) -> Result<(), String> {
+    if cli.input.is_some() {
+        return Err(
+            "--inspect takes the meshes, not an INPUT volume: give the volume with --volume".into(),
+        );
+    }
+    let command = <Cli as clap::CommandFactory>::command();
+    let other = command
+        .get_arguments()
+        .map(|a| a.get_id().as_str())
+        .find(|id| given(m, id) && !INSPECT_OPTIONS.contains(id));
+    if let Some(id) = other {
+        return Err(format!(
+            "{} does not apply with --inspect (it inspects meshes and meshes nothing)",
+            flag(id)
+        ));
+    }
+    if cli.volume.is_none() {
+        if let Some(id) = first_given(m, &["alpha", "beta", "spacing"]) {
+            return Err(format!(
+                "{} applies with --inspect only together with --volume",
+                flag(id)
+            ));
+        }
+    } else if cli.alpha.is_none() && cli.beta.is_none() {
+        return Err("--volume needs the interval: --alpha A and/or --beta B".into());
     }
     Ok(())
 }

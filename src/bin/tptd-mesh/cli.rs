@@ -19,14 +19,14 @@ use tptd::Method;
 pub(crate) struct Cli {
     /// Input volume (.npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha), or a curvilinear grid
     /// (.vts, or a Plot3D .xyz with its .q or .f file)
-    #[arg(value_name = "INPUT", required_unless_present = "demo")]
+    #[arg(value_name = "INPUT", required_unless_present_any = ["demo", "inspect"])]
     pub(crate) input: Option<PathBuf>,
 
     /// Output mesh; the format follows the extension: .msh (Gmsh), .inp (Abaqus/CalculiX),
     /// .vtu (VTK) for tetrahedra; .obj, .ply, .stl for the isosurface (the level sets
     /// f = alpha and f = beta, normals towards increasing f) [default with --demo:
     /// tptd-demo.vtu]
-    #[arg(short, long, value_name = "OUT", required_unless_present_any = ["demo", "critical"])]
+    #[arg(short, long, value_name = "OUT", required_unless_present_any = ["demo", "critical", "inspect"])]
     pub(crate) output: Option<PathBuf>,
 
     /// Lower bound of the interval [default: -inf; at least one of --alpha/--beta is required]
@@ -149,9 +149,23 @@ pub(crate) struct Cli {
     #[arg(long, conflicts_with_all = ["output", "demo", "quality"])]
     pub(crate) critical: bool,
 
-    /// With --critical: also write them as a JSON array to this file
-    #[arg(long, value_name = "FILE.json", requires = "critical")]
+    /// With --critical or --inspect: also write the points, or one object per mesh, as a
+    /// JSON array to this file
+    #[arg(long, value_name = "FILE.json")]
     pub(crate) json: Option<PathBuf>,
+
+    /// Instead of meshing, inspect tetrahedral meshes (.msh, .inp, .vtu, Medit .mesh, TetGen
+    /// .node/.ele) side by side: counts, volume, dihedral angles, element quality, and the
+    /// checker's verdict (conformity, orientation, closed manifold boundary, embedding, Betti
+    /// numbers); with --volume, also against the trilinear interval of that volume
+    #[arg(long, value_name = "MESH", num_args = 1.., conflicts_with_all = ["output", "demo", "critical", "quality"])]
+    pub(crate) inspect: Vec<PathBuf>,
+
+    /// With --inspect: the volume the meshes model (with --alpha and/or --beta): the reference
+    /// Betti numbers and volume of the trilinear interval, and the boundary's distance to the
+    /// level sets
+    #[arg(long, value_name = "VOLUME")]
+    pub(crate) volume: Option<PathBuf>,
 
     /// With --critical: write the contour spectrum (Betti numbers of {f >= w} between
     /// consecutive critical values) as CSV to this file (volumes up to about 10^6 cells)

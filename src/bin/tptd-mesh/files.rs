@@ -4,21 +4,28 @@
 use std::path::Path;
 
 use anyhow::Result;
-use tptd::io::{check_clashes, input_files, RunFile};
+use tptd::io::{check_clashes, input_files, mesh_files, RunFile};
 
 use crate::cli::Cli;
 
 /// Refuses, before any sample is read, an output of the run (`output`: the mesh, absent with
-/// `--critical`; `--report`, `--json`, `--spectrum`, `--transfer`) that is the same file as
-/// a file of the input or as another output. A clash is a [`tptd::io::FileClash`] (exit 2).
+/// `--critical` and `--inspect`; `--report`, `--json`, `--spectrum`, `--transfer`) that is
+/// the same file as a file of the input (the volume, `--volume`, every file of every
+/// `--inspect` mesh) or as another output. A clash is a [`tptd::io::FileClash`] (exit 2).
 pub(crate) fn check_files(cli: &Cli, output: Option<&Path>) -> Result<()> {
     let mut inputs = Vec::new();
-    if let Some(input) = &cli.input {
+    if let Some(input) = cli.input.as_ref().or(cli.volume.as_ref()) {
         let files = input_files(input, cli.function.as_deref())?;
         let read_with = format!("read with the input {}", input.display());
         for (n, f) in files.into_iter().enumerate() {
             let role = if n == 0 { "the input" } else { &read_with };
             inputs.push(RunFile::new(role, f));
+        }
+    }
+    for mesh in &cli.inspect {
+        let role = format!("the mesh {}", mesh.display());
+        for f in mesh_files(mesh) {
+            inputs.push(RunFile::new(role.clone(), f));
         }
     }
     let outputs: Vec<RunFile> = [

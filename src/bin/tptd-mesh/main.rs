@@ -10,7 +10,7 @@
 //! (partial) output file behind. A closed stdout is not an error.
 //!
 //! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
-//! that do nothing are refused), [`run`] (the run,
+//! that do nothing are refused), [`inspect`] (`--inspect`: meshes side by side), [`run`] (the run,
 //! step by step), [`quality`] (`--quality` and what it left), [`critical`] (`--critical` and the check of the bounds against the critical
 //! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
 //! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
@@ -23,6 +23,7 @@ mod cli;
 mod critical;
 mod error;
 mod files;
+mod inspect;
 mod progress;
 mod quality;
 mod run;
@@ -37,7 +38,9 @@ fn main() {
     let cli = cli::parse_or_exit();
     tptd::memory::set_limit(cli.memory_limit);
     clean_up_on_signals();
-    let result = if cli.critical {
+    let result = if !cli.inspect.is_empty() {
+        inspect::run(cli)
+    } else if cli.critical {
         alloc::set_critical_mode();
         critical::run(cli)
     } else {
