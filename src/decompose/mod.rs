@@ -11,6 +11,7 @@
 
 pub mod five;
 pub mod plan;
+pub mod sag;
 pub mod six;
 pub mod tptd;
 
@@ -147,10 +148,34 @@ pub fn decompose_cell(
                 }
             }
             let fv = plan.face_values();
-            tptd::decompose_tptd(used, plan.apex, &fv, plan.bodies(), &mut pts, out)
+            let case = tptd::decompose_tptd(used, plan.apex, &fv, plan.bodies(), &mut pts, out);
+            split_sagging_edges(plan, &mut pts, out);
+            case
         }
     };
     (case, pts)
+}
+
+/// Bisects the sagging face diagonals and main diagonal the plan names (see [`sag`]).
+#[inline]
+fn split_sagging_edges(plan: &CellPlan, pts: &mut CellPoints, out: &mut Vec<[u8; 4]>) {
+    for f in 0..6 {
+        if plan.extra & (1 << f) == 0 {
+            continue;
+        }
+        let s = plan.saddles[f];
+        pts.pos[8 + f] = crate::trilinear::face_point(f, s.uv);
+        pts.val[8 + f] = s.value;
+        let fc = face_corners(f);
+        sag::bisect(out, fc[0] as u8, fc[2] as u8, face_id(f));
+    }
+    if let Some(s) = plan.main_split {
+        if out.iter().any(|t| t.contains(&0) && t.contains(&7)) {
+            pts.pos[BODY0 as usize] = [s.t; 3];
+            pts.val[BODY0 as usize] = s.value;
+            sag::bisect(out, 0, 7, BODY0);
+        }
+    }
 }
 
 /// Appends the tets of the pyramid with apex `apex` over cell face `f`: four tets around the

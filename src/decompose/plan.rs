@@ -15,6 +15,7 @@
 //!   saddle (TPTD); other cells use no body saddle (STD cases i, ii, iv over the used faces).
 //!   Both cells of a face evaluate the same rule on the same data, so they agree.
 
+use super::sag::{face_diagonal_split, main_diagonal_split, EdgeSplit};
 use crate::grid::{ScalarGrid, LOW_FACES};
 use crate::trilinear::{body_saddles, face_saddle, BodySaddle, FaceSaddle};
 
@@ -194,6 +195,12 @@ pub struct CellPlan {
     pub own: u8,
     /// Faces whose saddle is used only because the cell across the face is full.
     pub forced: u8,
+    /// Faces with no saddle in use whose diagonal sags from the level set: bisected at the
+    /// point `saddles[f]` of the diagonal (`uv = [t, t]`) after the decomposition
+    /// ([`super::sag`]). Not used faces: the case analysis never sees them.
+    pub extra: u8,
+    /// The bisection of the main diagonal `0–7`, when it sags and the cell has no body saddle.
+    pub main_split: Option<EdgeSplit>,
     /// Used faces whose saddle may be the case-(ii) apex: `own`, except for a non-full cell
     /// with only forced saddles on faces of both parities (no corner apex fits), where it is
     /// the forced saddles that join nothing the cell keeps apart.
@@ -215,6 +222,8 @@ impl CellPlan {
             full: false,
             own: 0,
             forced: 0,
+            extra: 0,
+            main_split: None,
             apex: 0,
             saddles: [FaceSaddle {
                 uv: [0.0; 2],
@@ -366,7 +375,32 @@ fn plan_tptd(p: &Planner, c: [usize; 3], v: &[f64; 8], cls: CellClasses) -> Cell
             used
         };
     }
+    if crosses {
+        plan_splits(p, v, &mut plan);
+    }
     plan
+}
+
+/// The sagging edges of a cell crossing a level: the diagonals of faces that use no saddle,
+/// and the main diagonal when the cell has no body saddle (see [`super::sag`]).
+#[inline]
+fn plan_splits(p: &Planner, v: &[f64; 8], plan: &mut CellPlan) {
+    for f in 0..6 {
+        if plan.used() & (1 << f) != 0 {
+            continue;
+        }
+        let q = crate::grid::face_corners(f).map(|c| v[c]);
+        if let Some(s) = face_diagonal_split(q, p.alpha, p.beta) {
+            plan.extra |= 1 << f;
+            plan.saddles[f] = FaceSaddle {
+                uv: [s.t, s.t],
+                value: s.value,
+            };
+        }
+    }
+    if plan.num_body == 0 {
+        plan.main_split = main_diagonal_split(v, p.alpha, p.beta);
+    }
 }
 
 /// The used faces whose saddle lies on a side of the (single) level crossing the cell whose
