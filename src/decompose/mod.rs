@@ -169,11 +169,14 @@ fn split_sagging_edges(plan: &CellPlan, pts: &mut CellPoints, out: &mut Vec<[u8;
         let fc = face_corners(f);
         sag::bisect(out, fc[0] as u8, fc[2] as u8, face_id(f));
     }
-    if let Some(s) = plan.main_split {
-        if out.iter().any(|t| t.contains(&0) && t.contains(&7)) {
-            pts.pos[BODY0 as usize] = [s.t; 3];
-            pts.val[BODY0 as usize] = s.value;
-            sag::bisect(out, 0, 7, BODY0);
+    if plan.main_splits[0].is_some() && out.iter().any(|t| t.contains(&0) && t.contains(&7)) {
+        let mut from = 0;
+        for (s, id) in plan.main_splits.iter().zip([BODY0, BODY1]) {
+            let Some(s) = s else { break };
+            pts.pos[id as usize] = [s.t; 3];
+            pts.val[id as usize] = s.value;
+            sag::bisect(out, from, 7, id);
+            from = id;
         }
     }
 }

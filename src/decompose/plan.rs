@@ -15,7 +15,7 @@
 //!   saddle (TPTD); other cells use no body saddle (STD cases i, ii, iv over the used faces).
 //!   Both cells of a face evaluate the same rule on the same data, so they agree.
 
-use super::sag::{face_diagonal_split, main_diagonal_split, EdgeSplit};
+use super::sag::{face_diagonal_split, main_diagonal_splits, EdgeSplit};
 use crate::grid::{ScalarGrid, LOW_FACES};
 use crate::trilinear::{body_saddles, face_saddle, BodySaddle, FaceSaddle};
 
@@ -199,8 +199,9 @@ pub struct CellPlan {
     /// point `saddles[f]` of the diagonal (`uv = [t, t]`) after the decomposition
     /// ([`super::sag`]). Not used faces: the case analysis never sees them.
     pub extra: u8,
-    /// The bisection of the main diagonal `0–7`, when it sags and the cell has no body saddle.
-    pub main_split: Option<EdgeSplit>,
+    /// The bisections of the main diagonal `0–7` (in order from corner 0), when it sags and
+    /// the cell has no body saddle.
+    pub main_splits: [Option<EdgeSplit>; 2],
     /// Used faces whose saddle may be the case-(ii) apex: `own`, except for a non-full cell
     /// with only forced saddles on faces of both parities (no corner apex fits), where it is
     /// the forced saddles that join nothing the cell keeps apart.
@@ -223,7 +224,7 @@ impl CellPlan {
             own: 0,
             forced: 0,
             extra: 0,
-            main_split: None,
+            main_splits: [None, None],
             apex: 0,
             saddles: [FaceSaddle {
                 uv: [0.0; 2],
@@ -399,7 +400,7 @@ fn plan_splits(p: &Planner, v: &[f64; 8], plan: &mut CellPlan) {
         }
     }
     if plan.num_body == 0 {
-        plan.main_split = main_diagonal_split(v, p.alpha, p.beta);
+        plan.main_splits = main_diagonal_splits(v, p.alpha, p.beta);
     }
 }
 

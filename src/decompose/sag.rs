@@ -55,37 +55,77 @@ fn crossing(g: impl Fn(f64) -> f64, level: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// The split of an edge of length `len` (voxels) along which the field is `g` (`g(0)`, `g(1)`
-/// its ends' values) when a level crosses it more than [`SAG_LIMIT`] away from the linear
-/// crossing; classes as in [`super::plan::class`]. The point is placed where the field takes
-/// the middle of the band when both levels cross the edge, else just inside the interval from
-/// the crossing level, so that its value is never a level.
-pub fn edge_split(g: impl Fn(f64) -> f64, len: f64, alpha: f64, beta: f64) -> Option<EdgeSplit> {
+/// Whether a level crosses an edge (values `a`, `b` at its ends) more than [`SAG_LIMIT`] away
+/// from the linear crossing, for an edge of length `len` (voxels) along which the field is
+/// `g`; and which levels cross it. Classes as in [`super::plan::class`].
+fn sags(g: &impl Fn(f64) -> f64, len: f64, alpha: f64, beta: f64) -> Option<(bool, bool)> {
     let (a, b) = (g(0.0), g(1.0));
     let crosses_alpha = (a <= alpha) != (b <= alpha);
     let crosses_beta = (a >= beta) != (b >= beta);
-    if !crosses_alpha && !crosses_beta {
-        return None;
-    }
     let sag = |level: f64| {
         let linear = (level - a) / (b - a);
-        (crossing(&g, level) - linear).abs() * len
+        (crossing(g, level) - linear).abs() * len > SAG_LIMIT
     };
-    let sags = (crosses_alpha && sag(alpha) > SAG_LIMIT) || (crosses_beta && sag(beta) > SAG_LIMIT);
-    if !sags {
-        return None;
-    }
-    let (lo, hi) = (a.min(b), a.max(b));
-    let target = match (crosses_alpha, crosses_beta) {
-        (true, true) => 0.5 * (alpha + beta),
-        (true, false) => alpha + 1e-3 * (hi - alpha),
-        _ => beta - 1e-3 * (beta - lo),
-    };
-    let t = crossing(&g, target);
+    ((crosses_alpha && sag(alpha)) || (crosses_beta && sag(beta)))
+        .then_some((crosses_alpha, crosses_beta))
+}
+
+/// The point where `g` takes `target`, if it lies strictly inside the edge with a value
+/// strictly between the ends' and equal to no level.
+fn split_at(g: &impl Fn(f64) -> f64, target: f64, alpha: f64, beta: f64) -> Option<EdgeSplit> {
+    let (a, b) = (g(0.0), g(1.0));
+    let t = crossing(g, target);
     let value = g(t);
-    let strictly_between = value > lo && value < hi && value != alpha && value != beta;
-    ((END_MARGIN..=1.0 - END_MARGIN).contains(&t) && strictly_between)
-        .then_some(EdgeSplit { t, value })
+    let between = value > a.min(b) && value < a.max(b) && value != alpha && value != beta;
+    ((END_MARGIN..=1.0 - END_MARGIN).contains(&t) && between).then_some(EdgeSplit { t, value })
+}
+
+/// Just inside the interval from `alpha` (or from `beta`): the value a split point for that
+/// level takes, so that it is never a level itself; `toward` is the other end of the range.
+fn nudged(level: f64, toward: f64) -> f64 {
+    level + 1e-3 * (toward - level)
+}
+
+/// The split of an edge (see [`sags`]) at one point: where the field takes the middle of the
+/// band when both levels cross the edge, else just inside the interval from the crossing level.
+pub fn edge_split(g: impl Fn(f64) -> f64, len: f64, alpha: f64, beta: f64) -> Option<EdgeSplit> {
+    let (a, b) = (g(0.0), g(1.0));
+    let target = match sags(&g, len, alpha, beta)? {
+        (true, true) => 0.5 * (alpha + beta),
+        (true, false) => nudged(alpha, a.max(b)),
+        _ => nudged(beta, a.min(b)),
+    };
+    split_at(&g, target, alpha, beta)
+}
+
+/// The split of an edge (see [`sags`]) at up to two points, one just inside the interval from
+/// each level that crosses it, in order along the edge.
+pub fn edge_splits(
+    g: impl Fn(f64) -> f64,
+    len: f64,
+    alpha: f64,
+    beta: f64,
+) -> [Option<EdgeSplit>; 2] {
+    let (a, b) = (g(0.0), g(1.0));
+    let Some((ca, cb)) = sags(&g, len, alpha, beta) else {
+        return [None, None];
+    };
+    let (lo, hi) = (a.min(b), a.max(b));
+    let at = |level: f64, toward: f64| split_at(&g, nudged(level, toward), alpha, beta);
+    let mut s = match (ca, cb) {
+        (true, true) => [at(alpha, beta), at(beta, alpha)],
+        (true, false) => [at(alpha, hi), None],
+        _ => [at(beta, lo), None],
+    };
+    if let [Some(x), Some(y)] = s {
+        if y.t < x.t {
+            s = [Some(y), Some(x)];
+        }
+    }
+    match s {
+        [None, y] => [y, None],
+        s => s,
+    }
 }
 
 /// The split of the diagonal (entry 0 to entry 2) of a face with values `q` in
@@ -98,9 +138,10 @@ pub fn face_diagonal_split(q: [f64; 4], alpha: f64, beta: f64) -> Option<EdgeSpl
     edge_split(g, std::f64::consts::SQRT_2, alpha, beta)
 }
 
-/// The split of the main diagonal (corner 0 to corner 7) of a cell with corner values `v`.
-pub fn main_diagonal_split(v: &[f64; 8], alpha: f64, beta: f64) -> Option<EdgeSplit> {
-    edge_split(|t| eval(v, [t; 3]), 3f64.sqrt(), alpha, beta)
+/// The splits of the main diagonal (corner 0 to corner 7) of a cell with corner values `v`,
+/// in order from corner 0.
+pub fn main_diagonal_splits(v: &[f64; 8], alpha: f64, beta: f64) -> [Option<EdgeSplit>; 2] {
+    edge_splits(|t| eval(v, [t; 3]), 3f64.sqrt(), alpha, beta)
 }
 
 /// Bisects every tet of `tets` that has the edge `{a, b}` at local id `p`.
@@ -151,15 +192,20 @@ mod tests {
         assert!(face_diagonal_split([0.0, 1.0, 2.0, 1.0], 0.7, 1.5).is_none());
         assert!(face_diagonal_split(TIED, 140.0, 145.0).is_none());
         let v = [0.0, 1.0, 1.0, 2.0, 1.0, 2.0, 2.0, 3.0];
-        assert!(main_diagonal_split(&v, 1.2, 2.5).is_none());
+        assert_eq!(main_diagonal_splits(&v, 1.2, 2.5), [None, None]);
     }
 
     #[test]
     fn the_main_diagonal_of_a_dipping_cell_is_split() {
         // corner 0 at 174, corner 7 at 135, the diagonal dips to 132 on its way
         let v = [174.0, 120.0, 123.0, 115.0, 158.0, 130.0, 138.0, 135.0];
-        let s = main_diagonal_split(&v, 150.23, 150.77).expect("split");
-        assert!((s.value - 150.5).abs() < 1e-9 && s.t < 0.3, "{s:?}");
+        let [Some(x), Some(y)] = main_diagonal_splits(&v, 150.23, 150.77) else {
+            panic!("two splits expected");
+        };
+        // the upper level first from corner 0 (174), each just inside the band
+        assert!(x.t < y.t && y.t < 0.3, "{x:?} {y:?}");
+        assert!(x.value < 150.77 && x.value > 150.76, "{x:?}");
+        assert!(y.value > 150.23 && y.value < 150.24, "{y:?}");
     }
 
     #[test]
