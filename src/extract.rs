@@ -13,7 +13,7 @@ use crate::clip::{clip_tet, ClipVertex, Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NO
 use crate::decompose::plan::{plan_cell, Layout, Planner};
 use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM_LOCAL};
 use crate::grid::{cell_box_planes, corner_offset, Samples, ScalarGrid};
-use crate::keys::local_key;
+use crate::keys::{key_index, local_key};
 use crate::mesh::TetMesh;
 use crate::warp::{snap_vertices, Snapped};
 use crate::weld::{Gather, MeshSink, Slab, Welder};
@@ -37,6 +37,10 @@ pub struct MeshOptions {
     /// it lies off the trilinear level set until the quality pass projects it; use it with
     /// [`crate::improve::improve`].
     pub warp: f64,
+    /// Whether edges whose linear cut sags from the trilinear level set are split (default
+    /// true; see `decompose::sag`). Never with warping, whose snapped vertices the split
+    /// points would not fit.
+    pub split_sags: bool,
     /// Slabs (layers of cells) meshed at a time before they are welded and handed on;
     /// `0` (default) is 4 per worker thread. Bounds the memory of
     /// [`mesh_interval_streamed`]; the output does not depend on it.
@@ -52,6 +56,7 @@ impl Default for MeshOptions {
             method: Method::Ctd,
             threads: None,
             warp: 0.0,
+            split_sags: true,
             slabs_in_flight: 0,
         }
     }
@@ -86,6 +91,13 @@ impl MeshOptions {
     #[must_use]
     pub fn method(mut self, method: Method) -> Self {
         self.method = method;
+        self
+    }
+
+    /// Sets whether sagging edges are split (see [`MeshOptions::split_sags`]).
+    #[must_use]
+    pub fn split_sags(mut self, split: bool) -> Self {
+        self.split_sags = split;
         self
     }
 
@@ -296,6 +308,7 @@ fn run(
             method: opts.method,
             alpha,
             beta,
+            split_sags: opts.split_sags && opts.warp == 0.0,
         },
         snaps: Vec::new(),
     };
@@ -509,7 +522,7 @@ fn clip_cell(
                 let p = pts.pos[id];
                 let key = local_key(base, stride, id);
                 let (snap, val) = match id {
-                    0..=7 => ctx.corner((key >> 3) as usize, pts.val[id]),
+                    0..=7 => ctx.corner(key_index(key), pts.val[id]),
                     _ => (SNAP_NONE, ctx.point_value(pts.val[id])),
                 };
                 ClipVertex {

@@ -1,9 +1,10 @@
 //! Global identities of mesh points. Points are welded by these keys, never by distance.
 //!
-//! * A [`VertexKey`] names a decomposition vertex: `(grid_index << 3) | kind` where `kind` is
-//!   [`CORNER`] (the grid vertex itself), [`FACE`]` + axis` (the saddle of the cell face normal
-//!   to `axis` whose smallest corner is the grid vertex), or [`BODY`]` + n` (body saddle `n` of
-//!   the cell whose smallest corner is the grid vertex).
+//! * A [`VertexKey`] names a decomposition vertex: `(grid_index << KIND_BITS) | kind` where
+//!   `kind` is [`CORNER`] (the grid vertex itself), [`FACE`]` + axis` (the saddle, or the split
+//!   point of the diagonal, of the cell face normal to `axis` whose smallest corner is the grid
+//!   vertex), or [`BODY`]` + n` (point `n` inside the cell whose smallest corner is the grid
+//!   vertex: its body saddles, then the points that split its edges).
 //! * A [`PointKey`] names an output point: a decomposition vertex, or the cut of a
 //!   decomposition edge by level alpha (0) or beta (1). Its order (the clipper's last
 //!   tie-break when it picks cone and fan apexes) is a function of the identity only, so every
@@ -18,13 +19,27 @@ pub type PointKey = u128;
 pub const CORNER: u64 = 0;
 /// Kind tag of a face saddle (add the face normal axis 0..3).
 pub const FACE: u64 = 1;
-/// Kind tag of a body saddle (add the saddle number 0..2).
+/// Kind tag of a point inside a cell (add its number: body saddles 0 and 1, then split points).
 pub const BODY: u64 = 4;
+/// Bits of a vertex key that hold the kind.
+pub const KIND_BITS: u32 = 5;
 
 /// Key of a decomposition vertex.
 #[inline]
 pub const fn vertex_key(grid_index: usize, kind: u64) -> VertexKey {
-    ((grid_index as u64) << 3) | kind
+    ((grid_index as u64) << KIND_BITS) | kind
+}
+
+/// The kind of a vertex key.
+#[inline]
+pub const fn key_kind(k: VertexKey) -> u64 {
+    k & ((1 << KIND_BITS) - 1)
+}
+
+/// The grid index a vertex key is attached to.
+#[inline]
+pub const fn key_index(k: VertexKey) -> usize {
+    (k >> KIND_BITS) as usize
 }
 
 /// Output-point key of a decomposition vertex.
@@ -57,10 +72,10 @@ pub fn split(p: PointKey) -> (VertexKey, Option<(VertexKey, u8)>) {
 #[inline]
 pub fn grid_vertex(p: PointKey) -> Option<usize> {
     let (vk, rest) = split(p);
-    (rest.is_none() && vk & 7 == CORNER).then_some((vk >> 3) as usize)
+    (rest.is_none() && key_kind(vk) == CORNER).then_some(key_index(vk))
 }
 
-/// Key of cell-local id `id` (`0..8` corners, `8 + f` face saddles, `14 + n` body points, as
+/// Key of cell-local id `id` (`0..8` corners, `8 + f` face points, `14 + n` inner points, as
 /// in [`crate::decompose`]) of the cell whose smallest corner is grid vertex `base`;
 /// `stride` is the grid-index step along each axis (`[1, nx, nx·ny]`).
 #[inline]
@@ -86,8 +101,8 @@ pub fn local_key(base: usize, stride: [usize; 3], id: usize) -> VertexKey {
 /// in the plane z = that index (grid vertices and saddles of faces normal to z do).
 #[inline]
 fn vertex_plane(k: VertexKey, plane_stride: usize) -> (usize, bool) {
-    let kind = k & 7;
-    let z = ((k >> 3) as usize) / plane_stride;
+    let kind = key_kind(k);
+    let z = key_index(k) / plane_stride;
     (z, kind == CORNER || kind == FACE + 2)
 }
 

@@ -60,7 +60,7 @@ use crate::decompose::decompose_cell;
 use crate::decompose::plan::{plan_cell, Layout, Planner};
 use crate::geom::interval_volume;
 use crate::grid::{corner_offset, ScalarGrid};
-use crate::keys::{local_key, vertex_key, VertexKey, CORNER};
+use crate::keys::{key_index, key_kind, local_key, vertex_key, VertexKey, CORNER};
 use crate::union_find::UnionFind;
 
 /// A grid vertex that warping put on a level, and the volume that moved (the mesh's volume
@@ -85,8 +85,8 @@ struct Node {
 impl Node {
     /// Its snap in state `snaps` ([`SNAP_NONE`] for a node that is not a grid vertex).
     fn state(&self, snaps: &[u8]) -> u8 {
-        match self.key & 7 == CORNER {
-            true => snaps[(self.key >> 3) as usize],
+        match key_kind(self.key) == CORNER {
+            true => snaps[key_index(self.key)],
             false => SNAP_NONE,
         }
     }
@@ -542,8 +542,8 @@ impl Link {
     fn grid_nodes(&self) -> impl Iterator<Item = usize> + '_ {
         self.nodes
             .iter()
-            .filter(|n| n.key & 7 == CORNER)
-            .map(|n| (n.key >> 3) as usize)
+            .filter(|n| key_kind(n.key) == CORNER)
+            .map(|n| key_index(n.key))
     }
 
     /// Joins, for each of the eight cells around `v` that lies entirely outside the
@@ -906,6 +906,7 @@ mod tests {
                 method: o.method,
                 alpha: o.alpha,
                 beta: o.beta,
+                split_sags: false,
             };
             let iv = crate::clip::Interval::new(o.alpha, o.beta, &g.values);
             let warp = super::snap_vertices(&g, &planner, &iv, 0.3);
@@ -1099,7 +1100,8 @@ mod tests {
                 (0.0, 0.42, 0.58),
             ] {
                 let g = noise([7, 6, 8], seed, levels);
-                let o = MeshOptions::new(alpha, beta, Method::Ctd);
+                // the plain mesh as warping sees it: no sagging edge split
+                let o = MeshOptions::new(alpha, beta, Method::Ctd).split_sags(false);
                 let plain = mesh_interval(&g, &o).unwrap().mesh.volume();
                 let warped = mesh_interval(&g, &o.clone().warp(0.3)).unwrap();
                 let sum: f64 = warped.snapped.iter().map(|s| s.volume).sum();

@@ -44,6 +44,7 @@ pub fn cell_tets(grid: &ScalarGrid, c: [usize; 3], out: &mut Vec<([u64; 4], [f64
         method: Method::Tptd,
         alpha: f64::NEG_INFINITY,
         beta: f64::INFINITY,
+        split_sags: false,
     };
     let v = grid.cell_values(c[0], c[1], c[2]);
     let plan = plan_cell(&planner, c, &v);
@@ -61,8 +62,8 @@ pub fn cell_tets(grid: &ScalarGrid, c: [usize; 3], out: &mut Vec<([u64; 4], [f64
 
 /// Whether the vertex with key `key` lies on the grid box.
 pub fn key_on_box(grid: &ScalarGrid, key: u64) -> bool {
-    let kind = key & 7;
-    let p = grid.vertex_ijk((key >> 3) as usize);
+    let kind = crate::keys::key_kind(key);
+    let p = grid.vertex_ijk(crate::keys::key_index(key));
     let at_box = |a: usize| p[a] == 0 || p[a] + 1 == grid.dims[a];
     match kind {
         CORNER => (0..3).any(at_box),

@@ -44,8 +44,8 @@ fn build_graph(grid: &ScalarGrid) -> Graph {
     let n = grid.num_vertices();
     let extra_keys: Vec<u64> = extra.iter().map(|x| x.0).collect();
     let id = |k: u64| -> u32 {
-        if k & 7 == CORNER {
-            (k >> 3) as u32
+        if crate::keys::key_kind(k) == CORNER {
+            crate::keys::key_index(k) as u32
         } else {
             (n + extra_keys.binary_search(&k).expect("saddle key")) as u32
         }
@@ -111,7 +111,7 @@ fn extra_vertices(tets: &[([u64; 4], [f64; 4])]) -> Vec<(u64, f64)> {
     let mut extra: Vec<(u64, f64)> = tets
         .iter()
         .flat_map(|(k, v)| k.iter().copied().zip(v.iter().copied()))
-        .filter(|(k, _)| k & 7 != CORNER)
+        .filter(|(k, _)| crate::keys::key_kind(*k) != CORNER)
         .collect();
     extra.par_sort_unstable_by_key(|x| x.0);
     extra.dedup_by_key(|x| x.0);
@@ -304,8 +304,8 @@ pub fn assign_persistence(grid: &ScalarGrid, points: &mut [CriticalPoint]) {
     let pers = vertex_persistence(grid, &g);
     let n = grid.num_vertices();
     let id = |k: u64| -> Option<usize> {
-        if k & 7 == CORNER {
-            Some((k >> 3) as usize)
+        if crate::keys::key_kind(k) == CORNER {
+            Some(crate::keys::key_index(k))
         } else {
             g.extra_keys.binary_search(&k).ok().map(|e| n + e)
         }

@@ -1,7 +1,8 @@
 //! Decompositions of one trilinear cell into tetrahedra over cell-local vertex ids.
 //!
 //! Local ids: `0..8` the corners (numbering of [`crate::grid`]), `8 + f` the saddle of face
-//! `f`, [`BODY0`] and [`BODY1`] the body saddles in increasing value order.
+//! `f` (or the point splitting its diagonal), [`BODY0`] and [`BODY1`] the body saddles in
+//! increasing value order, and from [`SPLIT0`] on the points that split edges inside the cell.
 //!
 //! Conformity between cells rests on one rule: a cell face is split into four triangles around
 //! its saddle when the face's saddle is *used* (a decision that depends only on the face and
@@ -24,8 +25,10 @@ use plan::{CellPlan, Layout};
 pub const BODY0: u8 = 14;
 /// Local id of the higher-valued body saddle.
 pub const BODY1: u8 = 15;
+/// Local id of the first point splitting an edge inside the cell ([`sag`]).
+pub const SPLIT0: u8 = 16;
 /// Number of local ids.
-pub const NUM_LOCAL: usize = 16;
+pub const NUM_LOCAL: usize = 40;
 
 /// Local id of the saddle of face `f`.
 #[inline]
@@ -156,7 +159,8 @@ pub fn decompose_cell(
     (case, pts)
 }
 
-/// Bisects the sagging face diagonals and main diagonal the plan names (see [`sag`]).
+/// Bisects the sagging face diagonals the plan names, then the sagging edges inside the cell
+/// (see [`sag`]).
 #[inline]
 fn split_sagging_edges(plan: &CellPlan, pts: &mut CellPoints, out: &mut Vec<[u8; 4]>) {
     for f in 0..6 {
@@ -169,15 +173,8 @@ fn split_sagging_edges(plan: &CellPlan, pts: &mut CellPoints, out: &mut Vec<[u8;
         let fc = face_corners(f);
         sag::bisect(out, fc[0] as u8, fc[2] as u8, face_id(f));
     }
-    if plan.main_splits[0].is_some() && out.iter().any(|t| t.contains(&0) && t.contains(&7)) {
-        let mut from = 0;
-        for (s, id) in plan.main_splits.iter().zip([BODY0, BODY1]) {
-            let Some(s) = s else { break };
-            pts.pos[id as usize] = [s.t; 3];
-            pts.val[id as usize] = s.value;
-            sag::bisect(out, from, 7, id);
-            from = id;
-        }
+    if let Some(levels) = plan.split_levels {
+        sag::split_inner_edges(levels, pts, out);
     }
 }
 

@@ -15,7 +15,7 @@
 //!   saddle (TPTD); other cells use no body saddle (STD cases i, ii, iv over the used faces).
 //!   Both cells of a face evaluate the same rule on the same data, so they agree.
 
-use super::sag::{face_diagonal_split, main_diagonal_splits, EdgeSplit};
+use super::sag::face_diagonal_split;
 use crate::grid::{ScalarGrid, LOW_FACES};
 use crate::trilinear::{body_saddles, face_saddle, BodySaddle, FaceSaddle};
 
@@ -199,9 +199,9 @@ pub struct CellPlan {
     /// point `saddles[f]` of the diagonal (`uv = [t, t]`) after the decomposition
     /// ([`super::sag`]). Not used faces: the case analysis never sees them.
     pub extra: u8,
-    /// The bisections of the main diagonal `0–7` (in order from corner 0), when it sags and
-    /// the cell has no body saddle.
-    pub main_splits: [Option<EdgeSplit>; 2],
+    /// The levels, when the cell crosses one: edges inside the cell that sag from the level
+    /// set are then bisected after the decomposition ([`super::sag::split_inner_edges`]).
+    pub split_levels: Option<[f64; 2]>,
     /// Used faces whose saddle may be the case-(ii) apex: `own`, except for a non-full cell
     /// with only forced saddles on faces of both parities (no corner apex fits), where it is
     /// the forced saddles that join nothing the cell keeps apart.
@@ -224,7 +224,7 @@ impl CellPlan {
             own: 0,
             forced: 0,
             extra: 0,
-            main_splits: [None, None],
+            split_levels: None,
             apex: 0,
             saddles: [FaceSaddle {
                 uv: [0.0; 2],
@@ -285,6 +285,10 @@ pub struct Planner<'a> {
     pub alpha: f64,
     /// Upper level (may be `+inf`).
     pub beta: f64,
+    /// Whether edges that sag from the level set are split ([`super::sag`]). Off when grid
+    /// vertices are snapped onto the levels (`--quality`): a snapped end no longer brackets
+    /// the split point's value, and the quality pass projects the boundary instead.
+    pub split_sags: bool,
 }
 
 impl Planner<'_> {
@@ -376,14 +380,14 @@ fn plan_tptd(p: &Planner, c: [usize; 3], v: &[f64; 8], cls: CellClasses) -> Cell
             used
         };
     }
-    if crosses {
+    if crosses && p.split_sags {
         plan_splits(p, v, &mut plan);
     }
     plan
 }
 
-/// The sagging edges of a cell crossing a level: the diagonals of faces that use no saddle,
-/// and the main diagonal when the cell has no body saddle (see [`super::sag`]).
+/// The sagging diagonals of the faces of a cell crossing a level that use no saddle, and the
+/// levels for the edges inside it (see [`super::sag`]).
 #[inline]
 fn plan_splits(p: &Planner, v: &[f64; 8], plan: &mut CellPlan) {
     for f in 0..6 {
@@ -399,9 +403,7 @@ fn plan_splits(p: &Planner, v: &[f64; 8], plan: &mut CellPlan) {
             };
         }
     }
-    if plan.num_body == 0 {
-        plan.main_splits = main_diagonal_splits(v, p.alpha, p.beta);
-    }
+    plan.split_levels = Some([p.alpha, p.beta]);
 }
 
 /// The used faces whose saddle lies on a side of the (single) level crossing the cell whose
@@ -470,6 +472,7 @@ mod tests {
                     method,
                     alpha,
                     beta,
+                    split_sags: true,
                 };
                 let plan = |c: [usize; 3]| plan_cell(&p, c, &grid.cell_values(c[0], c[1], c[2]));
                 for c in (0..cd[2])

@@ -18,6 +18,7 @@
 //! A face diagonal is split by both cells of the face, from the face's four values alone, so
 //! they agree; the main diagonal `0–7` is inside its cell.
 
+use super::{CellPoints, LOCAL_BOX, NUM_LOCAL, SPLIT0};
 use crate::trilinear::eval;
 
 /// Largest distance (voxels along the edge) between the linear and the trilinear crossing of
@@ -80,10 +81,14 @@ fn split_at(g: &impl Fn(f64) -> f64, target: f64, alpha: f64, beta: f64) -> Opti
     ((END_MARGIN..=1.0 - END_MARGIN).contains(&t) && between).then_some(EdgeSplit { t, value })
 }
 
-/// Just inside the interval from `alpha` (or from `beta`): the value a split point for that
-/// level takes, so that it is never a level itself; `toward` is the other end of the range.
+/// How far into the interval (fraction of the way from the level to the far end, or to the
+/// other level) a split point for one level is placed: its value is never a level, and the
+/// cuts of that level on the edges around it stay a fair distance from it.
+const INSIDE: f64 = 0.1;
+
+/// The value of a split point for `level`, [`INSIDE`] of the way toward `toward`.
 fn nudged(level: f64, toward: f64) -> f64 {
-    level + 1e-3 * (toward - level)
+    level + INSIDE * (toward - level)
 }
 
 /// The split of an edge (see [`sags`]) at one point: where the field takes the middle of the
@@ -92,8 +97,8 @@ pub fn edge_split(g: impl Fn(f64) -> f64, len: f64, alpha: f64, beta: f64) -> Op
     let (a, b) = (g(0.0), g(1.0));
     let target = match sags(&g, len, alpha, beta)? {
         (true, true) => 0.5 * (alpha + beta),
-        (true, false) => nudged(alpha, a.max(b)),
-        _ => nudged(beta, a.min(b)),
+        (true, false) => nudged(alpha, a.max(b).min(beta)),
+        _ => nudged(beta, a.min(b).max(alpha)),
     };
     split_at(&g, target, alpha, beta)
 }
@@ -114,8 +119,8 @@ pub fn edge_splits(
     let at = |level: f64, toward: f64| split_at(&g, nudged(level, toward), alpha, beta);
     let mut s = match (ca, cb) {
         (true, true) => [at(alpha, beta), at(beta, alpha)],
-        (true, false) => [at(alpha, hi), None],
-        _ => [at(beta, lo), None],
+        (true, false) => [at(alpha, hi.min(beta)), None],
+        _ => [at(beta, lo.max(alpha)), None],
     };
     if let [Some(x), Some(y)] = s {
         if y.t < x.t {
@@ -138,10 +143,63 @@ pub fn face_diagonal_split(q: [f64; 4], alpha: f64, beta: f64) -> Option<EdgeSpl
     edge_split(g, std::f64::consts::SQRT_2, alpha, beta)
 }
 
-/// The splits of the main diagonal (corner 0 to corner 7) of a cell with corner values `v`,
-/// in order from corner 0.
-pub fn main_diagonal_splits(v: &[f64; 8], alpha: f64, beta: f64) -> [Option<EdgeSplit>; 2] {
-    edge_splits(|t| eval(v, [t; 3]), 3f64.sqrt(), alpha, beta)
+/// Rounds of [`split_inner_edges`] (the second looks at the edges the first made).
+const PASSES: usize = 2;
+
+/// Bisects the edges inside a cell (not on one of its faces) that sag from the level set of
+/// `levels`, each at up to two points, in a fixed order, with local ids from [`SPLIT0`] on
+/// while there are some. Along an edge the field is the trilinear interpolant of the corner
+/// values, corrected linearly so that it takes the vertex values at the ends (a face saddle
+/// sits at a clamped position with its own value).
+pub fn split_inner_edges(levels: [f64; 2], pts: &mut CellPoints, tets: &mut Vec<[u8; 4]>) {
+    let [alpha, beta] = levels;
+    let corners: [f64; 8] = std::array::from_fn(|c| pts.val[c]);
+    let mut next = SPLIT0 as usize;
+    let mut edges: Vec<(u8, u8)> = Vec::with_capacity(6 * tets.len());
+    for _ in 0..PASSES {
+        edges.clear();
+        for t in tets.iter() {
+            for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+                let (a, b) = (t[i].min(t[j]), t[i].max(t[j]));
+                let (va, vb) = (pts.val[a as usize], pts.val[b as usize]);
+                let crosses = (va <= alpha) != (vb <= alpha) || (va >= beta) != (vb >= beta);
+                if crosses && LOCAL_BOX[a as usize] & LOCAL_BOX[b as usize] == 0 {
+                    edges.push((a, b));
+                }
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        let mut split = false;
+        for &(a, b) in &edges {
+            let (pa, pb) = (pts.pos[a as usize], pts.pos[b as usize]);
+            let (va, vb) = (pts.val[a as usize], pts.val[b as usize]);
+            let at = |t: f64| std::array::from_fn(|k| pa[k] + t * (pb[k] - pa[k]));
+            let (ea, eb) = (va - eval(&corners, pa), vb - eval(&corners, pb));
+            let g = |t: f64| eval(&corners, at(t)) + (1.0 - t) * ea + t * eb;
+            let len = (0..3).map(|k| (pb[k] - pa[k]).powi(2)).sum::<f64>().sqrt();
+            let splits = edge_splits(g, len, alpha, beta);
+            let need = splits.iter().flatten().count();
+            if need == 0 {
+                continue;
+            }
+            if next + need > NUM_LOCAL {
+                return;
+            }
+            let mut from = a;
+            for s in splits.iter().flatten() {
+                pts.pos[next] = at(s.t);
+                pts.val[next] = s.value;
+                bisect(tets, from, b, next as u8);
+                from = next as u8;
+                next += 1;
+            }
+            split = true;
+        }
+        if !split {
+            break;
+        }
+    }
 }
 
 /// Bisects every tet of `tets` that has the edge `{a, b}` at local id `p`.
@@ -178,10 +236,10 @@ mod tests {
     fn a_tied_face_is_split_near_its_bilinear_crossing() {
         let s = face_diagonal_split(TIED, 149.83, f64::INFINITY).expect("split");
         assert!((s.t - 0.835).abs() < 0.01, "{s:?}");
-        assert!(s.value > 149.83 && s.value < 149.84, "{s:?}");
+        assert!(s.value > 149.84 && s.value < 149.85, "{s:?}");
         // the same face seen through the upper level
         let s = face_diagonal_split(TIED, f64::NEG_INFINITY, 149.83).expect("split");
-        assert!(s.value < 149.83 && s.value > 149.82, "{s:?}");
+        assert!(s.value < 149.45 && s.value > 149.44, "{s:?}");
         // a thin band: the middle of the band
         let s = face_diagonal_split(TIED, 149.5, 149.83).expect("split");
         assert!((s.value - 149.665).abs() < 1e-9, "{s:?}");
@@ -191,21 +249,41 @@ mod tests {
     fn edges_that_are_nearly_linear_or_uncut_stay_whole() {
         assert!(face_diagonal_split([0.0, 1.0, 2.0, 1.0], 0.7, 1.5).is_none());
         assert!(face_diagonal_split(TIED, 140.0, 145.0).is_none());
-        let v = [0.0, 1.0, 1.0, 2.0, 1.0, 2.0, 2.0, 3.0];
-        assert_eq!(main_diagonal_splits(&v, 1.2, 2.5), [None, None]);
+        let linear = |t: f64| 1.0 + 2.0 * t;
+        assert_eq!(edge_splits(linear, 1.7, 1.2, 2.5), [None, None]);
     }
 
+    /// The 6-fold split of a cell whose main diagonal dips (corner 0 at 174, corner 7 at 135,
+    /// 132 on the way): the diagonal is split just inside the band from each level, and every
+    /// tet stays positive.
     #[test]
     fn the_main_diagonal_of_a_dipping_cell_is_split() {
-        // corner 0 at 174, corner 7 at 135, the diagonal dips to 132 on its way
+        use crate::geom::signed_volume;
         let v = [174.0, 120.0, 123.0, 115.0, 158.0, 130.0, 138.0, 135.0];
-        let [Some(x), Some(y)] = main_diagonal_splits(&v, 150.23, 150.77) else {
-            panic!("two splits expected");
+        let mut pts = CellPoints::from_corners(&v);
+        let mut tets = Vec::new();
+        super::super::six::decompose_six(&mut tets);
+        split_inner_edges([150.23, 150.77], &mut pts, &mut tets);
+        let on_diagonal: Vec<usize> = (SPLIT0 as usize..NUM_LOCAL)
+            .filter(|&i| tets.iter().any(|t| t.contains(&(i as u8))))
+            .filter(|&i| {
+                pts.pos[i]
+                    .iter()
+                    .all(|&x| (x - pts.pos[i][0]).abs() < 1e-15)
+            })
+            .collect();
+        assert_eq!(on_diagonal.len(), 2, "{on_diagonal:?}");
+        let (x, y) = (on_diagonal[0], on_diagonal[1]);
+        // the upper level first from corner 0, each a tenth of the band inside, both within 0.3
+        assert!(pts.pos[x][0] < pts.pos[y][0] && pts.pos[y][0] < 0.3);
+        assert!(pts.val[x] < 150.72 && pts.val[x] > 150.71, "{}", pts.val[x]);
+        assert!(pts.val[y] > 150.28 && pts.val[y] < 150.29, "{}", pts.val[y]);
+        let vol = |t: &[u8; 4]| {
+            let p = t.map(|i| pts.pos[i as usize]);
+            signed_volume(p[0], p[1], p[2], p[3])
         };
-        // the upper level first from corner 0 (174), each just inside the band
-        assert!(x.t < y.t && y.t < 0.3, "{x:?} {y:?}");
-        assert!(x.value < 150.77 && x.value > 150.76, "{x:?}");
-        assert!(y.value > 150.23 && y.value < 150.24, "{y:?}");
+        assert!(tets.iter().all(|t| vol(t) > 0.0));
+        assert!((tets.iter().map(vol).sum::<f64>() - 1.0).abs() < 1e-12);
     }
 
     #[test]
