@@ -23,13 +23,13 @@ use crate::trilinear::eval;
 
 /// Largest distance (voxels along the edge) between the linear and the trilinear crossing of
 /// a level that is left unsplit.
-pub const SAG_LIMIT: f64 = 0.25;
+pub const SAG_LIMIT: f64 = 0.4;
 
 /// Split points stay this far (fraction of the edge) from the edge's ends.
 const END_MARGIN: f64 = 0.02;
 
 /// Bisection steps of a crossing.
-const STEPS: usize = 44;
+const STEPS: usize = 36;
 
 /// A point splitting an edge: `t` along it from its first end, and the field value there.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,9 +63,15 @@ fn sags(g: &impl Fn(f64) -> f64, len: f64, alpha: f64, beta: f64) -> Option<(boo
     let (a, b) = (g(0.0), g(1.0));
     let crosses_alpha = (a <= alpha) != (b <= alpha);
     let crosses_beta = (a >= beta) != (b >= beta);
+    let within = SAG_LIMIT / len;
     let sag = |level: f64| {
         let linear = (level - a) / (b - a);
-        (crossing(g, level) - linear).abs() * len > SAG_LIMIT
+        let (lo, hi) = ((linear - within).max(0.0), (linear + within).min(1.0));
+        // A crossing within the limit of the linear one (the common case, two evaluations).
+        if (g(lo) - level) * (g(hi) - level) <= 0.0 {
+            return false;
+        }
+        (crossing(g, level) - linear).abs() > within
     };
     ((crosses_alpha && sag(alpha)) || (crosses_beta && sag(beta)))
         .then_some((crosses_alpha, crosses_beta))
