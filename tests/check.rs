@@ -176,14 +176,9 @@ fn smooth_noise(n: usize, m: usize, seed: u64) -> impl Fn(f64, f64, f64) -> f64 
     }
 }
 
-/// Thin intervals, where the two level sets are a fraction of a voxel apart: integer
-/// (MRI-like) data in bands of half a grey level and one and a half, a smooth random field in
-/// a band 3 % of its spread wide, and a shell 0.15 voxel thick. The quality pass must leave
-/// an embedding (winding number 1, no boundary crossing), the Betti numbers and the volume
-/// within 0.5 % of the plain mesh's, and move no boundary triangle farther from its level set
-/// than the plain mesh has it.
-#[test]
-fn the_quality_pass_keeps_thin_intervals_embedded() {
+/// Thin intervals: integer (MRI-like) data in bands of half a grey level and one and a half,
+/// a smooth random field in a band 3 % of its spread wide, and a shell 0.15 voxel thick.
+fn thin_cases() -> Vec<Case> {
     let field = smooth_noise(14, 5, 7);
     let integer = grid(14, |x, y, z| (100.0 + 40.0 * field(x, y, z)).round());
     let smooth = grid(14, smooth_noise(14, 5, 11));
@@ -191,13 +186,21 @@ fn the_quality_pass_keeps_thin_intervals_embedded() {
     let shell = grid(14, move |x, y, z| {
         ((x - c).powi(2) + (y - c).powi(2) + (z - c).powi(2)).sqrt()
     });
-    let cases: Vec<Case> = vec![
+    vec![
         ("integer half", integer.clone(), (118.23, 118.77), [0, 0, 0]),
         ("integer one and a half", integer, (117.6, 119.1), [0, 0, 0]),
         ("smooth 3 %", smooth, (0.49, 0.505), [0, 0, 0]),
         ("shell 0.15", shell, (4.2, 4.35), [1, 0, 1]),
-    ];
-    for (name, g, (a, b), betti) in cases {
+    ]
+}
+
+/// Thin intervals ([`thin_cases`]), where the two level sets are a fraction of a voxel apart.
+/// The quality pass must leave an embedding (winding number 1, no boundary crossing), the
+/// Betti numbers and the volume within 0.5 % of the plain mesh's, and move no boundary
+/// triangle farther from its level set than the plain mesh has it.
+#[test]
+fn the_quality_pass_keeps_thin_intervals_embedded() {
+    for (name, g, (a, b), betti) in thin_cases() {
         let opts = MeshOptions::new(a, b, Method::Ctd);
         let plain = mesh_interval(&g, &opts).unwrap().mesh;
         let mut out = mesh_interval(&g, &opts.warp(DEFAULT_WARP)).unwrap();
@@ -314,4 +317,58 @@ fn a_face_saddle_within_rounding_of_a_level_gives_a_valid_mesh() {
     .unwrap();
     improve_meshed(&mut out, &crop, 0.0, 10.0, &QualityOptions::default());
     assert_valid("crop, quality", &out.mesh, &crop, (0.0, 10.0));
+}
+
+/// Plain meshes of thin intervals, with every topology-preserving method, are valid
+/// embeddings whose boundary stays within half a voxel of its level sets, with the Betti
+/// numbers of the trilinear interval where they are known.
+#[test]
+fn plain_meshes_of_thin_intervals_stay_within_half_a_voxel() {
+    for (name, g, (a, b), betti) in thin_cases() {
+        for method in [Method::Ctd, Method::Tptd, Method::Std] {
+            let m = mesh_interval(&g, &MeshOptions::new(a, b, method))
+                .unwrap()
+                .mesh;
+            let r = assert_valid(&format!("{name} {method:?}"), &m, &g, (a, b));
+            if betti != [0, 0, 0] {
+                assert_eq!(r.betti, Some(betti), "{name} {method:?}");
+            }
+        }
+    }
+}
+
+/// A tie on integer data: along the diagonal of the face x = 1 the values run from 150 to
+/// 146 with 150 and 169 across, so the linear cut of the level 149.83 lies at 0.04 of the
+/// diagonal where the bilinear field crosses it at 0.835, most of a voxel away. Unless the
+/// diagonal is split, the checker finds the boundary off its level set.
+#[test]
+fn a_sagging_face_diagonal_is_split_onto_the_level_set() {
+    // The cell at (0, 1, 1) of a 3³ grid holds the tie (corner c = x + 2y + 4z: 160, 150,
+    // 172, 150, 171, 169, 180, 146; its face x = 1 is corners 1, 3, 7, 5 in cyclic order);
+    // the cell beyond x = 1 mirrors it, and 175 elsewhere keeps the level set away from the
+    // face's edges.
+    let mut values = vec![175.0; 27];
+    let cell = [160.0, 150.0, 172.0, 150.0, 171.0, 169.0, 180.0, 146.0];
+    for (c, &v) in cell.iter().enumerate() {
+        let (x, y, z) = (c & 1, 1 + ((c >> 1) & 1), 1 + ((c >> 2) & 1));
+        values[x + 3 * (y + 3 * z)] = v;
+        if x == 0 {
+            values[2 + 3 * (y + 3 * z)] = v;
+        }
+    }
+    let g = ScalarGrid::new([3, 3, 3], values).unwrap();
+    let (a, b) = (149.83, f64::INFINITY);
+    let check = CheckOptions::with_grid(&g, a, b);
+    let bent = |split: bool| {
+        let o = MeshOptions::new(a, b, Method::Ctd).split_sags(split);
+        check_mesh(&mesh_interval(&g, &o).unwrap().mesh, &check)
+    };
+    assert!(
+        bent(false).has(ProblemKind::OffLevel),
+        "the test lost its point"
+    );
+    let m = mesh_interval(&g, &MeshOptions::new(a, b, Method::Ctd))
+        .unwrap()
+        .mesh;
+    assert_valid("split", &m, &g, (a, b));
 }

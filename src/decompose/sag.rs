@@ -22,8 +22,11 @@ use super::{CellPoints, LOCAL_BOX, NUM_LOCAL, SPLIT0};
 use crate::trilinear::eval;
 
 /// Largest distance (voxels along the edge) between the linear and the trilinear crossing of
-/// a level that is left unsplit.
-pub const SAG_LIMIT: f64 = 0.4;
+/// a level that is left unsplit, on a face diagonal: the cut ends boundary triangles that
+/// span the face, whose middles sag further than their corners.
+pub const FACE_SAG_LIMIT: f64 = 0.25;
+/// The same inside a cell.
+pub const INNER_SAG_LIMIT: f64 = 0.4;
 
 /// Split points stay this far (fraction of the edge) from the edge's ends.
 const END_MARGIN: f64 = 0.02;
@@ -56,14 +59,20 @@ fn crossing(g: impl Fn(f64) -> f64, level: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// Whether a level crosses an edge (values `a`, `b` at its ends) more than [`SAG_LIMIT`] away
+/// Whether a level crosses an edge (values `a`, `b` at its ends) more than `limit` away
 /// from the linear crossing, for an edge of length `len` (voxels) along which the field is
 /// `g`; and which levels cross it. Classes as in [`super::plan::class`].
-fn sags(g: &impl Fn(f64) -> f64, len: f64, alpha: f64, beta: f64) -> Option<(bool, bool)> {
+fn sags(
+    g: &impl Fn(f64) -> f64,
+    len: f64,
+    limit: f64,
+    alpha: f64,
+    beta: f64,
+) -> Option<(bool, bool)> {
     let (a, b) = (g(0.0), g(1.0));
     let crosses_alpha = (a <= alpha) != (b <= alpha);
     let crosses_beta = (a >= beta) != (b >= beta);
-    let within = SAG_LIMIT / len;
+    let within = limit / len;
     let sag = |level: f64| {
         let linear = (level - a) / (b - a);
         let (lo, hi) = ((linear - within).max(0.0), (linear + within).min(1.0));
@@ -99,9 +108,15 @@ fn nudged(level: f64, toward: f64) -> f64 {
 
 /// The split of an edge (see [`sags`]) at one point: where the field takes the middle of the
 /// band when both levels cross the edge, else just inside the interval from the crossing level.
-pub fn edge_split(g: impl Fn(f64) -> f64, len: f64, alpha: f64, beta: f64) -> Option<EdgeSplit> {
+pub fn edge_split(
+    g: impl Fn(f64) -> f64,
+    len: f64,
+    limit: f64,
+    alpha: f64,
+    beta: f64,
+) -> Option<EdgeSplit> {
     let (a, b) = (g(0.0), g(1.0));
-    let target = match sags(&g, len, alpha, beta)? {
+    let target = match sags(&g, len, limit, alpha, beta)? {
         (true, true) => 0.5 * (alpha + beta),
         (true, false) => nudged(alpha, a.max(b).min(beta)),
         _ => nudged(beta, a.min(b).max(alpha)),
@@ -114,11 +129,12 @@ pub fn edge_split(g: impl Fn(f64) -> f64, len: f64, alpha: f64, beta: f64) -> Op
 pub fn edge_splits(
     g: impl Fn(f64) -> f64,
     len: f64,
+    limit: f64,
     alpha: f64,
     beta: f64,
 ) -> [Option<EdgeSplit>; 2] {
     let (a, b) = (g(0.0), g(1.0));
-    let Some((ca, cb)) = sags(&g, len, alpha, beta) else {
+    let Some((ca, cb)) = sags(&g, len, limit, alpha, beta) else {
         return [None, None];
     };
     let (lo, hi) = (a.min(b), a.max(b));
@@ -146,7 +162,7 @@ pub fn face_diagonal_split(q: [f64; 4], alpha: f64, beta: f64) -> Option<EdgeSpl
         let s = 1.0 - t;
         q[0] * s * s + (q[1] + q[3]) * s * t + q[2] * t * t
     };
-    edge_split(g, std::f64::consts::SQRT_2, alpha, beta)
+    edge_split(g, std::f64::consts::SQRT_2, FACE_SAG_LIMIT, alpha, beta)
 }
 
 /// Rounds of [`split_inner_edges`] (the second looks at the edges the first made).
@@ -184,7 +200,7 @@ pub fn split_inner_edges(levels: [f64; 2], pts: &mut CellPoints, tets: &mut Vec<
             let (ea, eb) = (va - eval(&corners, pa), vb - eval(&corners, pb));
             let g = |t: f64| eval(&corners, at(t)) + (1.0 - t) * ea + t * eb;
             let len = (0..3).map(|k| (pb[k] - pa[k]).powi(2)).sum::<f64>().sqrt();
-            let splits = edge_splits(g, len, alpha, beta);
+            let splits = edge_splits(g, len, INNER_SAG_LIMIT, alpha, beta);
             let need = splits.iter().flatten().count();
             if need == 0 {
                 continue;
@@ -256,7 +272,7 @@ mod tests {
         assert!(face_diagonal_split([0.0, 1.0, 2.0, 1.0], 0.7, 1.5).is_none());
         assert!(face_diagonal_split(TIED, 140.0, 145.0).is_none());
         let linear = |t: f64| 1.0 + 2.0 * t;
-        assert_eq!(edge_splits(linear, 1.7, 1.2, 2.5), [None, None]);
+        assert_eq!(edge_splits(linear, 1.7, 0.25, 1.2, 2.5), [None, None]);
     }
 
     /// The 6-fold split of a cell whose main diagonal dips (corner 0 at 174, corner 7 at 135,
