@@ -544,3 +544,32 @@ fn real_tetgen_on_our_boundary_surface() {
     }
     eprintln!("{out}");
 }
+
+/// Legacy `.vtk` files written by meshio (ASCII and binary, file versions 4.2 and 5.1) of our
+/// `.vtu` read back to the same points, tets and values, and inspect alike.
+#[test]
+fn legacy_vtk_from_meshio_reads_as_our_vtu() {
+    if !require_python_with("meshio") {
+        return;
+    }
+    let dir = meshed();
+    let d = dir.path();
+    let script = "import meshio\nm = meshio.read('m.vtu')\n\
+        for b in (False, True):\n    for v in ('4.2', '5.1'):\n        \
+        meshio.vtk.write(f'l{int(b)}{v[0]}.vtk', m, binary=b, fmt_version=v)\n";
+    let (ok, out) = run(Command::new(python()).current_dir(d).args(["-c", script]));
+    assert!(ok, "{out}");
+    let ours = read_mesh(&d.join("m.vtu")).unwrap().mesh;
+    let names = ["l04.vtk", "l05.vtk", "l14.vtk", "l15.vtk"];
+    for name in names {
+        let back = read_mesh(&d.join(name)).unwrap_or_else(|e| panic!("{e}"));
+        // (not assert_eq!: the vectors are long)
+        assert!(back.mesh.points == ours.points, "{name}: points differ");
+        assert!(back.mesh.tets == ours.tets, "{name}: tets differ");
+        assert!(back.mesh.values == ours.values, "{name}: values differ");
+    }
+    let (all, _) = inspect(d, &[&["m.vtu"][..], &names].concat(), &[]);
+    for i in &all[1..] {
+        same_numbers(&all[0], i);
+    }
+}

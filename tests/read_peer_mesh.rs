@@ -381,3 +381,63 @@ fn peer_files_read_back_and_cut_short_are_errors_not_panics() {
 fn fs_write(path: &Path, text: &str) {
     std::fs::write(path, text).unwrap();
 }
+
+const VTK42: &str = "# vtk DataFile Version 4.2\nhand written\nASCII\nDATASET UNSTRUCTURED_GRID\n\
+POINTS 5 float\n0 0 0 1 0 0 0 1 0\n0 0 1 1 1 1\n\
+CELLS 3 14\n3 0 1 2\n4 0 1 2 3\n4 1 2 3 4\nCELL_TYPES 3\n5\n10\n10\n\
+CELL_DATA 3\nSCALARS c int 1\nLOOKUP_TABLE default\n0 1 2\n";
+
+#[test]
+fn legacy_vtk_reads_and_bad_ones_give_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("a.vtk");
+    fs_write(&path, VTK42);
+    let f = read_mesh(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(f.mesh.tets, vec![[0, 1, 2, 3], [1, 2, 3, 4]]);
+    assert_eq!(f.mesh.points[4], [1.0, 1.0, 1.0]);
+    let with_f = VTK42.replace(
+        "CELL_DATA 3\nSCALARS c int 1\nLOOKUP_TABLE default\n0 1 2\n",
+        "POINT_DATA 5\nSCALARS f double\nLOOKUP_TABLE default\n0 0.5 1 1.5 2\n",
+    );
+    fs_write(&path, &with_f);
+    assert_eq!(
+        read_mesh(&path).unwrap().mesh.values,
+        [0.0, 0.5, 1.0, 1.5, 2.0]
+    );
+    let cases = [
+        ("hello\n".to_string(), "not a legacy VTK file"),
+        (VTK42.replace("ASCII", "XML"), "ASCII or BINARY"),
+        (
+            VTK42.replace("UNSTRUCTURED_GRID", "POLYDATA"),
+            "UNSTRUCTURED_GRID",
+        ),
+        (
+            VTK42.replace("4 1 2 3 4", "4 1 2 3 9"),
+            "node 9 is not a point",
+        ),
+        (
+            VTK42.replace("CELL_TYPES 3\n5", "CELL_TYPES 3\n12"),
+            "cell type 12",
+        ),
+        (VTK42.replace("CELLS 3 14", "CELLS 3 15"), "CELLS"),
+        (
+            VTK42.replace("POINTS 5 float", "POINTS 5 quaternion"),
+            "unknown type",
+        ),
+        (
+            VTK42[..VTK42.find("CELLS").unwrap()].to_string(),
+            "no CELLS",
+        ),
+    ];
+    for (text, want) in cases {
+        fs_write(&path, &text);
+        let e = error_naming(&path, &path);
+        assert!(e.contains(want), "{e}");
+    }
+    for cut in (1..25).map(|k| k * VTK42.len() / 25) {
+        fs_write(&path, &VTK42[..cut]);
+        if let Err(e) = read_mesh(&path) {
+            assert!(!e.to_string().contains('\n'), "{e}");
+        }
+    }
+}

@@ -1,8 +1,7 @@
 //! Mesh input by file extension: [`read_mesh`] is the twin of [`super::write_mesh`] and
 //! chooses among the readers `msh_read` (`.msh` 4.1 and 2.2), `msh_read_binary` (binary
-//! `.msh` 4.1), `inp_read` (`.inp`),
-//! `vtu_read` (`.vtu`), `tetgen_read` (TetGen `.node`/`.ele`/`.face`) and `medit_read`
-//! (Medit `.mesh`). All return a [`MeshFile`]: the [`TetMesh`] plus the named node groups
+//! `.msh` 4.1), `inp_read` (`.inp`), `vtu_read` (`.vtu`), `vtk_read` (legacy `.vtk`),
+//! `tetgen_read` (TetGen `.node`/`.ele`/`.face`) and `medit_read` (Medit `.mesh`). All return a [`MeshFile`]: the [`TetMesh`] plus the named node groups
 //! and volume regions a solver needs for boundary conditions and materials.
 
 use std::path::Path;
@@ -78,7 +77,7 @@ pub enum MeshReadError {
 }
 
 /// The mesh file extensions [`read_mesh`] reads, for messages.
-pub const MESH_EXTENSIONS: &str = ".msh, .inp, .vtu, .mesh, .node or .ele";
+pub const MESH_EXTENSIONS: &str = ".msh, .inp, .vtu, .vtk, .mesh, .node or .ele";
 
 /// The readers, by lower-case extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,6 +85,7 @@ enum Format {
     Msh,
     Inp,
     Vtu,
+    Vtk,
     Medit,
     TetGen,
 }
@@ -99,6 +99,7 @@ impl Format {
             "msh" => Format::Msh,
             "inp" => Format::Inp,
             "vtu" => Format::Vtu,
+            "vtk" => Format::Vtk,
             "mesh" => Format::Medit,
             "node" | "ele" => Format::TetGen,
             _ => return None,
@@ -117,10 +118,10 @@ pub fn mesh_files(path: &Path) -> Vec<std::path::PathBuf> {
 
 /// Reads a tetrahedral mesh with its groups from `path`, by extension (case-insensitive):
 /// `.msh` (Gmsh ASCII 4.1 or 2.2, see `msh_read`, or binary 4.1, see `msh_read_binary`),
-/// `.inp` (Abaqus/CalculiX, see
-/// `inp_read`), `.vtu` (VTK XML, see `vtu_read`), `.mesh` (Medit ASCII, as fTetWild, CGAL
-/// and MMG write it, see `medit_read`), `.node` or `.ele` (TetGen: both files of the same
-/// name, and its `.face` when present, see `tetgen_read`).
+/// `.inp` (Abaqus/CalculiX, see `inp_read`), `.vtu` (VTK XML, see `vtu_read`), `.vtk`
+/// (legacy VTK, see `vtk_read`), `.mesh` (Medit ASCII, as fTetWild, CGAL and MMG write it,
+/// see `medit_read`), `.node` or `.ele` (TetGen: both files of the same name, and its
+/// `.face` when present, see `tetgen_read`).
 ///
 /// # Errors
 /// [`MeshReadError`]: unknown extension, unreadable file or malformed content; one line
@@ -140,6 +141,7 @@ pub fn read_mesh(path: &Path) -> Result<MeshFile, MeshReadError> {
         Some(Format::Inp) => super::inp_read::parse_inp,
         Some(Format::Medit) => super::medit_read::parse_medit,
         Some(Format::Vtu) => return super::vtu_read::read_vtu(path),
+        Some(Format::Vtk) => return parse_bytes(path, super::vtk_read::parse_vtk),
         Some(Format::TetGen) => return super::tetgen_read::read_tetgen(path),
         None => return Err(MeshReadError::UnknownFormat { file }),
     };

@@ -46,5 +46,6 @@ mod mesh_in;
 mod msh_read;
 mod msh_read_binary;
 mod tetgen_read;
+mod vtk_read;
 mod vtu_read;
 pub use mesh_in::{mesh_files, read_mesh, MeshFile, MeshReadError, NodeGroup, MESH_EXTENSIONS};

@@ -74,8 +74,9 @@ fn as_index(x: f64) -> Option<usize> {
     (x >= 0.0 && x.fract() == 0.0 && x < 9.0e15).then_some(x as usize)
 }
 
-/// The tetrahedra of the cells (`offsets` end each cell's nodes in `conn`).
-fn tets(
+/// The tetrahedra of the cells (`offsets` end each cell's nodes in `conn`); shared with the
+/// legacy reader [`super::vtk_read`].
+pub(super) fn tets(
     offsets: &[f64],
     types: &[f64],
     conn: &[f64],

@@ -154,8 +154,8 @@ pub(crate) struct Cli {
     #[arg(long, value_name = "FILE.json")]
     pub(crate) json: Option<PathBuf>,
 
-    /// Instead of meshing, inspect tetrahedral meshes (.msh, .inp, .vtu, Medit .mesh, TetGen
-    /// .node/.ele) side by side: counts, volume, dihedral angles, element quality, and the
+    /// Instead of meshing, inspect tetrahedral meshes (.msh, .inp, .vtu, .vtk, Medit .mesh,
+    /// TetGen .node/.ele) side by side: counts, volume, dihedral angles, element quality, and the
     /// checker's verdict (conformity, orientation, closed manifold boundary, embedding, Betti
     /// numbers); with --volume, also against the trilinear interval of that volume
     #[arg(long, value_name = "MESH", num_args = 1.., conflicts_with_all = ["output", "demo", "critical", "quality"])]
