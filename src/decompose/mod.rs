@@ -174,7 +174,8 @@ fn split_sagging_edges(plan: &CellPlan, pts: &mut CellPoints, out: &mut Vec<[u8;
         sag::bisect(out, fc[0] as u8, fc[2] as u8, face_id(f));
     }
     if let Some(levels) = plan.split_levels {
-        sag::split_inner_edges(levels, pts, out);
+        let first = sag::split_dipping_diagonal(levels, pts, out);
+        sag::split_inner_edges(levels, pts, out, first);
     }
 }
 

@@ -169,14 +169,19 @@ pub fn face_diagonal_split(q: [f64; 4], alpha: f64, beta: f64) -> Option<EdgeSpl
 const PASSES: usize = 2;
 
 /// Bisects the edges inside a cell (not on one of its faces) that sag from the level set of
-/// `levels`, each at up to two points, in a fixed order, with local ids from [`SPLIT0`] on
+/// `levels`, each at up to two points, in a fixed order, with local ids from `first` on
 /// while there are some. Along an edge the field is the trilinear interpolant of the corner
 /// values, corrected linearly so that it takes the vertex values at the ends (a face saddle
 /// sits at a clamped position with its own value).
-pub fn split_inner_edges(levels: [f64; 2], pts: &mut CellPoints, tets: &mut Vec<[u8; 4]>) {
+pub fn split_inner_edges(
+    levels: [f64; 2],
+    pts: &mut CellPoints,
+    tets: &mut Vec<[u8; 4]>,
+    first: usize,
+) {
     let [alpha, beta] = levels;
     let corners: [f64; 8] = std::array::from_fn(|c| pts.val[c]);
-    let mut next = SPLIT0 as usize;
+    let mut next = first;
     let mut edges: Vec<(u8, u8)> = Vec::with_capacity(6 * tets.len());
     for _ in 0..PASSES {
         edges.clear();
@@ -222,6 +227,72 @@ pub fn split_inner_edges(levels: [f64; 2], pts: &mut CellPoints, tets: &mut Vec<
             break;
         }
     }
+}
+
+/// Samples of the main diagonal searched for a dip.
+const DIP_SAMPLES: usize = 16;
+
+/// Bisects the main diagonal `0–7` where both its ends lie on one side of the levels but the
+/// trilinear field along it dips through one (the 6-fold split then joins the ends across a
+/// layer the field has between them), at the deepest sample, with the trilinear value there.
+/// That value lies outside the ends' range, so the point keeps the topology only where it is
+/// a regular vertex at every level it passes: the diagonal's ring (the other corners of its
+/// tets) must split into one arc below the level and one above. Returns the next free local
+/// id.
+pub fn split_dipping_diagonal(
+    levels: [f64; 2],
+    pts: &mut CellPoints,
+    tets: &mut Vec<[u8; 4]>,
+) -> usize {
+    let next = SPLIT0 as usize;
+    let [alpha, beta] = levels;
+    let class = |v: f64| super::plan::class(v, alpha, beta);
+    let (v0, v7) = (pts.val[0], pts.val[7]);
+    if class(v0) != class(v7) || !tets.iter().any(|t| t.contains(&0) && t.contains(&7)) {
+        return next;
+    }
+    let corners: [f64; 8] = std::array::from_fn(|c| pts.val[c]);
+    let g = |t: f64| eval(&corners, [t; 3]);
+    // The sample farthest from the ends' side.
+    let away = if v0 <= alpha { -1.0 } else { 1.0 };
+    let (t, value) = (1..DIP_SAMPLES)
+        .map(|k| k as f64 / DIP_SAMPLES as f64)
+        .map(|t| (t, g(t)))
+        .max_by(|x, y| (away * (v0 - x.1)).total_cmp(&(away * (v0 - y.1))))
+        .expect("samples");
+    if class(value) == class(v0) || value == alpha || value == beta {
+        return next;
+    }
+    // The levels the value passes from the ends' side.
+    let (lo, hi) = (value.min(v0.min(v7)), value.max(v0.max(v7)));
+    let passed = [alpha, beta]
+        .into_iter()
+        .filter(|l| l.is_finite() && *l > lo && *l < hi);
+    let ring: Vec<[u8; 2]> = tets
+        .iter()
+        .filter(|t| t.contains(&0) && t.contains(&7))
+        .map(|t| {
+            let mut o = t.iter().copied().filter(|&x| x != 0 && x != 7);
+            [o.next().unwrap(), o.next().unwrap()]
+        })
+        .collect();
+    for level in passed {
+        if !splits_into_two_arcs(&ring, |x| pts.val[x as usize] < level) {
+            return next;
+        }
+    }
+    pts.pos[next] = [t; 3];
+    pts.val[next] = value;
+    bisect(tets, 0, 7, next as u8);
+    next + 1
+}
+
+/// Whether the cycle given by its edges `ring` splits into one non-empty arc of vertices
+/// where `below` holds and one where it does not.
+fn splits_into_two_arcs(ring: &[[u8; 2]], below: impl Fn(u8) -> bool) -> bool {
+    // In a cycle, each side is one non-empty arc exactly when two edges change side.
+    let changes = ring.iter().filter(|e| below(e[0]) != below(e[1])).count();
+    changes == 2
 }
 
 /// Bisects every tet of `tets` that has the edge `{a, b}` at local id `p`.
@@ -285,7 +356,7 @@ mod tests {
         let mut pts = CellPoints::from_corners(&v);
         let mut tets = Vec::new();
         super::super::six::decompose_six(&mut tets);
-        split_inner_edges([150.23, 150.77], &mut pts, &mut tets);
+        split_inner_edges([150.23, 150.77], &mut pts, &mut tets, SPLIT0 as usize);
         let on_diagonal: Vec<usize> = (SPLIT0 as usize..NUM_LOCAL)
             .filter(|&i| tets.iter().any(|t| t.contains(&(i as u8))))
             .filter(|&i| {
@@ -306,6 +377,34 @@ mod tests {
         };
         assert!(tets.iter().all(|t| vol(t) > 0.0));
         assert!((tets.iter().map(vol).sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+
+    /// The cell of the T1 crop whose main diagonal runs from 151 to 151 and dips to 146 in
+    /// between, through the band [150.23, 150.77]: split at the dip (its ring, corners 1, 3,
+    /// 2, 6, 4, 5 around 0–7, is 152, 151 above and 143, 137, 139, 146 below: two arcs).
+    /// With the lower corners alternating around the ring the point would be a saddle: no
+    /// split.
+    #[test]
+    fn a_dipping_main_diagonal_is_split_only_where_the_point_is_regular() {
+        let run = |v: [f64; 8]| {
+            let mut pts = CellPoints::from_corners(&v);
+            let mut tets = Vec::new();
+            super::super::six::decompose_six(&mut tets);
+            let next = split_dipping_diagonal([150.23, 150.77], &mut pts, &mut tets);
+            (next, pts, tets)
+        };
+        let (next, pts, tets) = run([151.0, 152.0, 143.0, 151.0, 139.0, 146.0, 137.0, 151.0]);
+        assert_eq!(next, SPLIT0 as usize + 1);
+        let p = SPLIT0 as usize;
+        assert!(
+            (pts.pos[p][0] - 0.5).abs() < 1e-12 && pts.val[p] < 146.3,
+            "{:?}",
+            pts.val[p]
+        );
+        assert_eq!(tets.len(), 12);
+        assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
+        let (next, _, tets) = run([151.0, 155.0, 155.0, 140.0, 155.0, 140.0, 140.0, 151.0]);
+        assert_eq!((next, tets.len()), (SPLIT0 as usize, 6));
     }
 
     #[test]
