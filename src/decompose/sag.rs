@@ -263,11 +263,14 @@ pub fn split_dipping_diagonal(
     if class(value) == class(v0) || value == alpha || value == beta {
         return next;
     }
-    // The levels the value passes from the ends' side.
-    let (lo, hi) = (value.min(v0.min(v7)), value.max(v0.max(v7)));
-    let passed = [alpha, beta]
-        .into_iter()
-        .filter(|l| l.is_finite() && *l > lo && *l < hi);
+    // The levels the value passes from the ends' side, each with its lower side as the
+    // classes have it (at or below alpha; below beta).
+    let lower_alpha = |x: f64| x <= alpha;
+    let lower_beta = |x: f64| x < beta;
+    let passed: [(bool, &dyn Fn(f64) -> bool); 2] = [
+        (lower_alpha(v0) != lower_alpha(value), &lower_alpha),
+        (lower_beta(v0) != lower_beta(value), &lower_beta),
+    ];
     let ring: Vec<[u8; 2]> = tets
         .iter()
         .filter(|t| t.contains(&0) && t.contains(&7))
@@ -276,8 +279,8 @@ pub fn split_dipping_diagonal(
             [o.next().unwrap(), o.next().unwrap()]
         })
         .collect();
-    for level in passed {
-        if !splits_into_two_arcs(&ring, |x| pts.val[x as usize] < level) {
+    for (_, lower) in passed.iter().filter(|p| p.0) {
+        if !splits_into_two_arcs(&ring, |x| lower(pts.val[x as usize])) {
             return next;
         }
     }
