@@ -38,8 +38,8 @@ pub struct MeshOptions {
     /// [`crate::improve::improve`].
     pub warp: f64,
     /// Whether edges whose linear cut sags from the trilinear level set are split (default
-    /// true; see `decompose::sag`). Never with warping, whose snapped vertices the split
-    /// points would not fit.
+    /// true; see `decompose::sag`). With warping, the snaps are decided on the split
+    /// complex.
     pub split_sags: bool,
     /// Slabs (layers of cells) meshed at a time before they are welded and handed on;
     /// `0` (default) is 4 per worker thread. Bounds the memory of
@@ -308,7 +308,7 @@ fn run(
             method: opts.method,
             alpha,
             beta,
-            split_sags: opts.split_sags && opts.warp == 0.0,
+            split_sags: opts.split_sags,
         },
         snaps: Vec::new(),
     };

@@ -49,6 +49,35 @@ pub fn interval_volume(p: [[f64; 3]; 4], f: [f64; 4], lo: f64, hi: f64) -> f64 {
     sublevel_volume(p, f, hi) - sublevel_volume(p, f, lo)
 }
 
+/// The polygon where the linear interpolant of the corner values `f` on tet `p` equals `c`,
+/// in cyclic order: the corners on `c` and the points where edges from a corner below `c` to
+/// one above cross it. Returns the points and how many there are (0 to 4; 4 only when two
+/// corners lie on each side).
+pub fn level_polygon(p: [[f64; 3]; 4], f: [f64; 4], c: f64) -> ([[f64; 3]; 4], usize) {
+    let mut out = [[0.0; 3]; 4];
+    let mut n = 0;
+    let at = |i: usize, j: usize| {
+        let s = (c - f[i]) / (f[j] - f[i]);
+        [0, 1, 2].map(|a| p[i][a] + s * (p[j][a] - p[i][a]))
+    };
+    let below: Vec<usize> = (0..4).filter(|&i| f[i] < c).collect();
+    let above: Vec<usize> = (0..4).filter(|&i| f[i] > c).collect();
+    if let ([a, b], [x, y]) = (below.as_slice(), above.as_slice()) {
+        return ([at(*a, *x), at(*a, *y), at(*b, *y), at(*b, *x)], 4);
+    }
+    for i in (0..4).filter(|&i| f[i] == c) {
+        out[n] = p[i];
+        n += 1;
+    }
+    for &i in &below {
+        for &j in &above {
+            out[n] = at(i, j);
+            n += 1;
+        }
+    }
+    (out, n)
+}
+
 /// Volume of `{x in tet p : f(x) < c}` for the linear interpolant of the corner values `f`:
 /// the corner tet at a lone corner below `c` (or the tet less the one at a lone corner above
 /// it), or, with two on each side, the wedge between them as three tets.
@@ -86,6 +115,52 @@ pub fn sublevel_volume(p: [[f64; 3]; 4], f: [f64; 4], c: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn level_polygons_lie_on_the_level_in_cyclic_order() {
+        let p = [
+            [0.1, 0.0, 0.2],
+            [1.3, 0.1, 0.0],
+            [0.2, 1.1, 0.1],
+            [0.0, 0.3, 1.4],
+        ];
+        // The linear interpolant at a point, from its barycentric coordinates on `p`.
+        let value = |f: [f64; 4], u: [f64; 3]| {
+            let whole = signed_volume(p[0], p[1], p[2], p[3]);
+            (0..4)
+                .map(|i| {
+                    let mut q = p;
+                    q[i] = u;
+                    f[i] * signed_volume(q[0], q[1], q[2], q[3]) / whole
+                })
+                .sum::<f64>()
+        };
+        for (f, c, n) in [
+            ([0.0, 1.0, 2.0, 3.0], 0.5, 3),
+            ([0.0, 1.0, 2.0, 3.0], 1.5, 4),
+            ([0.0, 1.0, 2.0, 3.0], 2.5, 3),
+            ([0.0, 1.0, 2.0, 3.0], 1.0, 3),
+            ([1.0, 1.0, 0.0, 3.0], 1.0, 3),
+            ([1.0, 1.0, 1.0, 3.0], 1.0, 3),
+            ([1.0, 1.0, 0.0, 0.0], 1.0, 2),
+            ([1.0, 0.0, 0.0, 0.0], 1.0, 1),
+            ([0.0, 0.0, 0.0, 0.5], 1.0, 0),
+        ] {
+            let (q, m) = level_polygon(p, f, c);
+            assert_eq!(m, n, "{f:?} at {c}");
+            for u in &q[..m] {
+                assert!((value(f, *u) - c).abs() < 1e-12, "{f:?} at {c}: {u:?}");
+            }
+            if m == 4 {
+                // A convex quad in cyclic order: every turn has the same sense.
+                let normal = cross(sub(q[1], q[0]), sub(q[3], q[0]));
+                for k in 0..4 {
+                    let (a, b, c2) = (q[k], q[(k + 1) % 4], q[(k + 2) % 4]);
+                    assert!(dot(cross(sub(b, a), sub(c2, b)), normal) > 0.0, "{q:?}");
+                }
+            }
+        }
+    }
 
     /// The divided-difference formula for distinct values: the volume fraction of
     /// `{f < c}` is the sum over the corners below `c` of `(c - f_i)^3 / prod (f_j - f_i)`.

@@ -142,7 +142,6 @@ fn the_quality_pass_output_is_valid_on_wide_intervals() {
 /// midpoints lie more than half a voxel from the level set (a dense search of the ball
 /// agrees): the checker's finding, kept until the pass guards the level-set distance.
 #[test]
-#[ignore = "the quality pass still moves boundary triangles off the level set here"]
 fn the_quality_pass_output_is_valid_on_the_waves() {
     check_quality(cases().remove(2));
 }
@@ -195,34 +194,30 @@ fn thin_cases() -> Vec<Case> {
 }
 
 /// Thin intervals ([`thin_cases`]), where the two level sets are a fraction of a voxel apart.
-/// The quality pass must leave an embedding (winding number 1, no boundary crossing), the
-/// Betti numbers and the volume within 0.5 % of the plain mesh's, and move no boundary
-/// triangle farther from its level set than the plain mesh has it.
+/// The quality pass must leave an embedding (winding number 1, no boundary crossing, every
+/// boundary triangle within half a voxel of its level set), the Betti numbers and the volume
+/// within 0.5 % of the plain mesh's or closer to the trilinear volume.
 #[test]
 fn the_quality_pass_keeps_thin_intervals_embedded() {
     for (name, g, (a, b), betti) in thin_cases() {
         let opts = MeshOptions::new(a, b, Method::Ctd);
-        // The plain mesh of the decomposition the pass starts from (warping splits no
-        // sagging edge).
-        let plain = mesh_interval(&g, &opts.clone().split_sags(false))
-            .unwrap()
-            .mesh;
+        let plain = mesh_interval(&g, &opts).unwrap().mesh;
         let mut out = mesh_interval(&g, &opts.warp(DEFAULT_WARP)).unwrap();
         let check = CheckOptions::with_grid(&g, a, b);
         improve_meshed(&mut out, &g, a, b, &QualityOptions::default());
         let (before, after) = (check_mesh(&plain, &check), check_mesh(&out.mesh, &check));
         for (which, r) in [("plain", &before), ("--quality", &after)] {
-            let others: Vec<_> = r
-                .kinds()
-                .into_iter()
-                .filter(|k| *k != ProblemKind::OffLevel)
-                .collect();
-            assert!(others.is_empty(), "{name} {which}: {}", r.summary_line());
+            assert!(r.valid, "{name} {which}: {}", r.summary_line());
             let w = r.winding.as_ref().unwrap();
             assert_eq!(
                 (w.min, w.max, w.off),
                 (1.0, 1.0, 0),
                 "{name} {which}: {w:?}"
+            );
+            let l = r.level.as_ref().unwrap();
+            assert!(
+                l.points > 0 && l.max_distance <= 0.5,
+                "{name} {which}: {l:?}"
             );
         }
         if betti != [0, 0, 0] {
@@ -237,13 +232,6 @@ fn the_quality_pass_keeps_thin_intervals_embedded() {
             "{name}: volume {} -> {} (trilinear {truth})",
             before.volume,
             after.volume
-        );
-        let (lb, la) = (before.level.unwrap(), after.level.unwrap());
-        assert!(
-            la.max_distance <= lb.max_distance.max(0.5) + 1e-9,
-            "{name}: boundary up to {} from its level set, plain {}",
-            la.max_distance,
-            lb.max_distance
         );
     }
 }

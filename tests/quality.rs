@@ -139,10 +139,7 @@ fn mesh_and_improve(field: &Field, alpha: f64, beta: f64) -> Outcome {
 fn mesh_and_improve_with(field: &Field, alpha: f64, beta: f64, q: &QualityOptions) -> Outcome {
     let grid = ScalarGrid::new(field.dims, field.values.clone()).unwrap();
     let opts = MeshOptions::new(alpha, beta, Method::Ctd);
-    // The plain mesh of the decomposition the pass starts from: warping splits no sagging edge.
-    let before = mesh_interval(&grid, &opts.clone().split_sags(false))
-        .unwrap()
-        .mesh;
+    let before = mesh_interval(&grid, &opts).unwrap().mesh;
     // As `tptd-mesh --quality` does: warped clipping, then the quality pass.
     let mut warped = mesh_interval(&grid, &opts.warp(DEFAULT_WARP)).unwrap();
     let r = improve_meshed(&mut warped, &grid, alpha, beta, q);

@@ -285,9 +285,8 @@ pub struct Planner<'a> {
     pub alpha: f64,
     /// Upper level (may be `+inf`).
     pub beta: f64,
-    /// Whether edges that sag from the level set are split ([`super::sag`]). Off when grid
-    /// vertices are snapped onto the levels (`--quality`): a snapped end no longer brackets
-    /// the split point's value, and the quality pass projects the boundary instead.
+    /// Whether edges that sag from the level set are split ([`super::sag`]). Warping decides
+    /// its snaps on the split complex (`warp`).
     pub split_sags: bool,
 }
 

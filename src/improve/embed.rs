@@ -60,36 +60,10 @@ pub fn sample_points(t: [[f64; 3]; 3]) -> Option<impl Iterator<Item = [f64; 3]>>
     }))
 }
 
-/// Whether the level set `f = level` of the trilinear field passes within `bound` (index
-/// units) of index point `u`: `|f(u) - level| <= tol`, or `f - level` changes sign along a
-/// segment of length `bound` from `u` (down the gradient towards the level first, then along
-/// the 26 lattice directions). A sign change is a witness: the answer `true` is never wrong;
-/// `false` may be, where the level set is near but found along none of these segments.
+/// Whether the level set `f = level` passes within `bound` of index point `u`
+/// ([`super::field::Field::near_level`]).
 pub fn near_level(ctx: &Ctx, u: [f64; 3], level: f64, bound: f64) -> bool {
-    let (f, g) = ctx.field.value_gradient(u);
-    let d = f - level;
-    if d.abs() <= ctx.tol {
-        return true;
-    }
-    let crosses = |dir: [f64; 3]| {
-        let norm = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
-        if norm == 0.0 || !norm.is_finite() {
-            return false;
-        }
-        (1..=4).any(|k| {
-            let s = bound * k as f64 / 4.0 / norm;
-            let p = [0, 1, 2].map(|a| u[a] + s * dir[a]);
-            (ctx.field.value(p) - level) * d.signum() <= 0.0
-        })
-    };
-    let down = g.map(|c| -c * d.signum());
-    if crosses(down) {
-        return true;
-    }
-    (0..27).filter(|&i| i != 13).any(|i| {
-        let dir = [i % 3, (i / 3) % 3, i / 9].map(|c| c as f64 - 1.0);
-        crosses(dir)
-    })
+    ctx.field.near_level(u, level, bound, ctx.tol)
 }
 
 /// Whether every sample point of triangle `t` (index space) with label `label` lies within

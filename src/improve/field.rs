@@ -233,6 +233,38 @@ impl<'a> Field<'a> {
 }
 
 impl Field<'_> {
+    /// Whether the level set `f = level` passes within `bound` (index units) of index point
+    /// `u`: `|f(u) - level| <= tol`, or `f - level` changes sign along a segment of length
+    /// `bound` from `u` (down the gradient towards the level first, then along the 26 lattice
+    /// directions). A sign change is a witness: the answer `true` is never wrong; `false` may
+    /// be, where the level set is near but found along none of these segments.
+    pub fn near_level(&self, u: [f64; 3], level: f64, bound: f64, tol: f64) -> bool {
+        let (f, g) = self.value_gradient(u);
+        let d = f - level;
+        if d.abs() <= tol {
+            return true;
+        }
+        let crosses = |dir: [f64; 3]| {
+            let norm = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+            if norm == 0.0 || !norm.is_finite() {
+                return false;
+            }
+            (1..=4).any(|k| {
+                let s = bound * k as f64 / 4.0 / norm;
+                let p = [0, 1, 2].map(|a| u[a] + s * dir[a]);
+                (self.value(p) - level) * d.signum() <= 0.0
+            })
+        };
+        let down = g.map(|c| -c * d.signum());
+        if crosses(down) {
+            return true;
+        }
+        (0..27).filter(|&i| i != 13).any(|i| {
+            let dir = [i % 3, (i / 3) % 3, i / 9].map(|c| c as f64 - 1.0);
+            crosses(dir)
+        })
+    }
+
     /// Walks from `c` along unit direction `d` in steps of `step` up to `reach` (index units)
     /// and returns the first step `(t - step, t)` with `crossed(t)`; `None` when the walk leaves
     /// the grid box or reaches `reach` first. Callers bisect the step.

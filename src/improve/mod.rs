@@ -14,7 +14,7 @@ pub(crate) mod collapse;
 mod composite;
 pub(crate) mod constraint;
 pub(crate) mod edge_removal;
-mod embed;
+pub(crate) mod embed;
 mod face_grid;
 pub mod field;
 #[cfg(test)]
