@@ -769,3 +769,64 @@ fn check_validates_the_mesh_before_writing_it() {
         "--check",
     );
 }
+
+/// Writes a quarter of a thick ring as Plot3D `duct.xyz` and `duct.f` (single block, float),
+/// with the field of the README's curvilinear example.
+fn write_duct(d: &Path) {
+    let n = [21usize, 48, 12];
+    let mut xyz = Vec::new();
+    let mut f = Vec::new();
+    for &i in &n {
+        xyz.extend((i as i32).to_le_bytes());
+        f.extend((i as i32).to_le_bytes());
+    }
+    f.extend(1i32.to_le_bytes());
+    let at = |a: usize, i: usize, j: usize, k: usize| {
+        let (r, t, z) = (10.0 + i as f64 / 2.0, j as f64 / 30.0, k as f64 / 2.0);
+        match a {
+            0 => r * t.cos(),
+            1 => r * t.sin(),
+            2 => z,
+            _ => (r / 2.0).sin() * (3.0 * t).cos() + z / 7.0,
+        }
+    };
+    for a in 0..4 {
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    let out = if a < 3 { &mut xyz } else { &mut f };
+                    out.extend((at(a, i, j, k) as f32).to_le_bytes());
+                }
+            }
+        }
+    }
+    fs::write(d.join("duct.xyz"), xyz).unwrap();
+    fs::write(d.join("duct.f"), f).unwrap();
+}
+
+#[test]
+fn check_measures_a_curvilinear_mesh_against_its_level_sets_in_parameter_space() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_duct(d);
+    for (beta, quality) in [("0.7", false), ("0.32", false), ("0.32", true)] {
+        let mut args = vec!["duct.xyz", "--alpha", "0.3", "--beta", beta, "--check"];
+        args.extend(["--report", "r.json", "-o", "duct.vtu"]);
+        if quality {
+            args.push("--quality");
+        }
+        let o = run_in(d, &args);
+        assert_ok(&o);
+        assert!(stdout(&o).contains("check     valid"), "{}", stdout(&o));
+        let r = read_json(&d.join("r.json"));
+        let level = &r["check"]["level"];
+        assert!(
+            level["points"].as_u64().unwrap() > 1000,
+            "{args:?}: {level}"
+        );
+        assert!(
+            level["max_distance"].as_f64().unwrap() <= 0.5,
+            "{args:?}: {level}"
+        );
+    }
+}

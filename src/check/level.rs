@@ -213,9 +213,10 @@ fn samples(u: &[P; 3], bound: f64) -> Vec<P> {
     out
 }
 
-/// Checks the labelled triangles of `mesh` against `grid` and the `levels` (alpha, beta).
+/// Checks the labelled triangles of `mesh`, with its points at `points`, against `grid` and
+/// the `levels` (alpha, beta).
 pub(crate) fn level_distance(
-    mesh: &TetMesh,
+    (mesh, points): (&TetMesh, &[[f64; 3]]),
     grid: &ScalarGrid,
     levels: (f64, f64),
     bound: f64,
@@ -239,7 +240,7 @@ pub(crate) fn level_distance(
         BoundaryLabel::Beta => Some(levels.1),
         BoundaryLabel::Box => None,
     };
-    let to_index = |v: u32| field.to_index(mesh.points[v as usize]);
+    let to_index = |v: u32| field.to_index(points[v as usize]);
     // Corners once per (vertex, level).
     let mut corners: Vec<(u32, u8)> = mesh
         .boundary

@@ -54,6 +54,11 @@ pub struct CheckOptions<'a> {
     pub grid: Option<&'a ScalarGrid>,
     /// `(alpha, beta)`: the levels of the alpha and beta triangles (used with `grid`).
     pub levels: (f64, f64),
+    /// Where the level-set distance is measured, per point of the mesh, when the mesh's
+    /// points are not in `grid`'s coordinates: a curvilinear grid's mesh, mapped to
+    /// physical space, is measured at its points in parameter space (`None`: the mesh's
+    /// points; one per point of the mesh, else the level-set distance is not checked).
+    pub level_points: Option<&'a [[f64; 3]]>,
     /// Largest distance (index units: voxels) allowed between a point of an alpha or beta
     /// triangle and its trilinear level set. Must be positive.
     pub level_distance_bound: f64,
@@ -72,6 +77,7 @@ impl Default for CheckOptions<'_> {
         CheckOptions {
             grid: None,
             levels: (f64::NEG_INFINITY, f64::INFINITY),
+            level_points: None,
             level_distance_bound: 0.5,
             winding_samples: 2000,
             gwn_budget: 20_000_000,
@@ -346,10 +352,11 @@ pub fn check_mesh(mesh: &TetMesh, opts: &CheckOptions) -> CheckReport {
         opts.gwn_budget,
         &mut problems,
     ));
-    if let Some(grid) = opts.grid {
+    let points = opts.level_points.unwrap_or(&mesh.points);
+    if let Some(grid) = opts.grid.filter(|_| points.len() == mesh.points.len()) {
         if labels_ok {
             report.level = Some(level::level_distance(
-                mesh,
+                (mesh, points),
                 grid,
                 opts.levels,
                 opts.level_distance_bound,

@@ -250,7 +250,7 @@ fn faces_with_three_snapped_corners_close_the_boundary_in_their_chunk() {
     // z, so the tets on both sides are meshed in one slab). Topology and the manifold
     // boundary: `warping_keeps_betti_numbers`.
     let mut three = 0;
-    for seed in 0..100u64 {
+    for seed in 0..130u64 {
         for (levels, alpha, beta) in [(0.0, 0.45, f64::INFINITY), (8.0, 3.0, 5.0)] {
             let g = noise([8, 7, 9], seed, levels);
             let o = MeshOptions::new(alpha, beta, Method::Ctd).warp(0.3);
@@ -278,7 +278,8 @@ fn faces_with_three_snapped_corners_close_the_boundary_in_their_chunk() {
             assert_eq!(sink.triangles, m.boundary.len(), "seed {seed}");
         }
     }
-    // 0 before such faces were allowed; 120 on the first 60 seeds.
+    // 0 before such faces were allowed; 120 on the first 60 seeds; 140 on the first 100 once
+    // snaps whose star would stray from the level sets were refused.
     assert!(
         three > 150,
         "{three} boundary faces with three snapped corners"

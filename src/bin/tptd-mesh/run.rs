@@ -174,6 +174,8 @@ fn mesh_in_memory(
     let t_mesh = secs(t);
 
     let (quality, t_quality) = improve_mesh(cli, (grid, job), &mut out, curvilinear).unzip();
+    // The level-set distance of a curvilinear mesh is checked in parameter space.
+    let parameter_points = (cli.check && curvilinear.is_some()).then(|| out.mesh.points.clone());
     let t = Instant::now();
     let t_map = match curvilinear {
         Some(c) => {
@@ -194,7 +196,8 @@ fn mesh_in_memory(
     });
     let comparison = compare_demo(cli, grid, job)?;
     let t_analysis = secs(t);
-    let (check, t_check) = check_output(cli, job, grid, curvilinear.is_some(), &out.mesh)?;
+    let parameter_points = parameter_points.as_deref();
+    let (check, t_check) = check_output(cli, job, grid, parameter_points, &out.mesh)?;
 
     // The mesh stays under its temporary name until the report is written too (`finish`).
     let t = Instant::now();
@@ -221,13 +224,14 @@ fn mesh_in_memory(
 }
 
 /// With `--check`: the validity check of the mesh, before anything is written; a mesh that
-/// fails it is an error naming the count of each problem. Curvilinear meshes are checked
-/// without the level-set distance (their grid's values are in parameter space).
+/// fails it is an error naming the count of each problem. A curvilinear mesh (mapped to
+/// physical space) has its level-set distance checked at its points in parameter space
+/// (`parameter_points`), where its grid's values are.
 fn check_output(
     cli: &Cli,
     job: &Job,
     grid: &ScalarGrid,
-    curvilinear: bool,
+    parameter_points: Option<&[[f64; 3]]>,
     mesh: &tptd::TetMesh,
 ) -> Result<(Option<CheckReport>, Option<f64>)> {
     if !cli.check {
@@ -235,10 +239,9 @@ fn check_output(
     }
     let t = Instant::now();
     let stage = Stage::start("checking the mesh".into(), cli.quiet);
-    let opts = if curvilinear {
-        CheckOptions::default()
-    } else {
-        CheckOptions::with_grid(grid, job.opts.alpha, job.opts.beta)
+    let opts = CheckOptions {
+        level_points: parameter_points,
+        ..CheckOptions::with_grid(grid, job.opts.alpha, job.opts.beta)
     };
     let report = check_mesh(mesh, &opts);
     stage.finish();
