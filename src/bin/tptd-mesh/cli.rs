@@ -89,7 +89,8 @@ pub(crate) struct Cli {
     /// Check the mesh before writing it: conforming, every tet positive, a closed manifold
     /// boundary that does not meet itself, the tets covering the domain once (winding number
     /// 1 at sampled tets), alpha and beta triangles within half a voxel of their trilinear
-    /// level sets (not checked for curvilinear grids). A failed check is an error and writes
+    /// level sets (half a cell in parameter space on curvilinear grids; std, six and five can
+    /// miss this where they change the topology). A failed check is an error and writes
     /// nothing. The mesh is then held in memory, also without --quality
     #[arg(long, conflicts_with = "critical")]
     pub(crate) check: bool,
