@@ -381,3 +381,64 @@ fn a_sagging_face_diagonal_is_split_onto_the_level_set() {
         .mesh;
     assert_valid("split", &m, &g, (a, b));
 }
+
+/// Two 5³ blocks of the MNI152 T1 (uint8) where a wide interval's plain mesh left the level
+/// set: on a face diagonal from 178 to 181 the field rises to 186.5, and a split just inside
+/// beta = 180.7 left the cut halfway to the 181 corner (now the split goes just outside, on
+/// the nearer side of the level); an edge inside a cell from 120 to 120.57 dips to 107 and
+/// crosses alpha = 120.3 1.5 % from its end (split points may now come that close).
+#[test]
+fn wide_intervals_of_integer_data_stay_within_half_a_voxel() {
+    #[rustfmt::skip]
+    let face_diagonal = [
+        160.0, 160.0, 158.0, 152.0, 150.0, 162.0, 164.0, 167.0, 162.0, 161.0, 173.0, 178.0, 187.0, 190.0, 188.0, 186.0, 192.0, 201.0, 206.0, 202.0, 186.0, 190.0, 192.0, 195.0, 193.0,
+        166.0, 168.0, 174.0, 173.0, 169.0, 182.0, 189.0, 198.0, 200.0, 195.0, 188.0, 195.0, 203.0, 207.0, 201.0, 175.0, 181.0, 185.0, 189.0, 192.0, 160.0, 162.0, 164.0, 171.0, 183.0,
+        188.0, 194.0, 203.0, 206.0, 200.0, 186.0, 193.0, 200.0, 205.0, 203.0, 166.0, 173.0, 180.0, 192.0, 202.0, 158.0, 167.0, 175.0, 191.0, 206.0, 175.0, 185.0, 193.0, 202.0, 211.0,
+        177.0, 188.0, 198.0, 205.0, 205.0, 159.0, 168.0, 182.0, 198.0, 207.0, 168.0, 179.0, 192.0, 207.0, 216.0, 197.0, 206.0, 214.0, 219.0, 218.0, 220.0, 223.0, 225.0, 223.0, 215.0,
+        157.0, 167.0, 184.0, 200.0, 209.0, 179.0, 188.0, 202.0, 214.0, 217.0, 210.0, 217.0, 223.0, 222.0, 219.0, 225.0, 226.0, 225.0, 220.0, 216.0, 224.0, 222.0, 220.0, 216.0, 212.0,
+    ];
+    #[rustfmt::skip]
+    let near_the_end = [
+        165.0, 165.0, 158.0, 115.0, 100.0, 157.0, 168.0, 156.0, 111.0, 102.0, 144.0, 169.0, 155.0, 103.0, 105.0, 139.0, 161.0, 146.0, 98.0, 109.0, 148.0, 153.0, 130.0, 93.0, 115.0,
+        166.0, 164.0, 124.0, 97.0, 127.0, 161.0, 165.0, 120.0, 96.0, 129.0, 152.0, 163.0, 115.0, 97.0, 132.0, 147.0, 149.0, 104.0, 99.0, 136.0, 154.0, 131.0, 92.0, 104.0, 141.0,
+        169.0, 140.0, 97.0, 116.0, 144.0, 165.0, 135.0, 96.0, 118.0, 145.0, 155.0, 125.0, 93.0, 123.0, 148.0, 144.0, 109.0, 94.0, 129.0, 151.0, 138.0, 95.0, 98.0, 135.0, 151.0,
+        152.0, 104.0, 108.0, 143.0, 154.0, 144.0, 99.0, 111.0, 145.0, 154.0, 126.0, 92.0, 113.0, 146.0, 156.0, 112.0, 88.0, 120.0, 149.0, 156.0, 103.0, 89.0, 129.0, 152.0, 156.0,
+        111.0, 99.0, 134.0, 155.0, 160.0, 102.0, 100.0, 138.0, 155.0, 161.0, 92.0, 103.0, 140.0, 156.0, 164.0, 86.0, 109.0, 146.0, 156.0, 164.0, 87.0, 117.0, 149.0, 157.0, 168.0,
+    ];
+    for (name, v) in [
+        ("face diagonal", face_diagonal),
+        ("near the end", near_the_end),
+    ] {
+        let g = ScalarGrid::new([5, 5, 5], v.to_vec()).unwrap();
+        for method in [Method::Ctd, Method::Tptd] {
+            let m = mesh_interval(&g, &MeshOptions::new(120.3, 180.7, method))
+                .unwrap()
+                .mesh;
+            assert_valid(&format!("{name} {method:?}"), &m, &g, (120.3, 180.7));
+        }
+    }
+}
+
+/// A grid vertex a little above beta among lower ones (the MNI152 T1 at 181, its neighbours
+/// down to 148 beside it): the interval's boundary there is a bubble a few hundredths of a
+/// voxel around it, smaller than the checker's search steps, where the field has a kink; the
+/// checker must still find the level set next to it.
+#[test]
+fn a_bubble_around_one_grid_vertex_is_found_on_its_level() {
+    #[rustfmt::skip]
+    let block = [
+        174.0, 170.0, 174.0, 171.0, 172.0, 171.0, 163.0, 172.0, 163.0,
+        163.0, 177.0, 163.0, 148.0, 181.0, 148.0, 133.0, 179.0, 133.0,
+        143.0, 180.0, 143.0, 124.0, 177.0, 124.0, 111.0, 168.0, 111.0,
+    ];
+    // The block in the middle of a 5³ grid, its faces repeated outward.
+    let at = |x: usize| x.clamp(1, 3) - 1;
+    let v: Vec<f64> = (0..125)
+        .map(|n| block[at(n % 5) + 3 * at(n / 5 % 5) + 9 * at(n / 25)])
+        .collect();
+    let g = ScalarGrid::new([5, 5, 5], v).unwrap();
+    let m = mesh_interval(&g, &MeshOptions::new(f64::NEG_INFINITY, 180.7, Method::Ctd))
+        .unwrap()
+        .mesh;
+    assert_valid("bubble", &m, &g, (f64::NEG_INFINITY, 180.7));
+}

@@ -84,6 +84,7 @@ impl Search<'_> {
         let u = self.clamp(u);
         match self
             .search(u, level, self.bound)
+            .or_else(|| self.corner_search(u, level))
             .or_else(|| self.ball_search(u, level))
         {
             Some(d) => Found::Within(d),
@@ -114,6 +115,39 @@ impl Search<'_> {
         down.iter()
             .chain(&self.dirs)
             .filter_map(|&d| self.walk(u, d, level, side, bound))
+            .min_by(f64::total_cmp)
+    }
+
+    /// The distance from `u` to a crossing of `level` on a segment from `u` to a corner of its
+    /// cell on the other side of it (bisected), if within the bound: catches the pockets
+    /// around a grid vertex smaller than the walks' and the ball's steps (a vertex of value
+    /// 181 among smaller ones puts `f = 180.7` a few hundredths of a voxel around it, where
+    /// the gradient has a kink and Newton's projection fails).
+    fn corner_search(&self, u: P, level: f64) -> Option<f64> {
+        let side = (self.field.value(u) - level).signum();
+        let cell = [0, 1, 2].map(|k| u[k].floor().clamp(0.0, (self.hi[k] - 1.0).max(0.0)));
+        (0..8)
+            .filter_map(|c| {
+                let q: P = [0, 1, 2].map(|k| (cell[k] + (c >> k & 1) as f64).min(self.hi[k]));
+                let d = [0, 1, 2].map(|k| q[k] - u[k]);
+                let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                let at = |t: f64| -> P { [0, 1, 2].map(|k| u[k] + t * d[k]) };
+                let crossed = |t: f64| (self.field.value(at(t)) - level) * side <= 0.0;
+                if len == 0.0 || !crossed(1.0) {
+                    return None;
+                }
+                let (mut a, mut b) = (0.0, 1.0);
+                for _ in 0..BISECTIONS {
+                    let m = 0.5 * (a + b);
+                    if crossed(m) {
+                        b = m;
+                    } else {
+                        a = m;
+                    }
+                }
+                Some(b * len)
+            })
+            .filter(|&r| r <= self.bound)
             .min_by(f64::total_cmp)
     }
 
