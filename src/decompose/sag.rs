@@ -359,12 +359,32 @@ mod tests {
         let s = face_diagonal_split(TIED, 149.83, f64::INFINITY).expect("split");
         assert!((s.t - 0.835).abs() < 0.01, "{s:?}");
         assert!(s.value > 149.84 && s.value < 149.85, "{s:?}");
-        // the same face seen through the upper level
+        // the same face seen through the upper level: the 150 end is nearer to it than the
+        // 146 one, so the point goes a tenth of the way toward 150, just outside the interval
         let s = face_diagonal_split(TIED, f64::NEG_INFINITY, 149.83).expect("split");
-        assert!(s.value < 149.45 && s.value > 149.44, "{s:?}");
+        assert!(s.value > 149.84 && s.value < 149.85, "{s:?}");
+        assert!((s.t - 0.835).abs() < 0.01, "{s:?}");
         // a thin band: the middle of the band
         let s = face_diagonal_split(TIED, 149.5, 149.83).expect("split");
         assert!((s.value - 149.665).abs() < 1e-9, "{s:?}");
+    }
+
+    #[test]
+    fn a_split_goes_to_the_nearer_side_of_its_level() {
+        // A face of the MNI T1: its diagonal runs from 178 to 181 and rises to 186.5 between,
+        // crossing 180.7 at 0.095. A point a tenth inside (180.43) would leave the cut of the
+        // piece toward 181 halfway along it; just outside (180.73), the cut falls on the piece
+        // toward 178, next to the point.
+        let q = [178.0, 192.0, 181.0, 195.0];
+        let s = face_diagonal_split(q, 120.3, 180.7).expect("split");
+        assert!(s.value > 180.7 && s.value < 180.75, "{s:?}");
+        assert!((s.t - 0.095).abs() < 0.01, "{s:?}");
+        let g = |t: f64| 178.0 * (1.0 - t) * (1.0 - t) + 387.0 * (1.0 - t) * t + 181.0 * t * t;
+        let cut = s.t * (180.7 - 178.0) / (s.value - 178.0);
+        assert!(
+            (cut - crossing(g, 180.7)).abs() * std::f64::consts::SQRT_2 < 0.01,
+            "{cut}"
+        );
     }
 
     #[test]
