@@ -55,22 +55,30 @@ pub fn interval_volume(p: [[f64; 3]; 4], f: [f64; 4], lo: f64, hi: f64) -> f64 {
 /// corners lie on each side).
 pub fn level_polygon(p: [[f64; 3]; 4], f: [f64; 4], c: f64) -> ([[f64; 3]; 4], usize) {
     let mut out = [[0.0; 3]; 4];
-    let mut n = 0;
     let at = |i: usize, j: usize| {
         let s = (c - f[i]) / (f[j] - f[i]);
         [0, 1, 2].map(|a| p[i][a] + s * (p[j][a] - p[i][a]))
     };
-    let below: Vec<usize> = (0..4).filter(|&i| f[i] < c).collect();
-    let above: Vec<usize> = (0..4).filter(|&i| f[i] > c).collect();
-    if let ([a, b], [x, y]) = (below.as_slice(), above.as_slice()) {
-        return ([at(*a, *x), at(*a, *y), at(*b, *y), at(*b, *x)], 4);
+    let (mut below, mut above) = ([0usize; 4], [0usize; 4]);
+    let (mut nb, mut na, mut n) = (0, 0, 0);
+    for i in 0..4 {
+        if f[i] < c {
+            below[nb] = i;
+            nb += 1;
+        } else if f[i] > c {
+            above[na] = i;
+            na += 1;
+        } else {
+            out[n] = p[i];
+            n += 1;
+        }
     }
-    for i in (0..4).filter(|&i| f[i] == c) {
-        out[n] = p[i];
-        n += 1;
+    if nb == 2 && na == 2 {
+        let ([a, b], [x, y]) = ([below[0], below[1]], [above[0], above[1]]);
+        return ([at(a, x), at(a, y), at(b, y), at(b, x)], 4);
     }
-    for &i in &below {
-        for &j in &above {
+    for &i in &below[..nb] {
+        for &j in &above[..na] {
             out[n] = at(i, j);
             n += 1;
         }

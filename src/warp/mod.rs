@@ -145,20 +145,27 @@ pub(crate) fn snap_vertices(grid: &ScalarGrid, planner: &Planner, iv: &Interval,
     for _ in 0..ROUNDS {
         let tested: Vec<(usize, bool)> = dirty
             .par_iter()
-            .map(|&s| {
-                (
-                    s,
-                    stars[s].regular(&snaps, iv) && stars[s].surface_near(grid, &near, &snaps, iv),
-                )
-            })
+            .map(|&s| (s, stars[s].regular(&snaps, iv)))
             .collect();
         for (s, p) in tested {
             passes[s] = p;
         }
-        let chosen = snap_round(&stars, &open, &passes);
+        let mut chosen = snap_round(&stars, &open, &passes);
         if chosen.is_empty() {
             break;
         }
+        // The surface test (the costly one) only for the chosen: one that fails it stops
+        // passing until its link changes, and the neighbours that gave way to it may be
+        // chosen in the next round.
+        let near_ok: Vec<bool> = chosen
+            .par_iter()
+            .map(|&s| stars[s].surface_near(grid, &near, &snaps, iv))
+            .collect();
+        for (&s, _) in chosen.iter().zip(&near_ok).filter(|(_, &ok)| !ok) {
+            passes[s] = false;
+        }
+        let mut ok = near_ok.into_iter();
+        chosen.retain(|_| ok.next().unwrap_or(false));
         // Stars snapped in one round share no tet, so their volume changes add up.
         let moved: Vec<f64> = chosen
             .par_iter()
