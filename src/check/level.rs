@@ -136,16 +136,7 @@ impl Search<'_> {
                 if len == 0.0 || !crossed(1.0) {
                     return None;
                 }
-                let (mut a, mut b) = (0.0, 1.0);
-                for _ in 0..BISECTIONS {
-                    let m = 0.5 * (a + b);
-                    if crossed(m) {
-                        b = m;
-                    } else {
-                        a = m;
-                    }
-                }
-                Some(b * len)
+                Some(first_crossed(crossed, 0.0, 1.0) * len)
             })
             .filter(|&r| r <= self.bound)
             .min_by(f64::total_cmp)
@@ -174,21 +165,26 @@ impl Search<'_> {
         for s in 1..=WALK_STEPS {
             let t = h * s as f64;
             if crossed(t) {
-                let (mut a, mut b) = (prev, t);
-                for _ in 0..BISECTIONS {
-                    let m = 0.5 * (a + b);
-                    if crossed(m) {
-                        b = m;
-                    } else {
-                        a = m;
-                    }
-                }
-                return Some(b);
+                return Some(first_crossed(crossed, prev, t));
             }
             prev = t;
         }
         None
     }
+}
+
+/// Bisects `[a, b]` (`crossed(b)` holds, `crossed(a)` does not) [`BISECTIONS`] times and
+/// returns the end that has crossed.
+fn first_crossed(crossed: impl Fn(f64) -> bool, mut a: f64, mut b: f64) -> f64 {
+    for _ in 0..BISECTIONS {
+        let m = 0.5 * (a + b);
+        if crossed(m) {
+            b = m;
+        } else {
+            a = m;
+        }
+    }
+    b
 }
 
 /// The 26 lattice directions, normalised.
