@@ -42,11 +42,19 @@ pub fn label_level(label: BoundaryLabel, levels: [f64; 2]) -> Option<f64> {
 /// points are at most [`SAMPLE_SPACING`] apart (at least 2: corners, edge midpoints and three
 /// inner points). `None` if the triangle is too long to sample ([`MAX_SUBDIVISIONS`]).
 pub fn sample_points(t: [[f64; 3]; 3]) -> Option<impl Iterator<Item = [f64; 3]>> {
+    sample_points_spaced(t, SAMPLE_SPACING)
+}
+
+/// [`sample_points`] with neighbouring points at most `spacing` apart.
+pub fn sample_points_spaced(
+    t: [[f64; 3]; 3],
+    spacing: f64,
+) -> Option<impl Iterator<Item = [f64; 3]>> {
     let len = |a: [f64; 3], b: [f64; 3]| {
         ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
     };
     let longest = len(t[0], t[1]).max(len(t[1], t[2])).max(len(t[2], t[0]));
-    let n = (longest / SAMPLE_SPACING).ceil().max(2.0);
+    let n = (longest / spacing).ceil().max(2.0);
     if n.is_nan() || n > MAX_SUBDIVISIONS as f64 {
         return None;
     }

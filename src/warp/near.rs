@@ -3,7 +3,7 @@
 
 use crate::geom::level_polygon;
 use crate::grid::ScalarGrid;
-use crate::improve::embed::GUARD_DISTANCE;
+use crate::improve::embed::{sample_points_spaced, GUARD_DISTANCE};
 
 /// Step 1 on the trilinear field: the crossing found there may lie on a diagonal of the
 /// decomposition, where the piecewise-linear level set is closer to the vertex than the
@@ -42,7 +42,7 @@ impl<'a> TrilinearNear<'a> {
 impl TrilinearNear<'_> {
     /// Whether the level sets `levels` (infinite ones skipped) of the linear interpolant of
     /// `f` on tet `p` (index space) lie within [`GUARD_DISTANCE`] of the trilinear level sets,
-    /// at [`coarse_samples`] (the guard's own are twice as fine; a snap is tested for every
+    /// at points [`SAMPLE_SPACING`] apart (the guard's own are twice as fine; a snap is tested for every
     /// candidate, and the checker after it allows half a voxel).
     pub(super) fn tet_levels_near(&self, p: [[f64; 3]; 4], f: [f64; 4], levels: [f64; 2]) -> bool {
         levels.into_iter().filter(|l| l.is_finite()).all(|level| {
@@ -54,30 +54,17 @@ impl TrilinearNear<'_> {
                 3 => &[[0, 1, 2]],
                 _ => &[[0, 1, 2], [0, 2, 3]],
             };
-            tris.iter().all(|t| {
-                let mut points = coarse_samples(t.map(|i| q[i]));
-                points.all(|u| self.field.near_level(u, level, GUARD_DISTANCE, self.tol))
-            })
+            tris.iter().all(
+                |t| match sample_points_spaced(t.map(|i| q[i]), SAMPLE_SPACING) {
+                    Some(mut points) => {
+                        points.all(|u| self.field.near_level(u, level, GUARD_DISTANCE, self.tol))
+                    }
+                    None => false,
+                },
+            )
         })
     }
 }
 
-/// Spacing (index units) of [`coarse_samples`].
+/// Spacing (index units) of the points at which a snap's surface is measured.
 const SAMPLE_SPACING: f64 = 0.5;
-
-/// The points of triangle `t` at which a snap's surface is measured: a barycentric lattice
-/// with `n` steps along each edge, `n` such that neighbouring points are at most
-/// [`SAMPLE_SPACING`] apart (at least 2: corners, edge midpoints and three inner points).
-fn coarse_samples(t: [[f64; 3]; 3]) -> impl Iterator<Item = [f64; 3]> {
-    let longest = (0..3)
-        .map(|k| crate::geom::distance(t[k], t[(k + 1) % 3]))
-        .fold(0.0, f64::max);
-    let n = (longest / SAMPLE_SPACING).ceil().clamp(2.0, 64.0) as usize;
-    (0..=n).flat_map(move |i| {
-        (0..=n - i).map(move |j| {
-            let (a, b) = (i as f64 / n as f64, j as f64 / n as f64);
-            let c = 1.0 - a - b;
-            [0, 1, 2].map(|k| a * t[0][k] + b * t[1][k] + c * t[2][k])
-        })
-    })
-}
