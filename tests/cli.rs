@@ -761,6 +761,17 @@ fn check_validates_the_mesh_before_writing_it() {
     );
     assert_ok(&o);
     assert!(stdout(&o).contains("check     valid"), "{}", stdout(&o));
+    // The level-set bound is the method's: half a voxel for ctd, a cell's diagonal for the
+    // methods that interpolate linearly across a cell.
+    assert!(stdout(&o).contains("bound 0.500)"), "{}", stdout(&o));
+    let o = run_in(
+        d,
+        &[
+            "vol.npy", "--alpha", "3", "--beta", "6", "--method", "six", "-o", "six.vtu", "--check",
+        ],
+    );
+    assert_ok(&o);
+    assert!(stdout(&o).contains("bound 1.732)"), "{}", stdout(&o));
     // Nothing to check in --critical mode.
     let empty = tempfile::tempdir().unwrap();
     assert_refused(

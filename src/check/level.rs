@@ -15,6 +15,8 @@ type P = [f64; 3];
 /// What the level-set distances at the sampled points of the labelled triangles were.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct LevelSummary {
+    /// The bound the distances were checked against (index units).
+    pub bound: f64,
     /// Points sampled on alpha and beta triangles (corners once per level).
     pub points: usize,
     /// Largest distance (index units) from a sampled point to a point of its level found
@@ -22,9 +24,9 @@ pub struct LevelSummary {
     pub max_distance: f64,
     /// Points with no point of their level found within the bound.
     pub beyond: usize,
-    /// Largest distance found, by the same search out to four times the bound, from a point
-    /// beyond the bound to its level (infinite when one has none within four times the
-    /// bound; 0 when no point is beyond).
+    /// Largest distance found, by the walks out to four times the bound and the segments to
+    /// the corners of the point's cell, from a point beyond the bound to its level (infinite
+    /// when neither finds one; 0 when no point is beyond).
     pub max_beyond: f64,
     /// Points outside the grid box.
     pub outside: usize,
@@ -46,8 +48,8 @@ const BALL_STEPS: i32 = 25;
 enum Found {
     /// A point of the level within the bound, at this distance.
     Within(f64),
-    /// None found within the bound; the distance found within four times the bound
-    /// (infinite if none).
+    /// None found within the bound; the distance found by the walks within four times the
+    /// bound or to the cell's corners (infinite if none).
     Beyond(f64),
     /// The point is outside the grid box.
     Outside,
@@ -84,12 +86,15 @@ impl Search<'_> {
         let u = self.clamp(u);
         match self
             .search(u, level, self.bound)
-            .or_else(|| self.corner_search(u, level))
+            .or_else(|| self.corner_search(u, level, self.bound))
             .or_else(|| self.ball_search(u, level))
         {
             Some(d) => Found::Within(d),
             None => Found::Beyond(
                 self.search(u, level, 4.0 * self.bound)
+                    .into_iter()
+                    .chain(self.corner_search(u, level, f64::INFINITY))
+                    .min_by(f64::total_cmp)
                     .unwrap_or(f64::INFINITY),
             ),
         }
@@ -123,7 +128,7 @@ impl Search<'_> {
     /// around a grid vertex smaller than the walks' and the ball's steps (a vertex of value
     /// 181 among smaller ones puts `f = 180.7` a few hundredths of a voxel around it, where
     /// the gradient has a kink and Newton's projection fails).
-    fn corner_search(&self, u: P, level: f64) -> Option<f64> {
+    fn corner_search(&self, u: P, level: f64, bound: f64) -> Option<f64> {
         let side = (self.field.value(u) - level).signum();
         let cell = [0, 1, 2].map(|k| u[k].floor().clamp(0.0, (self.hi[k] - 1.0).max(0.0)));
         (0..8)
@@ -138,7 +143,7 @@ impl Search<'_> {
                 }
                 Some(first_crossed(crossed, 0.0, 1.0) * len)
             })
-            .filter(|&r| r <= self.bound)
+            .filter(|&r| r <= bound)
             .min_by(f64::total_cmp)
     }
 
@@ -327,6 +332,7 @@ pub(crate) fn level_distance(
         })
         .collect();
     let mut s = LevelSummary {
+        bound,
         points: corners.len(),
         ..LevelSummary::default()
     };

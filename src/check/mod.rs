@@ -36,6 +36,7 @@ use serde::Serialize;
 
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
+use crate::Method;
 
 pub(crate) use intersect::triangles_cross;
 pub use level::LevelSummary;
@@ -60,7 +61,8 @@ pub struct CheckOptions<'a> {
     /// points; one per point of the mesh, else the level-set distance is not checked).
     pub level_points: Option<&'a [[f64; 3]]>,
     /// Largest distance (index units: voxels) allowed between a point of an alpha or beta
-    /// triangle and its trilinear level set. Must be positive.
+    /// triangle and its trilinear level set. Must be positive. [`level_bound`] gives the one
+    /// each method promises.
     pub level_distance_bound: f64,
     /// Tet centroids at which the winding number is computed (every k-th tet; all of them
     /// when the mesh has no more tets than this).
@@ -78,11 +80,32 @@ impl Default for CheckOptions<'_> {
             grid: None,
             levels: (f64::NEG_INFINITY, f64::INFINITY),
             level_points: None,
-            level_distance_bound: 0.5,
+            level_distance_bound: HALF_VOXEL,
             winding_samples: 2000,
             gwn_budget: 20_000_000,
             max_examples: 5,
         }
+    }
+}
+
+/// The level-set bound of the methods that keep the trilinear topology (ctd, tptd).
+pub const HALF_VOXEL: f64 = 0.5;
+
+/// The level-set bound of the methods that interpolate linearly across a cell (std, six,
+/// five): a cell's diagonal, √3 voxels.
+pub const CELL_DIAGONAL: f64 = 1.732_050_807_568_877_2;
+
+/// The largest distance between a boundary triangle and its trilinear level set that meshes
+/// of `method` keep. Ctd and tptd keep the trilinear topology and split the edges whose
+/// linear cut sags from the level set: half a voxel. Std, six and five change the topology
+/// where a level passes a saddle, so their boundary can follow a level set the trilinear
+/// field does not have there; as every point of it is a convex combination of points of one
+/// cell, the trilinear level set crosses the segment to one of them: within a cell's
+/// diagonal.
+pub fn level_bound(method: Method) -> f64 {
+    match method {
+        Method::Ctd | Method::Tptd => HALF_VOXEL,
+        Method::Std | Method::Six | Method::Five => CELL_DIAGONAL,
     }
 }
 
@@ -94,6 +117,14 @@ impl<'a> CheckOptions<'a> {
             grid: Some(grid),
             levels: (alpha, beta),
             ..CheckOptions::default()
+        }
+    }
+
+    /// [`CheckOptions::with_grid`] with the level-set bound `method` keeps ([`level_bound`]).
+    pub fn for_method(grid: &'a ScalarGrid, alpha: f64, beta: f64, method: Method) -> Self {
+        CheckOptions {
+            level_distance_bound: level_bound(method),
+            ..CheckOptions::with_grid(grid, alpha, beta)
         }
     }
 }

@@ -88,10 +88,11 @@ pub(crate) struct Cli {
 
     /// Check the mesh before writing it: conforming, every tet positive, a closed manifold
     /// boundary that does not meet itself, the tets covering the domain once (winding number
-    /// 1 at sampled tets), alpha and beta triangles within half a voxel of their trilinear
-    /// level sets (half a cell in parameter space on curvilinear grids; std, six and five can
-    /// miss this where they change the topology). A failed check is an error and writes
-    /// nothing. The mesh is then held in memory, also without --quality
+    /// 1 at sampled tets), alpha and beta triangles near their trilinear level sets: within
+    /// half a voxel with ctd and tptd, within a cell's diagonal with std, six and five, which
+    /// interpolate linearly across cells and change the topology at saddles (in parameter
+    /// space on curvilinear grids). A failed check is an error and writes nothing. The mesh
+    /// is then held in memory, also without --quality
     #[arg(long, conflicts_with = "critical")]
     pub(crate) check: bool,
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
-use tptd::check::{check_mesh, CheckOptions, CheckReport, ProblemKind};
+use tptd::check::{check_mesh, CheckOptions, CheckReport};
 use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
 use tptd::facts::{FactsSink, MeshFacts};
 use tptd::improve::quality::summarize;
@@ -241,7 +241,7 @@ fn check_output(
     let stage = Stage::start("checking the mesh".into(), cli.quiet);
     let opts = CheckOptions {
         level_points: parameter_points,
-        ..CheckOptions::with_grid(grid, job.opts.alpha, job.opts.beta)
+        ..CheckOptions::for_method(grid, job.opts.alpha, job.opts.beta, job.opts.method)
     };
     let report = check_mesh(mesh, &opts);
     stage.finish();
@@ -253,19 +253,10 @@ fn check_output(
             ),
             _ => String::new(),
         };
-        let off_level_only = report.kinds() == [ProblemKind::OffLevel];
-        let why = match job.opts.method {
-            Method::Std | Method::Six | Method::Five if off_level_only => format!(
-                " (--method {} does not keep the trilinear topology: its boundary follows \
-                 another level set where it changes it; ctd and tptd keep it)",
-                job.opts.method.name()
-            ),
-            _ => String::new(),
-        };
         return Err(file_error(
             job.output.display(),
             format_args!(
-                "the mesh fails --check ({}{how_far}){why}; nothing written",
+                "the mesh fails --check ({}{how_far}); nothing written",
                 report.summary_line()
             ),
         ));

@@ -21,8 +21,8 @@ fn check_line(c: &tptd::check::CheckReport) -> String {
     }
     if let Some(l) = &c.level {
         line += &format!(
-            ", boundary within {:.3} voxel of its levels ({} points)",
-            l.max_distance, l.points
+            ", boundary within {:.3} voxel of its levels ({} points, bound {:.3})",
+            l.max_distance, l.points, l.bound
         );
     }
     line
