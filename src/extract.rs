@@ -15,8 +15,9 @@ use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM
 use crate::grid::{cell_box_planes, corner_offset, Samples, ScalarGrid};
 use crate::keys::{key_index, local_key};
 use crate::mesh::TetMesh;
+use crate::mesh::{Gather, MeshSink};
 use crate::warp::{snap_vertices, Snapped};
-use crate::weld::{Gather, MeshSink, Slab, Welder};
+use crate::weld::{Slab, Welder};
 
 pub use crate::decompose::plan::Method;
 

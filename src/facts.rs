@@ -9,13 +9,11 @@ use std::io;
 use rayon::prelude::*;
 
 use crate::geom::signed_volume;
-use crate::improve::quality::{
-    cosine_extremes, cosines_to_degrees, dihedral_range, widest, NO_COSINES,
-};
+use crate::mesh::{MeshChunk, MeshSink};
 use crate::mesh::{TetMesh, VOLUME_BLOCK};
+use crate::quality::{cosine_extremes, cosines_to_degrees, dihedral_range, widest, NO_COSINES};
 use crate::topology::{betti, tet_links, triangle_links};
 use crate::union_find::UnionFind;
-use crate::weld::{MeshChunk, MeshSink};
 
 /// What the report says about a mesh.
 #[derive(Clone, Debug, PartialEq)]

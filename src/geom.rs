@@ -120,6 +120,36 @@ pub fn sublevel_volume(p: [[f64; 3]; 4], f: [f64; 4], c: f64) -> f64 {
     }
 }
 
+/// At most this many subdivisions of a triangle's edges: a longer triangle is refused (its
+/// edge is more than `MAX_SUBDIVISIONS` spacings long).
+const MAX_SUBDIVISIONS: usize = 64;
+
+/// The points of triangle `t` at which the quality pass and warping measure its distance to
+/// a level set: a barycentric lattice with `n` steps along each edge, `n` such that
+/// neighbouring points are at most `spacing` apart (at least 2: corners, edge midpoints and
+/// three inner points). `None` if the triangle is too long to sample ([`MAX_SUBDIVISIONS`]).
+pub(crate) fn sample_points_spaced(
+    t: [[f64; 3]; 3],
+    spacing: f64,
+) -> Option<impl Iterator<Item = [f64; 3]>> {
+    let len = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let longest = len(t[0], t[1]).max(len(t[1], t[2])).max(len(t[2], t[0]));
+    let n = (longest / spacing).ceil().max(2.0);
+    if n.is_nan() || n > MAX_SUBDIVISIONS as f64 {
+        return None;
+    }
+    let n = n as usize;
+    Some((0..=n).flat_map(move |i| {
+        (0..=n - i).map(move |j| {
+            let (a, b) = (i as f64 / n as f64, j as f64 / n as f64);
+            let c = 1.0 - a - b;
+            [0, 1, 2].map(|k| a * t[0][k] + b * t[1][k] + c * t[2][k])
+        })
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -5,7 +5,7 @@
 //! a [`ScalarGrid`] is read by [`io::read_volume`]; [`mesh_interval`] splits every cell into
 //! tetrahedra through the saddles of the trilinear interpolant, clips each tetrahedron to the
 //! interval, welds points by identity and returns a [`TetMesh`]; [`improve::improve`] raises
-//! the element quality without changing the topology; [`topology`] and [`improve::quality`]
+//! the element quality without changing the topology; [`topology`] and [`quality`]
 //! analyse the mesh and [`io::write_mesh`] writes it. [`critical`] finds the critical points
 //! and regions of the trilinear field (where the topology of the level sets changes), to
 //! choose `alpha` and `beta` away from them.
@@ -22,6 +22,7 @@ pub(crate) mod decompose;
 pub mod demo;
 pub(crate) mod extract;
 pub mod facts;
+pub mod field;
 pub(crate) mod geom;
 pub mod grid;
 pub mod improve;
@@ -30,6 +31,7 @@ pub mod io;
 pub(crate) mod keys;
 pub mod memory;
 pub mod mesh;
+pub mod quality;
 pub mod report;
 pub mod samples;
 pub mod surface;
@@ -47,7 +49,7 @@ pub use extract::{
 };
 pub use grid::{CurvilinearGrid, ScalarGrid};
 pub use mesh::{BoundaryLabel, TetMesh, TriSurface};
+pub use mesh::{MeshChunk, MeshSink};
 pub use samples::{SampleStorage, Samples};
 pub use surface::{analysis::analyse_surface, level_surface, SurfaceOptions};
 pub use warp::Snapped;
-pub use weld::{MeshChunk, MeshSink};

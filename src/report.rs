@@ -12,9 +12,9 @@ use crate::extract::{MeshStats, Method};
 use crate::facts::MeshFacts;
 use crate::improve::forced::ForcedReport;
 use crate::improve::outcome::TargetCounts;
-use crate::improve::quality::QualitySummary;
 use crate::improve::ImproveReport;
 use crate::mesh::BoundaryLabel;
+use crate::quality::QualitySummary;
 
 /// A bound of the interval: finite values serialize as JSON numbers, infinities as the strings
 /// `"-inf"` / `"inf"` (JSON has no infinity), so the report is always valid JSON.

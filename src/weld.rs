@@ -5,12 +5,10 @@
 //! slab after the other in z order: a point on the plane shared with the slab below takes the
 //! number it got there, every other point the next free number. Only the keys of one plane
 //! are remembered, so the slabs can be handed on as [`MeshChunk`]s (points in physical
-//! coordinates, elements in global numbers) and streamed to a [`MeshSink`]: memory stays
+//! coordinates, elements in global numbers) and streamed to a [`crate::mesh::MeshSink`]: memory stays
 //! bounded by the slabs in flight, whatever the size of the mesh. Numbering depends only on
 //! the keys and the slab order, so the output is identical for every thread count and every
 //! number of slabs in flight.
-
-use std::io;
 
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
@@ -18,7 +16,7 @@ use rustc_hash::FxHashMap;
 use crate::clip::{ClipPoint, ClipSink};
 use crate::grid::ScalarGrid;
 use crate::keys::{grid_vertex, on_z_plane, vertex_key, vertex_point, PointKey, CORNER};
-use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::mesh::{grow_box, BoundaryLabel, MeshChunk, EMPTY_BOX};
 
 /// Points, tets and boundary triangles of one slab, numbered locally.
 pub(crate) struct Slab {
@@ -130,79 +128,6 @@ impl ClipSink for Slab {
         let ids = t.map(|i| self.id(&points[i]));
         self.tris.push(ids);
         self.labels.push(label);
-    }
-}
-
-/// One slab of the mesh in global numbering, as handed to a [`MeshSink`].
-///
-/// Chunks arrive in slab order. `points` are the points numbered first in this slab (global
-/// numbers `first_point..first_point + points.len()`); the elements may also use points of
-/// earlier chunks (those on the plane shared with the slab below).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct MeshChunk {
-    /// Global number of `points[0]`.
-    pub first_point: usize,
-    /// New points, physical coordinates.
-    pub points: Vec<[f64; 3]>,
-    /// Field value at each new point.
-    pub values: Vec<f64>,
-    /// Global number of `tets[0]`.
-    pub first_tet: usize,
-    /// Tets, global point numbers, positively oriented.
-    pub tets: Vec<[u32; 4]>,
-    /// Boundary triangles, global point numbers, outward normals. Each is a face of a tet of
-    /// the same chunk.
-    pub boundary: Vec<[u32; 3]>,
-    /// Label of each boundary triangle.
-    pub boundary_labels: Vec<BoundaryLabel>,
-    /// Per label (in [`BoundaryLabel::ALL`] order) the bounding box `[min xyz, max xyz]` of the
-    /// vertices of this chunk's triangles with that label (`±inf` when there are none).
-    pub label_boxes: [[f64; 6]; 3],
-}
-
-/// Where [`crate::mesh_interval_streamed`] delivers the mesh, one slab at a time.
-pub trait MeshSink {
-    /// Takes the next chunk (in slab order).
-    ///
-    /// # Errors
-    /// Any I/O error: it stops the meshing run and is returned from it.
-    fn chunk(&mut self, chunk: &MeshChunk) -> io::Result<()>;
-}
-
-/// A sink that gathers the chunks into one [`TetMesh`].
-#[derive(Default)]
-pub(crate) struct Gather {
-    pub(crate) mesh: TetMesh,
-}
-
-impl MeshSink for Gather {
-    fn chunk(&mut self, c: &MeshChunk) -> io::Result<()> {
-        let m = &mut self.mesh;
-        m.points.extend_from_slice(&c.points);
-        m.values.extend_from_slice(&c.values);
-        m.tets.extend_from_slice(&c.tets);
-        m.boundary.extend_from_slice(&c.boundary);
-        m.boundary_labels.extend_from_slice(&c.boundary_labels);
-        Ok(())
-    }
-}
-
-/// An empty bounding box (`min = +inf`, `max = -inf`).
-pub const EMPTY_BOX: [f64; 6] = [
-    f64::INFINITY,
-    f64::INFINITY,
-    f64::INFINITY,
-    f64::NEG_INFINITY,
-    f64::NEG_INFINITY,
-    f64::NEG_INFINITY,
-];
-
-/// Grows box `b` by point `p`.
-#[inline]
-pub fn grow_box(b: &mut [f64; 6], p: [f64; 3]) {
-    for k in 0..3 {
-        b[k] = b[k].min(p[k]);
-        b[k + 3] = b[k + 3].max(p[k]);
     }
 }
 

@@ -8,8 +8,8 @@ mod common;
 use common::invariants::{check_labels, check_mesh, mesh_betti, total_volume};
 use common::reference::{self, Field};
 use common::{extent, Rng};
-use tptd::improve::quality::summarize;
 use tptd::improve::{improve_meshed, QualityOptions, DEFAULT_WARP};
+use tptd::quality::summarize;
 use tptd::{mesh_interval, MeshOptions, MeshOutput, Method, ScalarGrid, TetMesh};
 
 /// A field sampled from `f(x, y, z)` on an `n`³ grid.

@@ -697,3 +697,39 @@ fn a_direction_matrix_of_condition_number_2000_is_warned_about() {
         stderr(&o)
     );
 }
+
+/// A `uint8` volume is estimated at one byte per sample, as the README says, and the bound
+/// check before meshing streams through the volume instead of holding the critical-point
+/// analysis of all of it: a 128³ `uint8` ball (2 MiB of samples, a small mesh) meshes with
+/// the default options under a 16 MiB cap, and a cap below its samples names 2.0 MiB.
+#[test]
+fn a_uint8_volume_costs_one_byte_per_sample_and_the_bound_check_streams() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let n = 128usize;
+    let mut data = Vec::with_capacity(n * n * n);
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                let (x, y, z) = (i as f64 - 60.3, j as f64 - 64.2, k as f64 - 66.1);
+                let r = (x * x + y * y + z * z).sqrt();
+                data.push((200.0 - 20.0 * r).clamp(0.0, 200.0) as u8);
+            }
+        }
+    }
+    fs::write(d.join("b.npy"), npy_bytes("|u1", "(128, 128, 128)", &data)).unwrap();
+    let before = listing(d);
+    let args = ["b.npy", "--alpha", "100.3", "-o", "m.vtu", "--memory-limit"];
+    let mut a = args.to_vec();
+    a.push("1500K");
+    let e = assert_one_line_failure(&run_in(d, &a), d, &before, "b.npy");
+    assert!(
+        e.contains("reading 2097152 samples needs about 2.0 MiB"),
+        "{e}"
+    );
+    let mut a = args.to_vec();
+    a.push("16M");
+    let o = run_in(d, &a);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(d.join("m.vtu").exists());
+}

@@ -6,8 +6,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::{ProblemKind, Problems};
+use crate::field::Field;
 use crate::grid::ScalarGrid;
-use crate::improve::field::Field;
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 type P = [f64; 3];

@@ -14,19 +14,12 @@ use super::collapse::{boundary_faces_at, VertexFaces};
 use super::local::{BoundaryFace, LocalMesh};
 use super::Ctx;
 use crate::check::triangles_cross;
+use crate::field::GUARD_DISTANCE;
+use crate::geom::sample_points_spaced;
 use crate::mesh::BoundaryLabel;
-
-/// How far (index units, voxels) a boundary triangle may leave its level set, as the guard
-/// measures it: below the half voxel that the checker allows, so that the checker's own
-/// search, which tries more directions, always finds the level set within its bound.
-pub const GUARD_DISTANCE: f64 = 0.4;
 
 /// Spacing (index units) of the sample points of a triangle.
 const SAMPLE_SPACING: f64 = 0.25;
-
-/// At most this many subdivisions of a triangle's edges: a longer triangle is refused (its
-/// edge is more than `MAX_SUBDIVISIONS * SAMPLE_SPACING` voxels long).
-const MAX_SUBDIVISIONS: usize = 64;
 
 /// The level a boundary label lies on (`None` for the grid box).
 pub fn label_level(label: BoundaryLabel, levels: [f64; 2]) -> Option<f64> {
@@ -40,36 +33,14 @@ pub fn label_level(label: BoundaryLabel, levels: [f64; 2]) -> Option<f64> {
 /// The points of triangle `t` (index space) at which its distance to the level set is
 /// measured: a barycentric lattice with `n` steps along each edge, `n` such that neighbouring
 /// points are at most [`SAMPLE_SPACING`] apart (at least 2: corners, edge midpoints and three
-/// inner points). `None` if the triangle is too long to sample ([`MAX_SUBDIVISIONS`]).
+/// inner points). `None` if the triangle is too long to sample
+/// ([`sample_points_spaced`]).
 pub fn sample_points(t: [[f64; 3]; 3]) -> Option<impl Iterator<Item = [f64; 3]>> {
     sample_points_spaced(t, SAMPLE_SPACING)
 }
 
-/// [`sample_points`] with neighbouring points at most `spacing` apart.
-pub fn sample_points_spaced(
-    t: [[f64; 3]; 3],
-    spacing: f64,
-) -> Option<impl Iterator<Item = [f64; 3]>> {
-    let len = |a: [f64; 3], b: [f64; 3]| {
-        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-    };
-    let longest = len(t[0], t[1]).max(len(t[1], t[2])).max(len(t[2], t[0]));
-    let n = (longest / spacing).ceil().max(2.0);
-    if n.is_nan() || n > MAX_SUBDIVISIONS as f64 {
-        return None;
-    }
-    let n = n as usize;
-    Some((0..=n).flat_map(move |i| {
-        (0..=n - i).map(move |j| {
-            let (a, b) = (i as f64 / n as f64, j as f64 / n as f64);
-            let c = 1.0 - a - b;
-            [0, 1, 2].map(|k| a * t[0][k] + b * t[1][k] + c * t[2][k])
-        })
-    }))
-}
-
 /// Whether the level set `f = level` passes within `bound` of index point `u`
-/// ([`super::field::Field::near_level`]).
+/// ([`crate::field::Field::near_level`]).
 pub fn near_level(ctx: &Ctx, u: [f64; 3], level: f64, bound: f64) -> bool {
     ctx.field.near_level(u, level, bound, ctx.tol)
 }

@@ -34,15 +34,15 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::embed::GUARD_DISTANCE;
-use super::field::Field;
 use super::outcome::PointMap;
-use super::quality::{cosine_extremes, tet_dihedral_range};
 use super::QualityOptions;
 use crate::critical::find::vertex_class;
+use crate::field::Field;
+use crate::field::GUARD_DISTANCE;
 use crate::geom::{distance, dot, norm};
 use crate::grid::{corner_offset, ScalarGrid};
 use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::quality::{cosine_extremes, tet_dihedral_range};
 use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle};
 
 /// Why an element stays below the floor.
@@ -656,8 +656,8 @@ impl Classifier<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::improve::quality::summarize;
     use crate::improve::{improve_meshed, DEFAULT_WARP};
+    use crate::quality::summarize;
     use crate::{mesh_interval, MeshOptions, Method};
 
     /// `f` sampled at the integer points of an `n[0] × n[1] × n[2]` grid.

@@ -13,10 +13,10 @@ use smallvec::SmallVec;
 
 use super::constraint::Constraint;
 use super::face_grid::FaceGrid;
-use super::field::Field;
 use super::Ctx;
-use crate::improve::quality::biased_min_sine;
+use crate::field::Field;
 use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::quality::biased_min_sine;
 
 /// A boundary face of the region: its outward orientation and label.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

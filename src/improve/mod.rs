@@ -16,15 +16,13 @@ pub(crate) mod constraint;
 pub(crate) mod edge_removal;
 pub(crate) mod embed;
 mod face_grid;
-pub mod field;
 #[cfg(test)]
-mod fixtures;
+pub(crate) mod fixtures;
 pub(crate) mod flip;
 pub mod forced;
 pub(crate) mod local;
 pub mod outcome;
 pub(crate) mod project;
-pub mod quality;
 pub(crate) mod restore;
 mod schedule;
 pub(crate) mod search;
@@ -43,12 +41,12 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::extract::MeshOutput;
+use crate::field::Field;
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
+use crate::quality::biased_min_sine;
 use crate::warp::Snapped;
-use field::Field;
 use local::LocalMesh;
-use quality::biased_min_sine;
 use stages::{run_stage, stage_targets, Stage};
 use submesh::{SubMesh, Untouched};
 

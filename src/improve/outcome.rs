@@ -7,13 +7,13 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::quality::tet_dihedral_range;
 use super::{
     improve_keeping_volume, runs_again_for_volume, ImproveReport, QualityOptions, StageSeconds,
 };
 use crate::extract::MeshOutput;
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
+use crate::quality::tet_dihedral_range;
 use crate::warp::Snapped;
 
 /// A map of the mesh's points to the space its quality is measured in (a curvilinear grid's

@@ -14,8 +14,8 @@
 
 use rayon::prelude::*;
 
-use super::embed::GUARD_DISTANCE;
 use super::Ctx;
+use crate::field::GUARD_DISTANCE;
 use crate::geom::{distance, dot, norm};
 use crate::mesh::TetMesh;
 

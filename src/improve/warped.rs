@@ -12,7 +12,7 @@
 
 use rayon::prelude::*;
 
-use super::field::Field;
+use crate::field::Field;
 use crate::geom::signed_volume;
 use crate::mesh::TetMesh;
 use crate::warp::Snapped;

@@ -2,8 +2,8 @@
 
 use rayon::prelude::*;
 
+use crate::field::Field;
 use crate::grid::ScalarGrid;
-use crate::improve::field::Field;
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// Distance (voxels) within which a corner counts as on a face of the grid box.

@@ -25,8 +25,8 @@ use serde::Serialize;
 use crate::check::{check_mesh, CheckOptions, LevelSummary, Problem, ProblemKind, WindingSummary};
 use crate::geom::signed_volume;
 use crate::grid::ScalarGrid;
-use crate::improve::quality::{dihedral_angles, summarize, ABOVE_ANGLES, BELOW_ANGLES};
 use crate::mesh::TetMesh;
+use crate::quality::{dihedral_angles, summarize, ABOVE_ANGLES, BELOW_ANGLES};
 
 pub use labels::label_boundary;
 pub use reference::{reference, trilinear_volume, Reference, ReferenceOptions, TrilinearVolume};
@@ -285,7 +285,7 @@ fn dihedral(mesh: &TetMesh) -> Option<Dihedral> {
         let k = ((p / 100.0 * v.len() as f64).ceil() as usize).clamp(1, v.len());
         v[k - 1]
     };
-    let range = crate::improve::quality::dihedral_range(mesh);
+    let range = crate::quality::dihedral_range(mesh);
     let (min, max) = range.unwrap_or((lo[0], hi[hi.len() - 1]));
     Some(Dihedral {
         min,

@@ -9,8 +9,8 @@ use std::io;
 use rustc_hash::FxHashMap;
 
 use super::write_common::invalid;
+use crate::mesh::{grow_box, EMPTY_BOX};
 use crate::mesh::{BoundaryLabel, TetMesh};
-use crate::weld::{grow_box, EMPTY_BOX};
 
 /// A visitor of consecutive slices of one list.
 pub(crate) type Visit<'a, T> = &'a mut dyn FnMut(&[T]) -> io::Result<()>;

@@ -16,7 +16,7 @@ use bytemuck::Pod;
 
 use super::source::{boundary_faces, MeshSource, Visit};
 use crate::mesh::BoundaryLabel;
-use crate::weld::{grow_box, MeshChunk, MeshSink, EMPTY_BOX};
+use crate::mesh::{grow_box, MeshChunk, MeshSink, EMPTY_BOX};
 
 /// Items read back per slice.
 const READ_SLICE: usize = 1 << 16;

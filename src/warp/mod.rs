@@ -358,7 +358,7 @@ fn candidate_level(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], eps: f64) 
 
 /// How close (index units, along an edge from the vertex) the other level of the interval may
 /// pass a vertex that is snapped to one level: the quality pass's guard distance
-/// (`improve::embed::GUARD_DISTANCE`), within which it leaves a thin layer as it is.
+/// (`field::GUARD_DISTANCE`), within which it leaves a thin layer as it is.
 const THIN_LAYER: f64 = 0.4;
 
 /// Whether the level other than `snap` crosses an edge from interior vertex `ijk` to one of

@@ -1,16 +1,17 @@
 //! Closeness on the trilinear field: whether a level set passes near a grid vertex, and
 //! whether the surface a snap leaves in a star stays near its level sets.
 
+use crate::field::GUARD_DISTANCE;
 use crate::geom::level_polygon;
+use crate::geom::sample_points_spaced;
 use crate::grid::ScalarGrid;
-use crate::improve::embed::{sample_points_spaced, GUARD_DISTANCE};
 
 /// Step 1 on the trilinear field: the crossing found there may lie on a diagonal of the
 /// decomposition, where the piecewise-linear level set is closer to the vertex than the
 /// trilinear one that the quality pass projects the snapped vertex onto. A vertex is snapped
 /// only when the trilinear level set also passes within `eps` (index units) of it.
 pub(super) struct TrilinearNear<'a> {
-    field: crate::improve::field::Field<'a>,
+    field: crate::field::Field<'a>,
     tol: f64,
     eps: f64,
 }
@@ -19,7 +20,7 @@ impl<'a> TrilinearNear<'a> {
     pub(super) fn new(grid: &'a ScalarGrid, eps: f64) -> Self {
         let (lo, hi) = grid.value_range();
         TrilinearNear {
-            field: crate::improve::field::Field::new(grid),
+            field: crate::field::Field::new(grid),
             tol: 1e-9 * (hi - lo).max(f64::MIN_POSITIVE),
             eps,
         }

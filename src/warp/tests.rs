@@ -293,8 +293,8 @@ struct ChunkFaces {
     stray: usize,
 }
 
-impl crate::weld::MeshSink for ChunkFaces {
-    fn chunk(&mut self, c: &crate::weld::MeshChunk) -> std::io::Result<()> {
+impl crate::mesh::MeshSink for ChunkFaces {
+    fn chunk(&mut self, c: &crate::mesh::MeshChunk) -> std::io::Result<()> {
         let sorted = |mut f: [u32; 3]| {
             f.sort_unstable();
             f

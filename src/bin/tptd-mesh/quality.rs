@@ -6,8 +6,8 @@
 use std::time::{Duration, Instant};
 
 use tptd::curvilinear::map_point;
-use tptd::improve::quality::{summarize, QualitySummary};
 use tptd::improve::QualityOptions;
+use tptd::quality::{summarize, QualitySummary};
 use tptd::report::{QualitySection, QualityTimings};
 use tptd::{CurvilinearGrid, MeshOutput, ScalarGrid, TetMesh};
 

@@ -9,12 +9,12 @@ use anyhow::Result;
 use tptd::check::{check_mesh, CheckOptions, CheckReport};
 use tptd::demo::{demo_volume, DEMO_ALPHA, DEMO_BETA};
 use tptd::facts::{FactsSink, MeshFacts};
-use tptd::improve::quality::summarize;
 use tptd::io::WriteOptions;
 use tptd::io::{
     check_writable, read_volume, spill_for, write_mesh_pending, write_pending,
     write_spilled_pending, MeshFormat, PendingFile, SurfaceFormat,
 };
+use tptd::quality::summarize;
 use tptd::report::{build_report, QualitySection, QualityTimings, Report, RunInfo, Timings};
 use tptd::{
     mesh_interval, MeshError, MeshOptions, MeshOutput, MeshStats, Method, Samples, ScalarGrid,

@@ -4,8 +4,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use tptd::improve::forced::ForcedCounts;
-use tptd::improve::quality::BELOW_ANGLES;
 use tptd::improve::ImproveReport;
+use tptd::quality::BELOW_ANGLES;
 use tptd::report::{QualitySection, Report};
 use tptd::CellCase;
 use tptd::Method;

@@ -5,6 +5,11 @@ use crate::geom::norm;
 use crate::grid::ScalarGrid;
 use crate::trilinear;
 
+/// How far (index units, voxels) a boundary triangle may leave its level set, as the guard
+/// measures it: below the half voxel that the checker allows, so that the checker's own
+/// search, which tries more directions, always finds the level set within its bound.
+pub const GUARD_DISTANCE: f64 = 0.4;
+
 /// The piecewise-trilinear interpolant of a [`ScalarGrid`], in index coordinates
 /// (grid vertex `(i, j, k)` at `(i, j, k)`).
 #[derive(Clone, Copy)]
