@@ -700,13 +700,14 @@ fn a_direction_matrix_of_condition_number_2000_is_warned_about() {
 
 /// A `uint8` volume is estimated at one byte per sample, as the README says, and the bound
 /// check before meshing streams through the volume instead of holding the critical-point
-/// analysis of all of it: a 128³ `uint8` ball (2 MiB of samples, a small mesh) meshes with
-/// the default options under a 16 MiB cap, and a cap below its samples names 2.0 MiB.
+/// analysis of all of it: a 192³ `uint8` ball (6.75 MiB of samples, a small mesh) meshes with
+/// the default options under a 24 MiB cap (the whole analysis needed more than 40 MiB), and
+/// a cap below its samples names 6.8 MiB (three bytes per sample were estimated before).
 #[test]
 fn a_uint8_volume_costs_one_byte_per_sample_and_the_bound_check_streams() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let n = 128usize;
+    let n = 192usize;
     let mut data = Vec::with_capacity(n * n * n);
     for i in 0..n {
         for j in 0..n {
@@ -717,18 +718,18 @@ fn a_uint8_volume_costs_one_byte_per_sample_and_the_bound_check_streams() {
             }
         }
     }
-    fs::write(d.join("b.npy"), npy_bytes("|u1", "(128, 128, 128)", &data)).unwrap();
+    fs::write(d.join("b.npy"), npy_bytes("|u1", "(192, 192, 192)", &data)).unwrap();
     let before = listing(d);
     let args = ["b.npy", "--alpha", "100.3", "-o", "m.vtu", "--memory-limit"];
     let mut a = args.to_vec();
-    a.push("1500K");
+    a.push("5M");
     let e = assert_one_line_failure(&run_in(d, &a), d, &before, "b.npy");
     assert!(
-        e.contains("reading 2097152 samples needs about 2.0 MiB"),
+        e.contains("reading 7077888 samples needs about 6.8 MiB"),
         "{e}"
     );
     let mut a = args.to_vec();
-    a.push("16M");
+    a.push("24M");
     let o = run_in(d, &a);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(d.join("m.vtu").exists());
