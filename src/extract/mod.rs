@@ -214,9 +214,9 @@ pub fn mesh_interval_with_progress(
     })
 }
 
-/// Meshes like [`mesh_interval`] but hands the mesh to `sink` slab by slab ([`MeshChunk`]s in
-/// z order, points in physical coordinates, elements in global numbers) instead of building
-/// it in memory: at most [`MeshOptions::slabs_in_flight`] slabs are held at a time. The
+/// Meshes like [`mesh_interval`] but hands the mesh to `sink` slab by slab
+/// ([`MeshChunk`](crate::mesh::MeshChunk)s in z order, points in physical coordinates,
+/// elements in global numbers) instead of building it in memory: at most [`MeshOptions::slabs_in_flight`] slabs are held at a time. The
 /// chunks concatenated are exactly the mesh [`mesh_interval`] returns, whatever the number of
 /// threads or of slabs in flight.
 ///
