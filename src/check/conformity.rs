@@ -82,6 +82,22 @@ pub(crate) fn tet_face(t: &[u32; 4], f: usize) -> [u32; 3] {
 /// order. Precondition: fewer than 2^30 tets, every index in range.
 pub(crate) fn faces(mesh: &TetMesh, problems: &mut Problems) -> Vec<BoundaryFace> {
     let tets = &mesh.tets;
+    let keys = sorted_face_keys(tets);
+    let starts = group_starts(&keys);
+    let groups: Vec<(Group, Vec<(usize, usize)>)> = starts
+        .par_iter()
+        .enumerate()
+        .map(|(g, &s)| {
+            let e = starts.get(g + 1).copied().unwrap_or(keys.len());
+            judge_group(tets, &keys[s..e])
+        })
+        .collect();
+    gather_groups(groups, problems)
+}
+
+/// Every tet's four faces as one key each, sorted: the face's [`face_key`] with the tet's
+/// index and the face's slot in the low 32 bits.
+fn sorted_face_keys(tets: &[[u32; 4]]) -> Vec<u128> {
     let mut keys: Vec<u128> = tets
         .par_iter()
         .enumerate()
@@ -90,60 +106,71 @@ pub(crate) fn faces(mesh: &TetMesh, problems: &mut Problems) -> Vec<BoundaryFace
         })
         .collect();
     keys.par_sort_unstable();
+    keys
+}
+
+/// The starts of the groups of equal faces in the sorted `keys`, found in parallel.
+fn group_starts(keys: &[u128]) -> Vec<usize> {
     const HIGH: u128 = !0u128 << 32;
-    // Group starts, found in parallel.
-    let starts: Vec<usize> = (0..keys.len())
+    (0..keys.len())
         .into_par_iter()
         .filter(|&i| i == 0 || keys[i] & HIGH != keys[i - 1] & HIGH)
-        .collect();
+        .collect()
+}
+
+/// What one group of equal faces says (after setting aside duplicate tets).
+enum Group {
+    Boundary(BoundaryFace),
+    Pair,
+    SameSide(usize, usize),
+    Many(Vec<usize>),
+}
+
+/// Judges one group of equal faces (`group`: their keys), and lists the duplicate tets met in
+/// it as (earlier tet, later tet).
+fn judge_group(tets: &[[u32; 4]], group: &[u128]) -> (Group, Vec<(usize, usize)>) {
     let entry = |k: u128| -> (usize, usize) { ((k as u32 >> 2) as usize, (k & 3) as usize) };
     let sorted_tet = |t: usize| {
         let mut s = tets[t];
         s.sort_unstable();
         s
     };
-    /// What one group of equal faces says (after setting aside duplicate tets).
-    enum Group {
-        Boundary(BoundaryFace),
-        Pair,
-        SameSide(usize, usize),
-        Many(Vec<usize>),
+    // Members in tet order; a tet with the corners of an earlier member is a duplicate
+    // and set aside, so the face is judged as if it were not there.
+    let mut members: Vec<(usize, usize)> = Vec::with_capacity(group.len());
+    let mut dups = Vec::new();
+    for &k in group {
+        let (t, f) = entry(k);
+        match members.iter().find(|m| sorted_tet(m.0) == sorted_tet(t)) {
+            Some(m) => dups.push((m.0, t)),
+            None => members.push((t, f)),
+        }
     }
-    let groups: Vec<(Group, Vec<(usize, usize)>)> = starts
-        .par_iter()
-        .enumerate()
-        .map(|(g, &s)| {
-            let e = starts.get(g + 1).copied().unwrap_or(keys.len());
-            // Members in tet order; a tet with the corners of an earlier member is a duplicate
-            // and set aside, so the face is judged as if it were not there.
-            let mut members: Vec<(usize, usize)> = Vec::with_capacity(e - s);
-            let mut dups = Vec::new();
-            for &k in &keys[s..e] {
-                let (t, f) = entry(k);
-                match members.iter().find(|m| sorted_tet(m.0) == sorted_tet(t)) {
-                    Some(m) => dups.push((m.0, t)),
-                    None => members.push((t, f)),
-                }
+    let group = match members[..] {
+        [(t, f)] => Group::Boundary(BoundaryFace {
+            tri: tet_face(&tets[t], f),
+            tet: t as u32,
+        }),
+        [(t, f), (u, h)] => {
+            let (_, p) = face_key(tet_face(&tets[t], f));
+            let (_, q) = face_key(tet_face(&tets[u], h));
+            if p != q {
+                Group::Pair
+            } else {
+                Group::SameSide(t, u)
             }
-            let group = match members[..] {
-                [(t, f)] => Group::Boundary(BoundaryFace {
-                    tri: tet_face(&tets[t], f),
-                    tet: t as u32,
-                }),
-                [(t, f), (u, h)] => {
-                    let (_, p) = face_key(tet_face(&tets[t], f));
-                    let (_, q) = face_key(tet_face(&tets[u], h));
-                    if p != q {
-                        Group::Pair
-                    } else {
-                        Group::SameSide(t, u)
-                    }
-                }
-                _ => Group::Many(members.iter().map(|m| m.0).collect()),
-            };
-            (group, dups)
-        })
-        .collect();
+        }
+        _ => Group::Many(members.iter().map(|m| m.0).collect()),
+    };
+    (group, dups)
+}
+
+/// Reports the groups' problems in group order, then the duplicate tets (sorted, each pair
+/// once); returns the boundary faces.
+fn gather_groups(
+    groups: Vec<(Group, Vec<(usize, usize)>)>,
+    problems: &mut Problems,
+) -> Vec<BoundaryFace> {
     let mut boundary = Vec::new();
     let mut dups: Vec<(usize, usize)> = Vec::new();
     for (g, d) in groups {

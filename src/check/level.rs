@@ -66,6 +66,25 @@ struct Search<'a> {
     ball: Vec<(f64, P)>,
 }
 
+impl<'a> Search<'a> {
+    /// The search on `grid` out to `bound` (index units).
+    fn new(grid: &'a ScalarGrid, bound: f64) -> Self {
+        let field = Field::new(grid);
+        let hi = grid.dims.map(|d| (d - 1) as f64);
+        let (lo_v, hi_v) = grid.value_range();
+        let scale = lo_v.abs().max(hi_v.abs()).max(f64::MIN_POSITIVE);
+        Search {
+            field,
+            hi,
+            eps: 1e-9 * hi.iter().fold(1.0, |a: f64, &b| a.max(b)),
+            bound,
+            tol: 1e-12 * scale,
+            dirs: lattice_directions(),
+            ball: ball_lattice(bound),
+        }
+    }
+}
+
 impl Search<'_> {
     fn inside(&self, u: P) -> bool {
         (0..3).all(|k| u[k] >= -self.eps && u[k] <= self.hi[k] + self.eps)
@@ -257,86 +276,122 @@ pub(crate) fn level_distance(
     bound: f64,
     problems: &mut Problems,
 ) -> LevelSummary {
-    let field = Field::new(grid);
-    let hi = grid.dims.map(|d| (d - 1) as f64);
-    let (lo_v, hi_v) = grid.value_range();
-    let scale = lo_v.abs().max(hi_v.abs()).max(f64::MIN_POSITIVE);
-    let search = Search {
-        field,
-        hi,
-        eps: 1e-9 * hi.iter().fold(1.0, |a: f64, &b| a.max(b)),
-        bound,
-        tol: 1e-12 * scale,
-        dirs: lattice_directions(),
-        ball: ball_lattice(bound),
-    };
-    let level_of = |l: BoundaryLabel| match l {
-        BoundaryLabel::Alpha => Some(levels.0),
-        BoundaryLabel::Beta => Some(levels.1),
-        BoundaryLabel::Box => None,
-    };
-    let to_index = |v: u32| field.to_index(points[v as usize]);
-    // Corners once per (vertex, level).
-    let mut corners: Vec<(u32, u8)> = mesh
-        .boundary
-        .iter()
-        .zip(&mesh.boundary_labels)
-        .filter(|(_, &l)| l != BoundaryLabel::Box)
-        .flat_map(|(t, &l)| t.iter().map(move |&v| (v, l as u8)))
-        .collect();
-    corners.par_sort_unstable();
-    corners.dedup();
-    let level_for = |l: u8| if l == 0 { levels.0 } else { levels.1 };
-    let corner_found: Vec<Found> = corners
-        .par_iter()
-        .map(|&(v, l)| search.distance(to_index(v), level_for(l)))
-        .collect();
-    let corner_at = |v: u32, l: u8| -> Found {
-        let i = corners.partition_point(|&c| c < (v, l));
-        corner_found[i]
-    };
+    let search = Search::new(grid, bound);
+    let to_index = |v: u32| search.field.to_index(points[v as usize]);
+    let corners = Corners::new(mesh, &search, &to_index, levels);
     let per_tri: Vec<Tri> = mesh
         .boundary
         .par_iter()
         .zip(&mesh.boundary_labels)
-        .map(|(t, &label)| {
-            let u = t.map(to_index);
-            let mut acc = Tri::default();
-            let Some(level) = level_of(label) else {
-                acc.off_box = !on_box(&u, hi, search.eps * 100.0);
-                return acc;
-            };
-            let inner = samples(&u, bound);
-            acc.points = inner.len();
-            for &p in &inner {
-                match search.distance(p, level) {
-                    Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
-                    Found::Beyond(d) => {
-                        acc.beyond += 1;
-                        acc.max_beyond = acc.max_beyond.max(d);
-                    }
-                    Found::Outside => acc.outside += 1,
-                }
-            }
-            for &v in t {
-                match corner_at(v, label as u8) {
-                    Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
-                    Found::Beyond(d) => {
-                        acc.corner_beyond = true;
-                        acc.max_beyond = acc.max_beyond.max(d);
-                    }
-                    Found::Outside => acc.corner_outside = true,
-                }
-            }
-            acc
-        })
+        .map(|(t, &label)| triangle(t, label, &search, &to_index, &corners, levels))
         .collect();
+    summarize(bound, &corners, &per_tri, problems)
+}
+
+/// The level a triangle's label stands for (`None`: a box triangle).
+fn level_of(label: BoundaryLabel, levels: (f64, f64)) -> Option<f64> {
+    match label {
+        BoundaryLabel::Alpha => Some(levels.0),
+        BoundaryLabel::Beta => Some(levels.1),
+        BoundaryLabel::Box => None,
+    }
+}
+
+/// The corners of the labelled triangles, searched once per (vertex, level).
+struct Corners {
+    /// (vertex, label as `u8`), sorted, each once.
+    list: Vec<(u32, u8)>,
+    /// What the search found for each entry of `list`.
+    found: Vec<Found>,
+}
+
+impl Corners {
+    /// Collects the corners of the alpha and beta triangles and searches from each.
+    fn new(
+        mesh: &TetMesh,
+        search: &Search,
+        to_index: &(impl Fn(u32) -> P + Sync),
+        levels: (f64, f64),
+    ) -> Self {
+        let mut list: Vec<(u32, u8)> = mesh
+            .boundary
+            .iter()
+            .zip(&mesh.boundary_labels)
+            .filter(|(_, &l)| l != BoundaryLabel::Box)
+            .flat_map(|(t, &l)| t.iter().map(move |&v| (v, l as u8)))
+            .collect();
+        list.par_sort_unstable();
+        list.dedup();
+        let level_for = |l: u8| if l == 0 { levels.0 } else { levels.1 };
+        let found: Vec<Found> = list
+            .par_iter()
+            .map(|&(v, l)| search.distance(to_index(v), level_for(l)))
+            .collect();
+        Corners { list, found }
+    }
+
+    /// What was found for vertex `v` on the level labelled `l`.
+    fn at(&self, v: u32, l: u8) -> Found {
+        let i = self.list.partition_point(|&c| c < (v, l));
+        self.found[i]
+    }
+}
+
+/// One labelled triangle `t`: its sampled points searched, its corners looked up in
+/// `corners`; a box triangle only checked to lie on the grid box.
+fn triangle(
+    t: &[u32; 3],
+    label: BoundaryLabel,
+    search: &Search,
+    to_index: &impl Fn(u32) -> P,
+    corners: &Corners,
+    levels: (f64, f64),
+) -> Tri {
+    let u = t.map(to_index);
+    let mut acc = Tri::default();
+    let Some(level) = level_of(label, levels) else {
+        acc.off_box = !on_box(&u, search.hi, search.eps * 100.0);
+        return acc;
+    };
+    let inner = samples(&u, search.bound);
+    acc.points = inner.len();
+    for &p in &inner {
+        match search.distance(p, level) {
+            Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
+            Found::Beyond(d) => {
+                acc.beyond += 1;
+                acc.max_beyond = acc.max_beyond.max(d);
+            }
+            Found::Outside => acc.outside += 1,
+        }
+    }
+    for &v in t {
+        match corners.at(v, label as u8) {
+            Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
+            Found::Beyond(d) => {
+                acc.corner_beyond = true;
+                acc.max_beyond = acc.max_beyond.max(d);
+            }
+            Found::Outside => acc.corner_outside = true,
+        }
+    }
+    acc
+}
+
+/// Sums the corners and the triangles into the summary and reports the triangles off their
+/// level, outside the grid or off the box, in triangle order.
+fn summarize(
+    bound: f64,
+    corners: &Corners,
+    per_tri: &[Tri],
+    problems: &mut Problems,
+) -> LevelSummary {
     let mut s = LevelSummary {
         bound,
-        points: corners.len(),
+        points: corners.list.len(),
         ..LevelSummary::default()
     };
-    for f in &corner_found {
+    for f in &corners.found {
         match f {
             Found::Beyond(_) => s.beyond += 1,
             Found::Outside => s.outside += 1,

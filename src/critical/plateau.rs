@@ -123,22 +123,34 @@ pub fn plateaus_in(grid: &ScalarGrid, windows: &[(f64, f64)]) -> Plateaus {
 
 /// [`plateaus_in`] with chunks of `1 << chunk_bits` grid vertices.
 fn plateaus_chunked(grid: &ScalarGrid, windows: &[(f64, f64)], chunk_bits: u32) -> Plateaus {
-    let n = grid.num_vertices();
+    let offsets = plateau_offsets(grid, windows, chunk_bits);
+    let mut p = Plateaus::unnumbered(offsets, grid.num_vertices(), chunk_bits);
+    p.number(grid);
+    p
+}
+
+/// The edge-neighbours of grid vertex `idx`.
+fn neighbours(grid: &ScalarGrid, idx: usize) -> impl Iterator<Item = usize> + '_ {
     let nx = grid.dims[0];
     let stride = [1, nx, nx * grid.dims[1]];
-    let nbrs = |idx: usize| {
-        let p = grid.vertex_ijk(idx);
-        (0..6).filter_map(move |d| {
-            let (a, side) = (d / 2, d % 2);
-            if side == 0 {
-                (p[a] > 0).then(|| idx - stride[a])
-            } else {
-                (p[a] + 1 < grid.dims[a]).then(|| idx + stride[a])
-            }
-        })
-    };
+    let p = grid.vertex_ijk(idx);
+    (0..6).filter_map(move |d| {
+        let (a, side) = (d / 2, d % 2);
+        if side == 0 {
+            (p[a] > 0).then(|| idx - stride[a])
+        } else {
+            (p[a] + 1 < grid.dims[a]).then(|| idx + stride[a])
+        }
+    })
+}
+
+/// Per chunk of `1 << chunk_bits` grid vertices, the in-chunk offsets (ascending) of the
+/// vertices with a value in a window and an edge-neighbour of that value.
+fn plateau_offsets(grid: &ScalarGrid, windows: &[(f64, f64)], chunk_bits: u32) -> Vec<Vec<u32>> {
+    let n = grid.num_vertices();
+    let nx = grid.dims[0];
     let chunk = 1usize << chunk_bits;
-    let offsets: Vec<Vec<u32>> = (0..n.div_ceil(chunk))
+    (0..n.div_ceil(chunk))
         .into_par_iter()
         .map(|c| {
             let (start, end) = (c * chunk, n.min((c + 1) * chunk));
@@ -157,7 +169,7 @@ fn plateaus_chunked(grid: &ScalarGrid, windows: &[(f64, f64)], chunk_bits: u32) 
                         let i = a + o;
                         let mut idx = [i; 7];
                         let mut count = 1;
-                        for m in nbrs(i) {
+                        for m in neighbours(grid, i) {
                             idx[count] = m;
                             count += 1;
                         }
@@ -172,64 +184,79 @@ fn plateaus_chunked(grid: &ScalarGrid, windows: &[(f64, f64)], chunk_bits: u32) 
             out.shrink_to_fit();
             out
         })
-        .collect();
-    let flat: usize = offsets.iter().map(Vec::len).sum();
-    let mut p = Plateaus {
-        regions: Vec::new(),
-        offsets,
-        labels: Labels::Sparse(Vec::new()),
-        chunk_bits,
-        flat,
-    };
-    let dense = flat >= n / DENSE_FRACTION;
-    if dense {
-        // the plateau vertices marked in the dense labels, then their list dropped
-        let mut l = vec![NO_REGION; n];
-        for (c, o) in p.offsets.iter().enumerate() {
-            for &off in o {
-                l[(c << chunk_bits) + off as usize] = UNCLAIMED;
+        .collect()
+}
+
+impl Plateaus {
+    /// The plateau vertices of a grid of `n` vertices (`offsets`, per chunk of
+    /// `1 << chunk_bits`) marked unclaimed, with no plateau numbered yet: in dense labels
+    /// (the offsets then dropped) when they are at least one vertex in [`DENSE_FRACTION`],
+    /// else in sparse ones.
+    fn unnumbered(offsets: Vec<Vec<u32>>, n: usize, chunk_bits: u32) -> Plateaus {
+        let flat: usize = offsets.iter().map(Vec::len).sum();
+        let mut p = Plateaus {
+            regions: Vec::new(),
+            offsets,
+            labels: Labels::Sparse(Vec::new()),
+            chunk_bits,
+            flat,
+        };
+        if flat >= n / DENSE_FRACTION {
+            // the plateau vertices marked in the dense labels, then their list dropped
+            let mut l = vec![NO_REGION; n];
+            for (c, o) in p.offsets.iter().enumerate() {
+                for &off in o {
+                    l[(c << chunk_bits) + off as usize] = UNCLAIMED;
+                }
+            }
+            p.offsets = Vec::new();
+            p.labels = Labels::Dense(l);
+        } else {
+            p.labels = Labels::Sparse(p.offsets.iter().map(|o| vec![UNCLAIMED; o.len()]).collect());
+        }
+        p
+    }
+
+    /// Numbers the plateaus in the order of their smallest vertex, as the vertices are
+    /// visited, and lists their vertices.
+    fn number(&mut self, grid: &ScalarGrid) {
+        let mut stack = Vec::new();
+        if self.is_dense() {
+            for i in 0..grid.num_vertices() {
+                self.grow(grid, i, &mut stack);
+            }
+        } else {
+            for c in 0..self.offsets.len() {
+                for s in 0..self.offsets[c].len() {
+                    let start = (c << self.chunk_bits) + self.offsets[c][s] as usize;
+                    self.grow(grid, start, &mut stack);
+                }
             }
         }
-        p.offsets = Vec::new();
-        p.labels = Labels::Dense(l);
-    } else {
-        p.labels = Labels::Sparse(p.offsets.iter().map(|o| vec![UNCLAIMED; o.len()]).collect());
     }
-    // plateau numbers in the order of the smallest vertex, as the vertices are visited
-    let mut stack = Vec::new();
-    let mut grow = |p: &mut Plateaus, start: usize| {
-        let id = p.regions.len() as u32;
-        if !p.claim(start, id) {
+
+    /// The plateau of `start` by a flood fill (`stack`: empty scratch), numbered next, unless
+    /// `start` is on no plateau or on one already numbered.
+    fn grow(&mut self, grid: &ScalarGrid, start: usize, stack: &mut Vec<usize>) {
+        let id = self.regions.len() as u32;
+        if !self.claim(start, id) {
             return;
         }
         let v = grid.values.get(start);
         let mut region = vec![start];
         stack.push(start);
         while let Some(i) = stack.pop() {
-            for m in nbrs(i) {
+            for m in neighbours(grid, i) {
                 // an equal neighbour of a kept value is a plateau vertex
-                if grid.values.get(m) == v && p.claim(m, id) {
+                if grid.values.get(m) == v && self.claim(m, id) {
                     region.push(m);
                     stack.push(m);
                 }
             }
         }
         region.sort_unstable();
-        p.regions.push(region);
-    };
-    if dense {
-        for i in 0..n {
-            grow(&mut p, i);
-        }
-    } else {
-        for c in 0..p.offsets.len() {
-            for s in 0..p.offsets[c].len() {
-                let start = (c << chunk_bits) + p.offsets[c][s] as usize;
-                grow(&mut p, start);
-            }
-        }
+        self.regions.push(region);
     }
-    p
 }
 
 #[cfg(test)]

@@ -1,0 +1,152 @@
+//! One slab of cells: each cell planned, decomposed and clipped into the slab (the most
+//! common cell, six whole tets, emitted straight from its corners).
+
+use crate::clip::{clip_tet, ClipVertex, Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
+use crate::decompose::plan::{plan_cell, Layout, Planner};
+use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM_LOCAL};
+use crate::grid::{cell_box_planes, corner_offset, ScalarGrid};
+use crate::keys::{key_index, local_key};
+use crate::weld::Slab;
+
+use super::outside::outside_cells;
+
+/// What every cell of one run shares.
+pub(super) struct Ctx<'a> {
+    pub(super) grid: &'a ScalarGrid,
+    /// [`NEAR_TIE`](super::NEAR_TIE) × the data range: face and body points this near a
+    /// level are put on it.
+    pub(super) near_tie: f64,
+    pub(super) interval: Interval,
+    pub(super) planner: Planner<'a>,
+    /// Per grid vertex, the level it is snapped to (empty: no warping).
+    pub(super) snaps: Vec<u8>,
+}
+
+impl Ctx<'_> {
+    /// Snap state and clipping value of grid vertex `gi` with data value `val`.
+    #[inline]
+    fn corner(&self, gi: usize, val: f64) -> (u8, f64) {
+        match self.snaps.get(gi).copied().unwrap_or(SNAP_NONE) {
+            SNAP_ALPHA => (SNAP_ALPHA, self.interval.alpha),
+            SNAP_BETA => (SNAP_BETA, self.interval.beta),
+            _ => (SNAP_NONE, val),
+        }
+    }
+
+    /// Clipping value of a face or body point of the decomposition with value `val`: on the
+    /// level when within [`Ctx::near_tie`] of it. The grid's values are (`without_near_ties`),
+    /// but these points' values are computed from them: a face saddle at -3e-19 with alpha 0
+    /// put the cuts of its edges within rounding of it, and tets between them were inverted
+    /// or flat. On the level they follow the ties rule like tied grid values.
+    #[inline]
+    fn point_value(&self, val: f64) -> f64 {
+        let iv = &self.interval;
+        [iv.alpha, iv.beta]
+            .into_iter()
+            .find(|&l| l.is_finite() && (val - l).abs() <= self.near_tie)
+            .unwrap_or(val)
+    }
+}
+
+/// Meshes the cells of layer `k` into a new slab.
+pub(super) fn process_slab(ctx: &Ctx, k: usize) -> Slab {
+    let [cx, cy, _] = ctx.grid.cell_dims();
+    let mut slab = Slab::new(ctx.grid.dims[0] * ctx.grid.dims[1], k);
+    let mut tets: Vec<[u8; 4]> = Vec::with_capacity(64);
+    let words = ctx.grid.dims[0].div_ceil(64);
+    let outside = outside_cells(ctx.grid, &ctx.interval, k);
+    let skipped: usize = outside.iter().map(|w| w.count_ones() as usize).sum();
+    slab.reserve(cx * cy - skipped);
+    for j in 0..cy {
+        for i in 0..cx {
+            if (outside[j * words + i / 64] >> (i % 64)) & 1 == 1 {
+                continue;
+            }
+            process_cell(ctx, [i, j, k], &mut tets, &mut slab);
+        }
+    }
+    slab.seal();
+    slab
+}
+
+/// One cell: plan → decompose → clip (→ weld, in the slab's sink).
+#[inline]
+fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Slab) {
+    let v = ctx.grid.cell_values(c[0], c[1], c[2]);
+    let plan = plan_cell(&ctx.planner, c, &v);
+    if plan.layout == Layout::Outside {
+        return;
+    }
+    let box_planes = cell_box_planes(c, ctx.grid.cell_dims());
+    if plan.whole_six() && box_planes == 0 {
+        // By far the most common cell: six whole tets over the eight corners.
+        emit_six_inside(ctx, c, &v, slab);
+        slab.cases[CellCase::I as usize] += 1;
+        return;
+    }
+    tets.clear();
+    let (case, pts) = decompose_cell(&plan, &v, tets);
+    slab.cases[case as usize] += 1;
+    clip_cell(ctx, c, box_planes, &pts, tets, slab);
+}
+
+/// Clips the tets (over local ids with points `pts`) of cell `c` into `slab`.
+#[inline]
+fn clip_cell(
+    ctx: &Ctx,
+    c: [usize; 3],
+    box_planes: u8,
+    pts: &CellPoints,
+    tets: &[[u8; 4]],
+    slab: &mut Slab,
+) {
+    let grid = ctx.grid;
+    let base = grid.index(c[0], c[1], c[2]);
+    let stride = [1, grid.dims[0], grid.dims[0] * grid.dims[1]];
+    let base_f = c.map(|x| x as f64);
+    let mut cv: [Option<ClipVertex>; NUM_LOCAL] = [None; NUM_LOCAL];
+    for t in tets {
+        let tv = t.map(|id| {
+            let id = id as usize;
+            *cv[id].get_or_insert_with(|| {
+                let p = pts.pos[id];
+                let key = local_key(base, stride, id);
+                let (snap, val) = match id {
+                    0..=7 => ctx.corner(key_index(key), pts.val[id]),
+                    _ => (SNAP_NONE, ctx.point_value(pts.val[id])),
+                };
+                ClipVertex {
+                    key,
+                    pos: [base_f[0] + p[0], base_f[1] + p[1], base_f[2] + p[2]],
+                    val,
+                    box_mask: LOCAL_BOX[id],
+                    snap,
+                }
+            })
+        });
+        clip_tet(&tv, &ctx.interval, box_planes, slab);
+    }
+}
+
+/// Emits the 6-fold split of a cell whose corners are all inside, straight from the corner
+/// ids (what clipping would produce, without clipping).
+#[inline]
+fn emit_six_inside(ctx: &Ctx, c: [usize; 3], v: &[f64; 8], slab: &mut Slab) {
+    let grid = ctx.grid;
+    let base = grid.index(c[0], c[1], c[2]);
+    let (sy, sz) = (grid.dims[0], grid.dims[0] * grid.dims[1]);
+    let mut ids = [0u32; 8];
+    for (corner, id) in ids.iter_mut().enumerate() {
+        let o = corner_offset(corner);
+        let pos = [
+            (c[0] + o[0]) as f64,
+            (c[1] + o[1]) as f64,
+            (c[2] + o[2]) as f64,
+        ];
+        let gi = base + o[0] + o[1] * sy + o[2] * sz;
+        *id = slab.corner_id(gi, pos, ctx.corner(gi, v[corner]).1);
+    }
+    for t in six::SIX {
+        slab.tets.push(t.map(|l| ids[l as usize]));
+    }
+}
