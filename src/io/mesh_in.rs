@@ -73,7 +73,7 @@ pub enum MeshReadError {
     },
     /// A `.vtu` file the VTK XML reader refused (malformed, truncated or unsupported).
     #[error(transparent)]
-    Vtk(#[from] super::volume::ReadError),
+    Vtk(#[from] super::read_common::ReadError),
 }
 
 /// The mesh file extensions [`read_mesh`] reads, for messages.

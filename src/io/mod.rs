@@ -3,6 +3,7 @@
 //! [`crate::mesh::TetMesh`] (and [`crate::mesh::TriSurface`]).
 
 pub mod atomic;
+mod formats;
 mod header;
 pub mod inp;
 mod inputs;
@@ -15,6 +16,7 @@ pub mod nrrd;
 pub mod obj;
 pub mod plot3d;
 pub mod ply;
+mod read_common;
 mod source;
 mod spill;
 pub use spill::SpilledMesh;
@@ -35,8 +37,9 @@ pub use mesh_out::{
     spill_for, write_mesh, write_mesh_pending, write_spilled_pending, write_surface,
     write_surface_pending, MeshFormat, SurfaceFormat, WriteOptions,
 };
+pub use read_common::ReadError;
 pub use transfer_out::{write_transfer, TransferFormat, TransferTable};
-pub use volume::{is_curvilinear, read_curvilinear, read_volume, ReadError};
+pub use volume::{is_curvilinear, is_plot3d, read_curvilinear, read_volume};
 
 // Mesh readers (the twins of the writers above, and TetGen's and Medit's formats), used by
 // `solver-demo` and `inspect`.

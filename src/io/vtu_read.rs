@@ -11,7 +11,7 @@
 use std::path::Path;
 
 use super::mesh_in::{check_mesh, MeshFile, MeshReadError};
-use super::volume::{read_all, ReadError};
+use super::read_common::{read_all, ReadError};
 use super::vtk_xml::{parse, ArrayDesc, Parsed, Section};
 
 /// `VTK_TETRA`.
