@@ -10,7 +10,7 @@
 
 use std::path::Path;
 
-use super::mesh_in::{check_mesh, MeshFile, MeshReadError};
+use super::mesh_read_common::{check_mesh, MeshFile, MeshReadError};
 use super::read_common::{read_all, ReadError};
 use super::vtk_xml::{parse, ArrayDesc, Parsed, Section};
 
