@@ -1,6 +1,11 @@
 //! Readers and writers, one file per format. `io` never imports the algorithms and the
 //! algorithms never import `io`: both only share [`crate::grid::ScalarGrid`] and
 //! [`crate::mesh::TetMesh`] (and [`crate::mesh::TriSurface`]).
+//!
+//! Each side has a dispatcher that picks the format by extension over a module of what its
+//! formats share: `volume.rs` over `read_common.rs` (volume readers; the extensions in
+//! `formats.rs`), `mesh_in.rs` over `mesh_read_common.rs` (mesh readers), `mesh_out.rs` over
+//! `write_common.rs` (writers). No reader or writer imports its dispatcher.
 
 pub mod atomic;
 mod formats;
