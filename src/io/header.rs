@@ -10,7 +10,7 @@ use std::fs::File;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 
-use super::volume::{quote, ReadError, Skip};
+use super::read_common::{quote, ReadError, Skip};
 
 /// The lines of `bytes`, split at `\n` with a trailing `\r` removed, each with the offset of
 /// its first byte and the offset just past its line break. A final line break does not start

@@ -13,7 +13,7 @@
 
 use rustc_hash::FxHashMap;
 
-use super::mesh_in::{
+use super::mesh_read_common::{
     check_mesh, field, label_of, normalize_groups, Lines, MeshFile, NodeGroup, ParseError,
 };
 use crate::mesh::BoundaryLabel;

@@ -5,7 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use super::atomic::same_file;
-use super::volume::ReadError;
+use super::formats::VolumeFormat;
+use super::read_common::ReadError;
 
 /// The files the readers read for the input `path`: `path` itself first, then the files its
 /// header names — the detached data file of an NRRD header (`data file:`) or a MetaImage
@@ -20,19 +21,14 @@ use super::volume::ReadError;
 /// The readers' [`ReadError`]s about the header: it cannot be read or is malformed, or a
 /// Plot3D grid has no function file.
 pub fn input_files(path: &Path, function: Option<&Path>) -> Result<Vec<PathBuf>, ReadError> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
-        super::nrrd::nrrd_files(path)
-    } else if name.ends_with(".mhd") || name.ends_with(".mha") {
-        super::mhd::mhd_files(path)
-    } else if name.ends_with(".xyz") {
-        let f = super::plot3d::function_file(path, function)?;
-        Ok(vec![path.to_path_buf(), f])
-    } else {
-        Ok(vec![path.to_path_buf()])
+    match VolumeFormat::of(path) {
+        Some(VolumeFormat::Nrrd) => super::nrrd::nrrd_files(path),
+        Some(VolumeFormat::MetaImage) => super::mhd::mhd_files(path),
+        Some(VolumeFormat::Plot3d) => {
+            let f = super::plot3d::function_file(path, function)?;
+            Ok(vec![path.to_path_buf(), f])
+        }
+        _ => Ok(vec![path.to_path_buf()]),
     }
 }
 

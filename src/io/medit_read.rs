@@ -13,7 +13,9 @@
 
 use rustc_hash::FxHashMap;
 
-use super::mesh_in::{check_mesh, normalize_groups, perr, MeshFile, NodeGroup, ParseError};
+use super::mesh_read_common::{
+    check_mesh, normalize_groups, perr, MeshFile, NodeGroup, ParseError,
+};
 
 /// Entry sizes (numbers per entry) of the tables that are skipped, by lower-case keyword.
 const SKIPPED: [(&str, usize); 21] = [

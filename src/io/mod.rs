@@ -1,8 +1,14 @@
 //! Readers and writers, one file per format. `io` never imports the algorithms and the
 //! algorithms never import `io`: both only share [`crate::grid::ScalarGrid`] and
 //! [`crate::mesh::TetMesh`] (and [`crate::mesh::TriSurface`]).
+//!
+//! Each side has a dispatcher that picks the format by extension over a module of what its
+//! formats share: `volume.rs` over `read_common.rs` (volume readers; the extensions in
+//! `formats.rs`), `mesh_in.rs` over `mesh_read_common.rs` (mesh readers), `mesh_out.rs` over
+//! `write_common.rs` (writers). No reader or writer imports its dispatcher.
 
 pub mod atomic;
+mod formats;
 mod header;
 pub mod inp;
 mod inputs;
@@ -15,6 +21,7 @@ pub mod nrrd;
 pub mod obj;
 pub mod plot3d;
 pub mod ply;
+mod read_common;
 mod source;
 mod spill;
 pub use spill::SpilledMesh;
@@ -35,17 +42,20 @@ pub use mesh_out::{
     spill_for, write_mesh, write_mesh_pending, write_spilled_pending, write_surface,
     write_surface_pending, MeshFormat, SurfaceFormat, WriteOptions,
 };
+pub use read_common::ReadError;
 pub use transfer_out::{write_transfer, TransferFormat, TransferTable};
-pub use volume::{is_curvilinear, read_curvilinear, read_volume, ReadError};
+pub use volume::{is_curvilinear, is_plot3d, read_curvilinear, read_volume};
 
 // Mesh readers (the twins of the writers above, and TetGen's and Medit's formats), used by
 // `solver-demo` and `inspect`.
 mod inp_read;
 mod medit_read;
 mod mesh_in;
+mod mesh_read_common;
 mod msh_read;
 mod msh_read_binary;
 mod tetgen_read;
 mod vtk_read;
 mod vtu_read;
-pub use mesh_in::{mesh_files, read_mesh, MeshFile, MeshReadError, NodeGroup, MESH_EXTENSIONS};
+pub use mesh_in::{mesh_files, read_mesh};
+pub use mesh_read_common::{MeshFile, MeshReadError, NodeGroup, MESH_EXTENSIONS};

@@ -14,7 +14,7 @@
 
 use rustc_hash::FxHashMap;
 
-use super::mesh_in::{
+use super::mesh_read_common::{
     check_mesh, field, label_of, normalize_groups, perr, Lines, MeshFile, NodeGroup, ParseError,
 };
 

@@ -7,7 +7,7 @@
 //! text. Elements: tetrahedra and triangles; points and lines are skipped; any other type is
 //! an error (its size is not known here). Errors name the byte offset.
 
-use super::mesh_in::{perr, Lines, MeshFile, ParseError};
+use super::mesh_read_common::{perr, Lines, MeshFile, ParseError};
 use super::msh_read::{finish, physical_names, State, LINE, POINT, TETRAHEDRON, TRIANGLE};
 
 /// Whether `bytes` start a binary `.msh` file (`$MeshFormat` then a version with file type 1).

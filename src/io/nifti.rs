@@ -18,7 +18,7 @@ use std::path::Path;
 
 use flate2::read::MultiGzDecoder;
 
-use super::volume::{
+use super::read_common::{
     build_grid, data_size, decompress_into, split_linear, to_dim, Endian, Geometry, ReadError,
     SampleBuf, SampleType,
 };

@@ -9,7 +9,7 @@ use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
-use super::volume::{
+use super::read_common::{
     build_grid, data_size, quote, read_all, Endian, ReadError, SampleBuf, SampleType,
 };
 use crate::grid::{Samples, ScalarGrid, IDENTITY};

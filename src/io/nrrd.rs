@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use flate2::read::MultiGzDecoder;
 
 use super::header::{self, Fields};
-use super::volume::{
+use super::read_common::{
     build_grid, checked_decode, data_size, decompress_into, open_raw_range, quote, read_all,
     read_data_file, read_raw_into, split_linear, take_exact, Endian, Geometry, ReadError,
     SampleBuf, SampleType, Skip,

@@ -13,7 +13,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::volume::{decode_samples, read_all, Endian, ReadError, SampleType};
+use super::read_common::{decode_samples, read_all, Endian, ReadError, SampleType};
 use crate::grid::CurvilinearGrid;
 
 /// The names of the variables of a `.q` file.

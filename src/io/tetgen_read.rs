@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use rustc_hash::FxHashMap;
 
-use super::mesh_in::{
+use super::mesh_read_common::{
     check_mesh, normalize_groups, parse_file, perr, MeshFile, MeshReadError, NodeGroup, ParseError,
 };
 

@@ -8,8 +8,8 @@
 //! Cells as in [`super::vtu_read`]: tetrahedra (10), quadratic tetrahedra (24) by their
 //! corners, cells of lower dimension (1–9) skipped, others an error.
 
-use super::mesh_in::{check_mesh, perr, MeshFile, ParseError};
-use super::volume::{decode_samples, Endian, SampleType};
+use super::mesh_read_common::{check_mesh, perr, MeshFile, ParseError};
+use super::read_common::{decode_samples, Endian, SampleType};
 
 /// A cursor over the file: words for ASCII data, raw big-endian bytes for BINARY.
 struct Cur<'a> {

@@ -10,7 +10,7 @@ use std::path::Path;
 use base64::Engine as _;
 use quick_xml::events::{BytesStart, Event};
 
-use super::volume::{decode_samples, decompress_exact, Endian, ReadError, SampleType};
+use super::read_common::{decode_samples, decompress_exact, Endian, ReadError, SampleType};
 
 /// How the file's binary arrays are stored.
 #[derive(Clone, Copy)]

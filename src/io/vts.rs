@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use super::volume::{read_all, ReadError};
+use super::read_common::{read_all, ReadError};
 use super::vtk_xml::{parse, ArrayDesc, Section, Source};
 use crate::grid::CurvilinearGrid;
 

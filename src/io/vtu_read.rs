@@ -10,8 +10,8 @@
 
 use std::path::Path;
 
-use super::mesh_in::{check_mesh, MeshFile, MeshReadError};
-use super::volume::{read_all, ReadError};
+use super::mesh_read_common::{check_mesh, MeshFile, MeshReadError};
+use super::read_common::{read_all, ReadError};
 use super::vtk_xml::{parse, ArrayDesc, Parsed, Section};
 
 /// `VTK_TETRA`.

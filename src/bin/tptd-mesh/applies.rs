@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use clap::parser::ValueSource;
 use clap::ArgMatches;
-use tptd::io::{is_curvilinear, MeshFormat, SurfaceFormat, TransferFormat};
+use tptd::io::{is_curvilinear, is_plot3d, MeshFormat, SurfaceFormat, TransferFormat};
 
 use crate::cli::Cli;
 
@@ -190,7 +190,7 @@ fn check_input(cli: &Cli, m: &ArgMatches) -> Result<(), String> {
     let input = cli.input.as_deref();
     let name = input.map_or("the demo volume".to_string(), |p| p.display().to_string());
     let curvilinear = input.is_some_and(is_curvilinear);
-    let plot3d = input.is_some_and(|p| p.to_string_lossy().to_ascii_lowercase().ends_with(".xyz"));
+    let plot3d = input.is_some_and(is_plot3d);
     if given(m, "field") && !curvilinear {
         return Err(format!(
             "--field applies only to a curvilinear grid input (.vts, .xyz), not {name}"
