@@ -442,7 +442,7 @@ impl LocalMesh {
     }
 
     /// As [`LocalMesh::set_position`], with the star's new qualities (in star order) known
-    /// from [`StarCorners::qualities_above`].
+    /// from [`StarCorners::qualities_above`](super::StarCorners::qualities_above).
     pub fn set_position_with(&mut self, v: u32, u: [f64; 3], ctx: &Ctx, q: &[f64]) {
         self.place(v, u, ctx);
         for (i, &qt) in q.iter().enumerate() {

@@ -55,7 +55,7 @@ struct Spliced {
     /// Its alive tets and their qualities.
     tets: Vec<[u32; 4]>,
     quality: Vec<f64>,
-    /// Its boundary faces (sorted by [`face_key`]) and their labels.
+    /// Its boundary faces (sorted by [`face_key`](super::face_key)) and their labels.
     faces: Vec<[u32; 3]>,
     labels: Vec<BoundaryLabel>,
     /// Its free points that stay (moved or not) and the points it added: id, position, value.
