@@ -10,7 +10,7 @@
 use smallvec::SmallVec;
 
 use super::embed;
-use super::local::{face_key, BoundaryFace, LocalMesh};
+use super::region::{face_key, BoundaryFace, LocalMesh};
 use super::Ctx;
 
 /// The boundary faces at a vertex ([`boundary_faces_at`]; inline up to 16).
@@ -695,10 +695,10 @@ mod tests {
             boundary_labels: vec![crate::mesh::BoundaryLabel::Alpha; 4],
         };
         let opts = crate::improve::QualityOptions::default();
-        let ctx = crate::improve::context(&grid, 20.0, 40.0, &opts, std::time::Instant::now());
-        let quality = crate::improve::tet_qualities(&mesh, &ctx);
+        let ctx = crate::improve::ctx::context(&grid, 20.0, 40.0, &opts, std::time::Instant::now());
+        let quality = crate::improve::quality_cache::tet_qualities(&mesh, &ctx);
         let (regions, _) =
-            crate::improve::local::extract_regions(&mesh, (&[true; 4], None), &quality, &ctx, 0);
+            crate::improve::region::extract_regions(&mesh, (&[true; 4], None), &quality, &ctx, 0);
         let lm = regions.iter().find(|lm| !lm.tets.is_empty()).unwrap();
         for (a, b) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
             assert!(lm.is_free(a) && lm.is_free(b));

@@ -14,7 +14,7 @@
 //! pass is otherwise stuck ([`super::schedule`], the polish of small stuck regions).
 
 use super::collapse::{apply_collapse, legal_collapse};
-use super::local::LocalMesh;
+use super::region::LocalMesh;
 use super::search::search_vertex;
 use super::smooth::smooth_vertex;
 use super::Ctx;

@@ -15,7 +15,7 @@
 use smallvec::{smallvec, SmallVec};
 
 use super::flip::even_completion;
-use super::local::LocalMesh;
+use super::region::LocalMesh;
 use super::Ctx;
 
 /// Largest ring tried (Stellar's limit): the triangulations of a ring of `k` vertices have
@@ -194,7 +194,7 @@ fn best_triangulation(
 mod tests {
     use super::*;
     use crate::improve::fixtures::{wavy_torus, wavy_torus_regions};
-    use crate::improve::local::face_key;
+    use crate::improve::region::face_key;
     use std::collections::{BTreeSet, HashMap};
 
     /// The faces of the alive tets of `lm` that only one of them has (the region's outside),

@@ -11,7 +11,7 @@
 //! ([`super::verify`]) also refuses boundary triangles that cross one another.
 
 use super::collapse::{boundary_faces_at, VertexFaces};
-use super::local::{BoundaryFace, LocalMesh};
+use super::region::{BoundaryFace, LocalMesh};
 use super::Ctx;
 use crate::check::triangles_cross;
 use crate::field::GUARD_DISTANCE;
@@ -192,7 +192,8 @@ mod tests {
     use std::time::Instant;
 
     use crate::grid::ScalarGrid;
-    use crate::improve::{context, QualityOptions};
+    use crate::improve::ctx::context;
+    use crate::improve::QualityOptions;
 
     fn ctx_of(grid: &ScalarGrid) -> Ctx<'_> {
         context(grid, 2.0, 3.0, &QualityOptions::default(), Instant::now())

@@ -2,8 +2,10 @@
 
 use std::time::Instant;
 
-use super::local::{extract_regions, LocalMesh};
-use super::{context, tet_qualities, Ctx, QualityOptions, DEFAULT_WARP};
+use super::ctx::context;
+use super::quality_cache::tet_qualities;
+use super::region::{extract_regions, LocalMesh};
+use super::{Ctx, QualityOptions, DEFAULT_WARP};
 use crate::mesh::TetMesh;
 use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
 

@@ -4,7 +4,7 @@
 //! the boundary and the labels are unchanged; a flip is applied only when every new tet is
 //! positive and the worst new tet is better than the worst old one.
 
-use super::local::{face_key, tet_edge, EdgeTets, LocalMesh};
+use super::region::{face_key, tet_edge, EdgeTets, LocalMesh};
 use super::Ctx;
 
 /// Tries the 2-3 flip of the face of tet `t` opposite its corner `i`; `around` holds the tets

@@ -7,9 +7,8 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{
-    improve_keeping_volume, runs_again_for_volume, ImproveReport, QualityOptions, StageSeconds,
-};
+use super::pass::{improve_keeping_volume, runs_again_for_volume};
+use super::{ImproveReport, QualityOptions, StageSeconds};
 use crate::extract::MeshOutput;
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use super::collapse::{apply_collapse, legal_collapse, topological_merge};
 use super::constraint::Constraint;
 use super::embed;
-use super::local::{LocalMesh, StarCorners};
+use super::region::{LocalMesh, StarCorners};
 use super::smooth::{climb, move_vertex};
 use super::Ctx;
 use crate::geom::{dot, signed_volume, sub};

@@ -16,7 +16,7 @@
 
 use rayon::prelude::*;
 
-use super::local::{LocalMesh, StarCorners, StarVec};
+use super::region::{LocalMesh, StarCorners, StarVec};
 use super::smooth::local_scale;
 use super::Ctx;
 use crate::geom::dot;

@@ -5,8 +5,8 @@ use super::collapse::{apply_collapse, apply_evaluated, best_collapse, evaluate_m
 use super::composite::{collapse_then_move, worst};
 use super::edge_removal::try_remove_edge;
 use super::flip::{try_flip23, try_flip32};
-use super::local::{LocalMesh, TetOp};
 use super::project::{absorb_and_project, merge_and_untangle, project_levels, untangle_around};
+use super::region::{LocalMesh, TetOp};
 use super::search::search_vertex;
 use super::smooth::smooth_vertex;
 use super::{Ctx, ImproveReport};

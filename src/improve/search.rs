@@ -10,7 +10,7 @@
 //! stage, on the corners of the tets a region leaves below the target ([`super::schedule`]).
 
 use super::constraint::Constraint;
-use super::local::{LocalMesh, StarCorners, StarVec};
+use super::region::{LocalMesh, StarCorners, StarVec};
 use super::smooth::{local_scale, move_by, place, rise_over, stepped, worst_of};
 use super::Ctx;
 

@@ -8,7 +8,7 @@
 
 use super::constraint::Constraint;
 use super::embed;
-use super::local::{LocalMesh, StarCorners, StarVec};
+use super::region::{LocalMesh, StarCorners, StarVec};
 use super::Ctx;
 use crate::geom::{dot, norm, sub};
 

@@ -10,7 +10,7 @@
 //! below the target), so the topology holds and no element gets worse than what was there.
 
 use super::constraint::Constraint;
-use super::local::{face_key, BoundaryFace, EdgeTets, LocalMesh};
+use super::region::{face_key, BoundaryFace, EdgeTets, LocalMesh};
 use super::Ctx;
 use crate::geom::{norm, signed_volume, sub};
 use crate::mesh::{BoundaryLabel, TetMesh};
@@ -68,7 +68,7 @@ pub fn sagging_points(mesh: &TetMesh, ctx: &Ctx, min_sag: f64) -> Vec<bool> {
         .into_iter()
         .filter(|&(e, s)| one_way(&bend, e, s, min_sag))
         .collect();
-    let axis = super::local::longest_axis(&ctx.field);
+    let axis = super::region::longest_axis(&ctx.field);
     let slab: Vec<usize> = sagging
         .iter()
         .map(|&(e, _)| {
@@ -379,8 +379,8 @@ fn faces_on_edge(lm: &LocalMesh, around: &[u32], a: u32, b: u32) -> Vec<Boundary
 mod tests {
     use super::*;
     use crate::improve::fixtures::{wavy_torus, wavy_torus_regions};
-    use crate::improve::local::NEW_POINT;
     use crate::improve::project::project_levels;
+    use crate::improve::region::NEW_POINT;
 
     #[test]
     fn splits_keep_the_region_conforming_positive_and_on_its_levels() {

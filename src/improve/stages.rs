@@ -24,7 +24,9 @@
 
 use serde::Serialize;
 
-use super::{run_rounds, Ctx, ImproveReport, PassState, QualityOptions, Rounds};
+use super::pass::PassState;
+use super::rounds::{run_rounds, Rounds};
+use super::{Ctx, ImproveReport, QualityOptions};
 use crate::mesh::TetMesh;
 
 /// One stage of a pass towards targets above the default ([`super::improve`]).

@@ -16,7 +16,7 @@
 
 use rayon::prelude::*;
 
-use super::local::{retain_flagged, Regions};
+use super::region::{retain_flagged, Regions};
 use crate::mesh::TetMesh;
 
 /// Rings of tets around the vertices that need work that the copy takes in. More rings copy
@@ -79,11 +79,11 @@ impl SubMesh {
     ) -> SubMesh {
         let mut near = work.to_vec();
         for _ in 1..rings {
-            super::grow(mesh, &mut near);
+            super::mark::grow(mesh, &mut near);
         }
         let tets = touching(mesh, &near);
         let mut in_copy = vec![false; mesh.points.len()];
-        super::mark_corners(mesh, &mut in_copy, |t| touches(mesh, t as u32, &near));
+        super::mark::mark_corners(mesh, &mut in_copy, |t| touches(mesh, t as u32, &near));
         let mut local = vec![NONE; mesh.points.len()];
         let mut points = Vec::new();
         for (v, id) in local.iter_mut().enumerate() {
@@ -237,7 +237,7 @@ fn touches(mesh: &TetMesh, t: u32, near: &[bool]) -> bool {
 /// tet outside the copy uses it.
 fn rim_of(mesh: &TetMesh, near: &[bool], local: &[u32], points: &[u32]) -> Vec<bool> {
     let mut used_outside = vec![false; mesh.points.len()];
-    super::mark_corners(mesh, &mut used_outside, |t| {
+    super::mark::mark_corners(mesh, &mut used_outside, |t| {
         let t = t as u32;
         !touches(mesh, t, near) && touches_copy(mesh, t, local)
     });
@@ -258,7 +258,9 @@ fn touches_copy(mesh: &TetMesh, t: u32, local: &[u32]) -> bool {
 mod tests {
     use super::*;
     use crate::improve::fixtures::{wavy_torus, wavy_torus_mesh, wavy_torus_mesh_at};
-    use crate::improve::{improve_in, tet_qualities, QualityOptions};
+    use crate::improve::pass::improve_in;
+    use crate::improve::quality_cache::tet_qualities;
+    use crate::improve::QualityOptions;
 
     #[test]
     fn a_copy_written_back_unchanged_leaves_the_mesh_as_it_was() {

@@ -18,7 +18,7 @@
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use super::local::{face_key, LocalMesh, Regions, NEW_POINT};
+use super::region::{face_key, LocalMesh, Regions, NEW_POINT};
 use super::Ctx;
 use crate::check::triangles_cross;
 

@@ -1,20 +1,16 @@
-//! The part of a mesh the quality pass works on: the stars of the vertices that need work,
-//! copied out with their own numbering, tet stars and boundary faces, and spliced back.
-//!
-//! A vertex of the region is *frozen* when some tet outside the region uses it: its star is
-//! incomplete, so it neither moves nor is merged; every vertex that needs work has its whole
-//! star in the region and is free.
+//! A region as the operations see it ([`LocalMesh`]): its vertices, tets, stars and
+//! boundary faces in local numbering, with the qualities, memos and drift kept up to date.
 
 use std::cell::Cell;
 
-use rayon::prelude::*;
 use rustc_hash::FxHashMap;
-use smallvec::SmallVec;
 
-use super::constraint::Constraint;
-use super::face_grid::FaceGrid;
-use super::Ctx;
+use super::partition::Source;
+use super::{face_key, tet_edge, EdgeTets, NEW_POINT, NONE};
 use crate::field::Field;
+use crate::improve::constraint::Constraint;
+use crate::improve::face_grid::FaceGrid;
+use crate::improve::Ctx;
 use crate::mesh::{BoundaryLabel, TetMesh};
 use crate::quality::biased_min_sine;
 
@@ -74,7 +70,7 @@ pub struct LocalMesh {
     pub volume: f64,
     /// Per vertex: the signed volume that the collapses into it and its moves have added
     /// (physical units; projections onto the level sets are corrections and do not count).
-    /// The pass gives it back at the end where it can ([`super::restore`]).
+    /// The pass gives it back at the end where it can ([`crate::improve::restore`]).
     pub drift: Vec<f64>,
     /// Per vertex: found within the tolerance of its level set since it last moved (so the
     /// projections need not evaluate the field there again).
@@ -111,224 +107,11 @@ pub enum TetOp {
     Flip = 1,
 }
 
-/// Sorted copy of a triangle, the key of [`LocalMesh::faces`].
-#[inline]
-pub fn face_key([a, b, c]: [u32; 3]) -> [u32; 3] {
-    // Three compare-exchanges (a sorting network): cheaper than a general sort of three.
-    let (a, b) = (a.min(b), a.max(b));
-    let (b, c) = (b.min(c), b.max(c));
-    [a.min(b), a.max(b), c]
-}
-
-/// No region.
-const NONE: u32 = u32::MAX;
-
-/// The index of the edge between corners `i < j` of a tet in the order
-/// `(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)` (edges from corner `i` follow the
-/// `i (7 - i) / 2` edges from the corners before it).
-#[inline]
-pub fn tet_edge(i: usize, j: usize) -> usize {
-    i * (7 - i) / 2 + j - i - 1
-}
-
-/// The global id of a vertex added in a region, until it is spliced back.
-pub const NEW_POINT: u32 = u32::MAX;
-
-/// Thickness (in voxels, along the grid's longest axis) of the slabs that split the work into
-/// independent regions. Regions of slabs of the same parity are at least a slab apart, so they
-/// share no tet and no vertex and are improved in parallel.
-pub const SLAB: f64 = 6.0;
-
-/// How the mesh is split into regions, in global terms (what the splice needs).
-pub struct Regions {
-    /// Region of each tet of the mesh (`NONE` outside every region).
-    of_tet: Vec<u32>,
-    /// Per point: the region whose free vertex it is (`NONE` if frozen or outside).
-    free_in: Vec<u32>,
-}
-
-impl Regions {
-    /// Whether the splice keeps mesh tet `t` where it is (it is in no region).
-    pub fn keeps_tet(&self, t: usize) -> bool {
-        self.of_tet[t] == NONE
-    }
-
-    /// Whether the splice keeps boundary face `tri` where it is (no corner is free).
-    pub fn keeps_face(&self, tri: [u32; 3]) -> bool {
-        tri.iter().all(|&v| self.free_in[v as usize] == NONE)
-    }
-}
-
-/// The grid's longest axis (the first of equals), along which the work is cut into slabs.
-pub fn longest_axis(field: &Field) -> usize {
-    let dims = field.grid().dims;
-    (0..3).max_by_key(|&a| (dims[a], 3 - a)).unwrap_or(0)
-}
-
-/// The slab of each work vertex along the grid's longest axis (`NONE` for the others).
-fn slabs(mesh: &TetMesh, work: &[bool], field: &Field, offset: f64) -> Vec<u32> {
-    let axis = longest_axis(field);
-    (0..mesh.points.len())
-        .into_par_iter()
-        .map(|v| {
-            if !work[v] {
-                return NONE;
-            }
-            let u = field.to_index(mesh.points[v])[axis] + offset;
-            (u / SLAB).floor().max(0.0) as u32
-        })
-        .collect()
-}
-
-/// Splits the stars of the work vertices in slabs of parity `phase` into regions, one per
-/// slab (empty for a slab without work); `quality` is each tet's [`Ctx::quality`], and
-/// `off_level` (if known) whether each point is a level vertex off its level
-/// ([`super::project::off_level_points`]), so that the regions need not evaluate the field at
-/// the others again. Returns the regions (region `r` at index `r`) and the global
-/// bookkeeping.
-pub fn extract_regions(
-    mesh: &TetMesh,
-    (work, off_level): (&[bool], Option<&[bool]>),
-    quality: &[f64],
-    ctx: &Ctx,
-    phase: u32,
-) -> (Vec<LocalMesh>, Regions) {
-    extract(mesh, (work, off_level), quality, ctx, phase, false)
-}
-
-/// [`extract_regions`]; with `sort`, each region sorts its own points, as when regions
-/// overlap (tests compare both ways).
-fn extract(
-    mesh: &TetMesh,
-    (work, off_level): (&[bool], Option<&[bool]>),
-    quality: &[f64],
-    ctx: &Ctx,
-    phase: u32,
-    sort: bool,
-) -> (Vec<LocalMesh>, Regions) {
-    let slab = slabs(mesh, work, &ctx.field, ctx.slab_offset);
-    let of_tet: Vec<u32> = mesh
-        .tets
-        .par_iter()
-        .map(|t| {
-            t.iter()
-                .map(|&v| slab[v as usize])
-                .filter(|&s| s != NONE && s % 2 == phase)
-                .min()
-                .map_or(NONE, |s| s / 2)
-        })
-        .collect();
-    let n_regions = of_tet
-        .iter()
-        .filter(|&&r| r != NONE)
-        .max()
-        .map_or(0, |&r| r + 1);
-    let mut tets_of: Vec<Vec<u32>> = vec![Vec::new(); n_regions as usize];
-    let (mut owner, mut shared) = (
-        vec![NONE; mesh.points.len()],
-        vec![false; mesh.points.len()],
-    );
-    // Whether a point has tets in two regions (a tet as long as a slab is thick).
-    let mut overlap = false;
-    for (t, (&r, tet)) in of_tet.iter().zip(&mesh.tets).enumerate() {
-        if r != NONE {
-            tets_of[r as usize].push(t as u32);
-        }
-        for &v in tet {
-            let o = &mut owner[v as usize];
-            if r == NONE || (*o != NONE && *o != r) {
-                shared[v as usize] = true;
-                overlap |= r != NONE;
-            } else {
-                *o = r;
-            }
-        }
-    }
-    // Pinned points (the rim of a submesh) are frozen like shared ones.
-    let pinned = |v: usize| ctx.pinned.is_some_and(|p| p[v]);
-    let free_in: Vec<u32> = owner
-        .iter()
-        .zip(&shared)
-        .enumerate()
-        .map(|(v, (&o, &s))| if s || pinned(v) { NONE } else { o })
-        .collect();
-    let faces_of = faces_by_region(mesh, &free_in, n_regions as usize);
-    let (points_of, local_id) = if overlap || sort {
-        (vec![None; n_regions as usize], None)
-    } else {
-        let (p, l) = points_by_region(&owner, n_regions as usize);
-        (p.into_iter().map(Some).collect(), Some(l))
-    };
-    let copy = Source {
-        mesh,
-        quality,
-        free_in: &free_in,
-        local_id: local_id.as_deref(),
-        off_level,
-    };
-    let regions = tets_of
-        .into_par_iter()
-        .zip(faces_of)
-        .zip(points_of)
-        .map(|((tets, faces), points)| LocalMesh::from_tets(&copy, &tets, &faces, points, ctx))
-        .collect();
-    (regions, Regions { of_tet, free_in })
-}
-
-/// The points of each region in ascending order (`owner`: the region of each point, which
-/// is one at most), and each point's place in its region's list.
-fn points_by_region(owner: &[u32], n_regions: usize) -> (Vec<Vec<u32>>, Vec<u32>) {
-    let mut points_of: Vec<Vec<u32>> = vec![Vec::new(); n_regions];
-    let local_id = owner
-        .iter()
-        .enumerate()
-        .map(|(v, &r)| {
-            if r == NONE {
-                return NONE;
-            }
-            let list = &mut points_of[r as usize];
-            list.push(v as u32);
-            list.len() as u32 - 1
-        })
-        .collect();
-    (points_of, local_id)
-}
-
-/// Indices of the boundary faces of each region, in mesh order: a face with a free vertex
-/// lies in a tet of that vertex's region (all free vertices of a face are in one region).
-fn faces_by_region(mesh: &TetMesh, free_in: &[u32], n_regions: usize) -> Vec<Vec<u32>> {
-    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); n_regions];
-    for (i, tri) in mesh.boundary.iter().enumerate() {
-        if let Some(r) = tri
-            .iter()
-            .map(|&v| free_in[v as usize])
-            .find(|&r| r != NONE)
-        {
-            faces_of[r as usize].push(i as u32);
-        }
-    }
-    faces_of
-}
-
-/// What the regions of one phase are copied from.
-struct Source<'a> {
-    mesh: &'a TetMesh,
-    /// Per tet: its quality.
-    quality: &'a [f64],
-    /// Per point: the region whose free vertex it is (`NONE` if frozen or outside).
-    free_in: &'a [u32],
-    /// Per point: whether it is a level vertex off its level (`None`: not known).
-    off_level: Option<&'a [bool]>,
-    /// Per point: its local id in the one region that uses it ([`points_by_region`]); `None`
-    /// when the regions sort their own points.
-    local_id: Option<&'a [u32]>,
-}
-
 impl LocalMesh {
     /// The region made of the mesh tets `tets` and the boundary faces `faces` (indices into
     /// `mesh.boundary`: those with a free vertex of this region), whose points are `points`
     /// (ascending, with [`Source::local_id`]; `None`: found here).
-    fn from_tets(
+    pub(super) fn from_tets(
         copy: &Source,
         tets: &[u32],
         faces: &[u32],
@@ -659,7 +442,7 @@ impl LocalMesh {
     }
 
     /// As [`LocalMesh::set_position`], with the star's new qualities (in star order) known
-    /// from [`StarCorners::qualities_above`].
+    /// from [`StarCorners::qualities_above`](super::StarCorners::qualities_above).
     pub fn set_position_with(&mut self, v: u32, u: [f64; 3], ctx: &Ctx, q: &[f64]) {
         self.place(v, u, ctx);
         for (i, &qt) in q.iter().enumerate() {
@@ -680,7 +463,7 @@ impl LocalMesh {
             None => ctx.field.value(u),
         };
         if self.on_boundary(v) {
-            for f in super::collapse::boundary_faces_at(self, v) {
+            for f in crate::improve::collapse::boundary_faces_at(self, v) {
                 let p = f.tri.map(|w| self.u[w as usize]);
                 self.face_grid.put(face_key(f.tri), p);
             }
@@ -791,325 +574,10 @@ impl LocalMesh {
     }
 }
 
-/// Tets of a star that a [`StarVec`] holds inline (on the stack); a larger star's list
-/// spills to the heap. 94 % of the vertices of the improved 48³ shell (`shell_48.npy`) have
-/// at most 32 tets.
-pub const STAR_INLINE: usize = 32;
-
-/// One item per tet of a star, in star order (inline up to [`STAR_INLINE`] tets).
-pub type StarVec<T> = SmallVec<[T; STAR_INLINE]>;
-
-/// The tets around an edge ([`LocalMesh::edge_tets`]; inline up to 8).
-pub type EdgeTets = SmallVec<[u32; 8]>;
-
-/// The tets around one vertex with the positions of their other corners: what a search
-/// for a better position of that vertex evaluates again and again while only it moves.
-pub struct StarCorners {
-    /// Per tet of the star (in star order): its corners.
-    corners: StarVec<[[f64; 3]; 4]>,
-    /// Per tet: which corner is the vertex.
-    slot: StarVec<usize>,
-}
-
-impl StarCorners {
-    /// The star of `v` in `lm`.
-    pub fn of(lm: &LocalMesh, v: u32) -> Self {
-        let mut star = StarCorners {
-            corners: StarVec::new(),
-            slot: StarVec::new(),
-        };
-        for &t in &lm.star[v as usize] {
-            let tet = lm.tets[t as usize];
-            let slot = tet.iter().position(|&w| w == v).unwrap_or(0);
-            star.corners.push(lm.corners(tet));
-            star.slot.push(slot);
-        }
-        star
-    }
-
-    /// [`StarCorners::volume`] at `x0` and at `x1`, in one pass over the tets (each sum in
-    /// the same order as `volume`'s, so the same numbers).
-    pub fn volumes(&self, x0: [f64; 3], x1: [f64; 3]) -> (f64, f64) {
-        (0..self.corners.len()).fold((0.0, 0.0), |(s0, s1), i| {
-            (s0 + self.tet_volume(i, x0), s1 + self.tet_volume(i, x1))
-        })
-    }
-
-    /// Summed signed volume of the tets with the vertex at physical point `x` (affine in `x`).
-    pub fn volume(&self, x: [f64; 3]) -> f64 {
-        (0..self.corners.len()).fold(0.0, |sum, i| sum + self.tet_volume(i, x))
-    }
-
-    /// Signed volume of the `i`-th tet with the vertex at physical point `x`.
-    #[inline]
-    fn tet_volume(&self, i: usize, x: [f64; 3]) -> f64 {
-        let mut p = self.corners[i];
-        p[self.slot[i]] = x;
-        crate::geom::signed_volume(p[0], p[1], p[2], p[3])
-    }
-
-    /// Quality of the `i`-th tet with the vertex at physical point `x`.
-    #[inline]
-    pub fn quality(&self, i: usize, x: [f64; 3], ctx: &Ctx) -> f64 {
-        let mut p = self.corners[i];
-        p[self.slot[i]] = x;
-        ctx.quality(p)
-    }
-
-    /// The qualities of the tets (in star order) with the vertex at physical point `x`.
-    pub fn qualities(&self, x: [f64; 3], ctx: &Ctx) -> StarVec<f64> {
-        (0..self.corners.len())
-            .map(|i| self.quality(i, x, ctx))
-            .collect()
-    }
-
-    /// Whether every tet would have quality above `floor` with the vertex at physical point
-    /// `x`, keeping the qualities (in star order) in `out`. `hint` is a tet to test first
-    /// (the one that failed last time: in a line search it usually fails again); it is set
-    /// to the failing one.
-    pub fn qualities_above(
-        &self,
-        x: [f64; 3],
-        ctx: &Ctx,
-        floor: f64,
-        out: &mut StarVec<f64>,
-        hint: &mut usize,
-    ) -> bool {
-        out.clear();
-        let above = |i: usize| Some(self.quality(i, x, ctx)).filter(|&q| q > floor);
-        // The hint's quality, once it passed (not evaluated twice).
-        let mut at_hint = None;
-        if *hint < self.corners.len() {
-            at_hint = above(*hint);
-            if at_hint.is_none() {
-                return false;
-            }
-        }
-        for i in 0..self.corners.len() {
-            let q = if i == *hint { at_hint } else { above(i) };
-            match q {
-                Some(q) => out.push(q),
-                None => {
-                    *hint = i;
-                    return false;
-                }
-            }
-        }
-        true
-    }
-}
-
-/// Writes the regions back into `mesh`: moved points, the regions' tets (after the tets
-/// outside them, which keep their order; regions in order) and boundary faces; merged points
-/// are dropped and the points renumbered in order.
-/// `quality` (per tet) follows the tets.
-/// Returns the points merged away: no tet or face uses them any more, and the caller drops
-/// them ([`drop_points`]) once, at the end of the pass.
-pub fn splice(
-    mesh: &mut TetMesh,
-    regions: Vec<LocalMesh>,
-    bookkeeping: Regions,
-    quality: &mut Vec<f64>,
-) -> Vec<u32> {
-    // Compacted in place: the tets (and their flags) outside every region keep their order.
-    retain_outside(&mut mesh.tets, &bookkeeping.of_tet);
-    retain_outside(quality, &bookkeeping.of_tet);
-    let keep: Vec<bool> = mesh
-        .boundary
-        .iter()
-        .map(|&tri| bookkeeping.keeps_face(tri))
-        .collect();
-    retain_flagged(&mut mesh.boundary, &keep);
-    retain_flagged(&mut mesh.boundary_labels, &keep);
-    // New points get ids after the existing ones, region by region.
-    let mut next = mesh.points.len() as u32;
-    let firsts: Vec<u32> = regions
-        .iter()
-        .map(|lm| {
-            let first = next;
-            next += lm.added_points() as u32;
-            first
-        })
-        .collect();
-    let parts: Vec<Spliced> = regions
-        .into_par_iter()
-        .zip(firsts)
-        .map(|(lm, first)| lm.into_spliced(first))
-        .collect();
-    let mut removed = Vec::new();
-    for part in parts {
-        part.write(mesh, quality, &mut removed);
-    }
-    removed
-}
-
-/// A region in global ids, ready to be appended to the mesh.
-struct Spliced {
-    /// Its alive tets and their qualities.
-    tets: Vec<[u32; 4]>,
-    quality: Vec<f64>,
-    /// Its boundary faces (sorted by [`face_key`]) and their labels.
-    faces: Vec<[u32; 3]>,
-    labels: Vec<BoundaryLabel>,
-    /// Its free points that stay (moved or not) and the points it added: id, position, value.
-    points: Vec<(u32, [f64; 3], f64)>,
-    /// Its points merged away.
-    removed: Vec<u32>,
-}
-
-/// Writes back regions in which vertices only moved (no tet or face was added or removed):
-/// the positions and values of their free vertices, and `quality` of their tets, in place, so
-/// the mesh keeps its tet order.
-pub fn write_positions(
-    mesh: &mut TetMesh,
-    regions: &[LocalMesh],
-    bookkeeping: &Regions,
-    quality: &mut [f64],
-) {
-    // Region `r` is `regions[r]`, and its k-th tet is its k-th tet in mesh order.
-    let mut next = vec![0usize; regions.len()];
-    for (t, &r) in bookkeeping.of_tet.iter().enumerate() {
-        if r != NONE {
-            let i = r as usize;
-            quality[t] = regions[i].q[next[i]];
-            next[i] += 1;
-        }
-    }
-    for lm in regions {
-        for (l, &gid) in lm.global.iter().enumerate() {
-            if !lm.frozen[l] && !lm.removed[l] {
-                mesh.points[gid as usize] = lm.x[l];
-                mesh.values[gid as usize] = lm.value[l];
-            }
-        }
-    }
-}
-
-/// Keeps the items whose region in `of` is `NONE`, in order.
-fn retain_outside<T>(items: &mut Vec<T>, of: &[u32]) {
-    let mut i = 0;
-    items.retain(|_| {
-        i += 1;
-        of[i - 1] == NONE
-    });
-}
-
-/// Keeps the items whose flag in `keep` is set, in order.
-pub fn retain_flagged<T>(items: &mut Vec<T>, keep: &[bool]) {
-    let mut i = 0;
-    items.retain(|_| {
-        i += 1;
-        keep[i - 1]
-    });
-}
-
-impl LocalMesh {
-    /// How many points the region added (they come after the copied ones).
-    fn added_points(&self) -> usize {
-        self.global
-            .iter()
-            .rev()
-            .take_while(|&&g| g == NEW_POINT)
-            .count()
-    }
-
-    /// This region in global ids; its added points get ids from `first` on, in order.
-    fn into_spliced(self, first: u32) -> Spliced {
-        let added = self.global.len() - self.added_points();
-        let mut global = self.global;
-        for (gid, id) in global[added..].iter_mut().zip(first..) {
-            *gid = id;
-        }
-        let g = |v: u32| global[v as usize];
-        let mut out = Spliced {
-            tets: Vec::with_capacity(self.tets.len()),
-            quality: Vec::with_capacity(self.tets.len()),
-            faces: Vec::with_capacity(self.faces.len()),
-            labels: Vec::with_capacity(self.faces.len()),
-            points: Vec::new(),
-            removed: Vec::new(),
-        };
-        for (l, &gid) in global.iter().enumerate() {
-            // An added point takes its id even if merged away again.
-            if l >= added || (!self.removed[l] && !self.frozen[l]) {
-                out.points.push((gid, self.x[l], self.value[l]));
-            }
-            if self.removed[l] {
-                out.removed.push(gid);
-            }
-        }
-        for ((t, &a), &q) in self.tets.iter().zip(&self.alive).zip(&self.q) {
-            if a {
-                out.tets.push(t.map(g));
-                out.quality.push(q);
-            }
-        }
-        // In the order of their keys (each face's sorted corners, unique), read from the map
-        // rather than sorted again at every comparison.
-        let mut faces: Vec<(&[u32; 3], &BoundaryFace)> = self.faces.iter().collect();
-        faces.sort_unstable_by_key(|&(key, _)| *key);
-        for (_, f) in faces {
-            out.faces.push(f.tri.map(g));
-            out.labels.push(f.label);
-        }
-        out
-    }
-}
-
-impl Spliced {
-    /// Appends this region's tets, qualities and faces to the mesh, writes its points (added
-    /// ones are appended: they come in id order) and lists its merged points in `removed`.
-    fn write(self, mesh: &mut TetMesh, quality: &mut Vec<f64>, removed: &mut Vec<u32>) {
-        for (gid, x, value) in self.points {
-            if gid as usize == mesh.points.len() {
-                mesh.points.push(x);
-                mesh.values.push(value);
-            } else {
-                mesh.points[gid as usize] = x;
-                mesh.values[gid as usize] = value;
-            }
-        }
-        mesh.tets.extend_from_slice(&self.tets);
-        quality.extend_from_slice(&self.quality);
-        mesh.boundary.extend_from_slice(&self.faces);
-        mesh.boundary_labels.extend_from_slice(&self.labels);
-        removed.extend_from_slice(&self.removed);
-    }
-}
-
-/// Removes the points `removed` (sorted ascending, used by no tet) and renumbers the rest.
-pub fn drop_points(mesh: &mut TetMesh, removed: &[u32]) {
-    if removed.is_empty() {
-        return;
-    }
-    let n = mesh.points.len();
-    let mut new_id = vec![u32::MAX; n];
-    let mut next = 0u32;
-    let mut r = removed.iter().peekable();
-    for (v, id) in new_id.iter_mut().enumerate() {
-        if r.peek() == Some(&&(v as u32)) {
-            r.next();
-            continue;
-        }
-        *id = next;
-        next += 1;
-    }
-    let keep = |v: &usize| new_id[*v] != u32::MAX;
-    mesh.points = (0..n).filter(keep).map(|v| mesh.points[v]).collect();
-    mesh.values = (0..n).filter(keep).map(|v| mesh.values[v]).collect();
-    mesh.tets
-        .par_iter_mut()
-        .for_each(|t| *t = t.map(|v| new_id[v as usize]));
-    mesh.boundary
-        .par_iter_mut()
-        .for_each(|t| *t = t.map(|v| new_id[v as usize]));
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::improve::fixtures::{wavy_torus, wavy_torus_mesh};
-    use crate::improve::tet_qualities;
+    use crate::improve::fixtures::wavy_torus;
 
     #[test]
     fn the_low_list_finds_the_tets_below_the_target_as_a_scan_does() {
@@ -1173,58 +641,5 @@ mod tests {
             }
         }
         assert!(edges > 10_000, "{edges}");
-    }
-
-    #[test]
-    fn face_key_sorts_every_order_of_three() {
-        for t in [[1, 2, 3], [5, 5, 2], [7, 7, 7], [0, u32::MAX, 9]] {
-            let mut sorted = t;
-            sorted.sort_unstable();
-            for [i, j, k] in [
-                [0, 1, 2],
-                [0, 2, 1],
-                [1, 0, 2],
-                [1, 2, 0],
-                [2, 0, 1],
-                [2, 1, 0],
-            ] {
-                assert_eq!(face_key([t[i], t[j], t[k]]), sorted, "{t:?} {i}{j}{k}");
-            }
-        }
-    }
-
-    fn faces_sorted(lm: &LocalMesh) -> Vec<([u32; 3], BoundaryLabel)> {
-        let mut f: Vec<_> = lm.faces.values().map(|f| (f.tri, f.label)).collect();
-        f.sort_unstable_by_key(|x| face_key(x.0));
-        f
-    }
-
-    /// The regions found from the points' owners (one ascending scan) equal those whose
-    /// points are sorted per region (the path taken when regions overlap).
-    #[test]
-    fn owner_scan_and_sorting_give_the_same_regions() {
-        let grid = wavy_torus();
-        let (mesh, ctx) = wavy_torus_mesh(&grid);
-        let quality = tet_qualities(&mesh, &ctx);
-        let mesh_tets: std::collections::HashSet<[u32; 4]> = mesh.tets.iter().copied().collect();
-        // Every third point needs work: regions with frozen points and holes.
-        let work: Vec<bool> = (0..mesh.points.len()).map(|v| v % 3 == 0).collect();
-        for phase in 0..2 {
-            let (fast, _) = extract(&mesh, (&work, None), &quality, &ctx, phase, false);
-            let (sorted, _) = extract(&mesh, (&work, None), &quality, &ctx, phase, true);
-            assert_eq!(fast.len(), sorted.len());
-            assert!(fast.iter().map(|lm| lm.tets.len()).sum::<usize>() > 100);
-            for (a, b) in fast.iter().zip(&sorted) {
-                assert_eq!(a.global, b.global);
-                assert_eq!(a.tets, b.tets);
-                assert_eq!(a.q, b.q);
-                assert_eq!(a.frozen, b.frozen);
-                assert_eq!(faces_sorted(a), faces_sorted(b));
-                // Local ids name the mesh's tets.
-                for t in &a.tets {
-                    assert!(mesh_tets.contains(&t.map(|v| a.global[v as usize])));
-                }
-            }
-        }
     }
 }
