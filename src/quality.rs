@@ -535,8 +535,18 @@ mod tests {
 
     #[test]
     fn a_mesh_summary_is_the_sum_of_its_tets_for_any_thread_count() {
-        let grid = crate::improve::fixtures::wavy_torus();
-        let (mesh, _) = crate::improve::fixtures::wavy_torus_mesh(&grid);
+        // A wavy shell: tets of every shape the clipper makes.
+        let n = 16;
+        let values: Vec<f64> = (0..n * n * n)
+            .map(|c| {
+                let [x, y, z] = [c % n, c / n % n, c / (n * n)].map(|i| i as f64 - 7.6);
+                (x * x + y * y + z * z).sqrt() + 0.4 * (1.7 * x).sin() * (1.3 * y + z).cos()
+            })
+            .collect();
+        let grid = crate::ScalarGrid::new([n, n, n], values).unwrap();
+        let opts = crate::MeshOptions::new(3.1, 6.3, crate::Method::Ctd);
+        let mesh = crate::mesh_interval(&grid, &opts).unwrap().mesh;
+        assert!(mesh.tets.len() > 1000);
         let ranges: Vec<(f64, f64)> = mesh
             .tets
             .iter()
