@@ -1,17 +1,16 @@
 //! `--critical`: the critical points and regions of the input as a table (stdout), JSON and a
-//! contour-spectrum CSV, a transfer function (ParaView preset or CSV); and the check of `--alpha`/`--beta` against the critical values
-//! before meshing.
+//! contour-spectrum CSV, a transfer function (ParaView preset or CSV). The check of
+//! `--alpha`/`--beta` against the critical values before meshing is the pipeline's
+//! ([`tptd::pipeline`]).
 
 use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Result;
-use tptd::critical::face::face_saddles_in;
-use tptd::critical::find::critical_in_windows;
 use tptd::critical::{
-    contour_spectrum, find_critical_with_options, near_critical, transfer_function, CriticalKind,
-    CriticalOptions, CriticalPoint, TransferFunction, TransferOptions,
+    contour_spectrum, find_critical_with_options, transfer_function, CriticalOptions,
+    CriticalPoint, TransferFunction, TransferOptions,
 };
 use tptd::io::{check_writable, write_atomically, write_transfer, TransferFormat, TransferTable};
 use tptd::ScalarGrid;
@@ -19,8 +18,6 @@ use tptd::ScalarGrid;
 use crate::cli::Cli;
 use crate::error::{file_error, write_error};
 use crate::run::read_grid;
-use crate::summary::fmt_bound;
-use crate::warnings::warn;
 
 /// Runs `tptd-mesh INPUT --critical ...`.
 pub(crate) fn run(cli: Cli) -> Result<()> {
@@ -37,7 +34,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     }
     let transfer_format = cli.transfer.as_deref().map(transfer_format).transpose()?;
     crate::files::check_files(&cli, None)?;
-    let grid = read_grid(&cli, &input)?;
+    let grid = read_grid(&cli)?;
     let opts = CriticalOptions {
         min_value: cli.min_value.unwrap_or(f64::NEG_INFINITY),
         max_value: cli.max_value.unwrap_or(f64::INFINITY),
@@ -237,115 +234,4 @@ fn print_table(input: &str, points: &[CriticalPoint], secs: f64) -> std::io::Res
         )?;
     }
     Ok(())
-}
-
-/// Warns ([`warn`]) when `alpha` (`beta`) lies within `tol` of a value where `{f >= w}`
-/// (`{f <= w}`) changes topology, naming the points and the nearest safe bounds.
-pub(crate) fn warn_critical_bounds(
-    grid: &ScalarGrid,
-    input: &str,
-    alpha: f64,
-    beta: f64,
-    tol: Option<f64>,
-) {
-    let (lo, hi) = grid.value_range();
-    let tol = tol.unwrap_or(1e-5 * (hi - lo));
-    // look for safe values this far around each bound
-    let reach = tol + 0.004 * (hi - lo);
-    let windows: Vec<(f64, f64)> = [alpha, beta]
-        .into_iter()
-        .filter(|b| b.is_finite())
-        .map(|b| (b - reach, b + reach))
-        .collect();
-    if windows.is_empty() || lo == hi {
-        return;
-    }
-    let points = critical_in_windows(grid, &windows);
-    for (name, bound, lower) in [("alpha", alpha, true), ("beta", beta, false)] {
-        if !bound.is_finite() {
-            continue;
-        }
-        // grid values equal to the bound have their own warning (see run.rs)
-        let grid_value = |p: &CriticalPoint| {
-            p.value == bound
-                && !matches!(p.kind, CriticalKind::FaceSaddle | CriticalKind::BodySaddle)
-        };
-        let around: Vec<CriticalPoint> = points
-            .iter()
-            .filter(|p| (p.value - bound).abs() <= reach && !grid_value(p))
-            .cloned()
-            .collect();
-        let bound = Bound {
-            input,
-            name,
-            value: bound,
-            tol,
-        };
-        warn_face_saddles(grid, &bound);
-        warn_near_critical(&bound, &around, lower, reach);
-    }
-}
-
-/// A bound being checked: `--{name} {value}` of `input`, with the warning tolerance `tol`.
-struct Bound<'a> {
-    input: &'a str,
-    name: &'a str,
-    value: f64,
-    tol: f64,
-}
-
-/// Warns when face saddles of the bilinear interpolant lie within `tol` of the bound.
-fn warn_face_saddles(grid: &ScalarGrid, b: &Bound) {
-    let (bound, tol) = (b.value, b.tol);
-    let flat = face_saddles_in(grid, bound - tol, bound + tol);
-    if let Some((v, p)) = flat.first() {
-        warn(format_args!(
-            "{}: --{} {} is within {tol:.4} of {} face saddle(s) of \
-             the bilinear interpolant (e.g. {} at ({:.3}, {:.3}, {:.3}); a checkerboard face \
-             with corners k, k+1 has its saddle at k+0.5): they are vertices of the \
-             decomposition, so elements there get a vertex on the bound",
-            b.input,
-            b.name,
-            fmt_bound(bound),
-            flat.len(),
-            fmt_bound(*v),
-            p[0],
-            p[1],
-            p[2]
-        ));
-    }
-}
-
-/// Warns when critical values among `around` (those within `reach` of the bound) change the
-/// filtration of the bound (`lower`: `{f >= w}`, else `{f <= w}`) within `tol`, naming the
-/// nearest safer values within `reach`.
-fn warn_near_critical(b: &Bound, around: &[CriticalPoint], lower: bool, reach: f64) {
-    let (bound, tol) = (b.value, b.tol);
-    let Some(near) = near_critical(around, bound, lower, tol) else {
-        return;
-    };
-    let first = &near.hits[0];
-    let p = first.position;
-    let safe = |v: Option<(f64, f64)>| {
-        v.filter(|x| (x.0 - bound).abs() < reach)
-            .map_or(format!("none within {}", fmt_bound(reach)), |(x, d)| {
-                format!("{x:.4} ({d:.4} from the nearest)")
-            })
-    };
-    warn(format_args!(
-        "{}: --{} {} is within {tol:.4} of {} critical value(s) of \
-         the trilinear field (e.g. {} {} at ({:.3}, {:.3}, {:.3})): the domain pinches there \
-         and its elements degenerate; nearest safer values: {} below, {} above",
-        b.input,
-        b.name,
-        fmt_bound(bound),
-        near.hits.len(),
-        first.kind.name(),
-        fmt_bound(first.value),
-        p[0],
-        p[1],
-        p[2],
-        safe(near.safe_below),
-        safe(near.safe_above),
-    ));
 }

@@ -9,13 +9,16 @@
 //! found before any work); outputs are written atomically, so a failed run leaves no
 //! (partial) output file behind. A closed stdout is not an error.
 //!
+//! The meshing run itself is the library's ([`tptd::pipeline::mesh_file`]): this program
+//! turns the arguments into its request, shows its progress and warnings on stderr, prints
+//! its summary and maps its errors to exit statuses.
+//!
 //! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
-//! that do nothing are refused), [`inspect`] (`--inspect`: meshes side by side), [`run`] (the run,
-//! step by step), [`quality`] (`--quality` and what it left), [`critical`] (`--critical` and the check of the bounds against the critical
-//! values), [`summary`] (stdout), [`progress`] (the progress bar), [`error`]
+//! that do nothing are refused), [`inspect`] (`--inspect`: meshes side by side), [`run`] (the
+//! meshing run: request, progress, summary), [`critical`] (`--critical`), [`summary`]
+//! (stdout), [`progress`] (the progress bar and the warnings on stderr), [`error`]
 //! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
-//! output), [`surface`] (isosurface output), [`warnings`] (every warning, printed and kept for
-//! the report).
+//! output).
 
 mod alloc;
 mod applies;
@@ -25,11 +28,8 @@ mod error;
 mod files;
 mod inspect;
 mod progress;
-mod quality;
 mod run;
 mod summary;
-mod surface;
-mod warnings;
 
 #[global_allocator]
 static ALLOC: alloc::CappedAlloc = alloc::CappedAlloc;
@@ -50,7 +50,9 @@ fn main() {
         let msg = e.to_string().replace(['\n', '\r'], " ");
         eprintln!("tptd-mesh: error: {msg}");
         // An output that would replace an input or another output is a usage error.
-        let usage = e.is::<tptd::io::FileClash>();
+        let usage = e.is::<tptd::io::FileClash>()
+            || e.downcast_ref::<tptd::pipeline::PipelineError>()
+                .is_some_and(|p| p.is_usage());
         std::process::exit(if usage { 2 } else { 1 });
     }
 }

@@ -1,31 +1,21 @@
 //! Progress on stderr: the bar of the meshing stage, the spinner of the quality pass, and a
-//! spinner for every other stage (read, analysis, write) that takes more than a second.
+//! spinner for every other stage (read, analysis, write) that takes more than a second; and
+//! the warnings of a run, one line each.
 
 use std::io::IsTerminal;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use tptd::facts::{FactsSink, Tee};
-use tptd::improve::forced::{classify_forced_mapped, ForcedReport};
-use tptd::improve::outcome::{improve_meshed_mapped, target_counts, PointMap, TargetCounts};
-use tptd::improve::{ImproveReport, QualityOptions};
-use tptd::io::SpilledMesh;
-use tptd::{
-    mesh_interval_streamed, mesh_interval_with_progress, MeshError, MeshOptions, MeshOutput,
-    MeshStats, ScalarGrid,
-};
-
-use crate::run::Job;
+use tptd::pipeline::{Progress, StageKind};
 
 /// Grids with more cells than this get a progress bar (when stderr is a terminal).
 const PROGRESS_MIN_CELLS: usize = 2_000_000;
 
 /// A progress bar on stderr for the meshing stage, hidden unless stderr is a terminal and the
-/// grid is large.
-fn progress_bar(grid: &ScalarGrid, quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() || grid.num_cells() <= PROGRESS_MIN_CELLS {
+/// grid (of `cells` cells) is large.
+fn progress_bar(cells: usize, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() || cells <= PROGRESS_MIN_CELLS {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
@@ -36,116 +26,83 @@ fn progress_bar(grid: &ScalarGrid, quiet: bool) -> ProgressBar {
     pb
 }
 
-/// Meshes `grid` with `opts`, showing a progress bar unless `quiet` (see [`progress_bar`]).
-pub(crate) fn mesh_with_progress(
-    grid: &ScalarGrid,
-    opts: &MeshOptions,
+/// The spinner `{msg}` of the quality pass, shown at once unless `quiet` or stderr is not a
+/// terminal.
+fn pass_spinner(msg: &str, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new_spinner();
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(Duration::from_millis(200));
+    pb
+}
+
+/// What shows the current stage.
+enum Shown {
+    /// The meshing bar or the spinner of the quality pass.
+    Bar(ProgressBar),
+    /// The spinner of another stage.
+    Stage(Stage),
+}
+
+/// The [`Progress`] of a run on stderr: bars and spinners (none with `quiet`), and each
+/// warning as one line `tptd-mesh: warning: {message}`.
+pub(crate) struct TermProgress {
     quiet: bool,
-) -> Result<MeshOutput, MeshError> {
-    let pb = progress_bar(grid, quiet);
-    let high = AtomicU64::new(0);
-    let result = mesh_interval_with_progress(grid, opts, &|done, total| {
-        pb.set_length(total as u64);
-        let d = high
-            .fetch_max(done as u64, Ordering::Relaxed)
-            .max(done as u64);
-        pb.set_position(d);
-    });
-    pb.finish_and_clear();
-    result
+    current: Mutex<Option<Shown>>,
 }
 
-/// Meshes like [`mesh_with_progress`], streaming the chunks to `spill` and `facts`.
-pub(crate) fn mesh_streamed_with_progress(
-    grid: &ScalarGrid,
-    opts: &MeshOptions,
-    quiet: bool,
-    spill: &mut SpilledMesh,
-    facts: &mut FactsSink,
-) -> Result<MeshStats, MeshError> {
-    let pb = progress_bar(grid, quiet);
-    let high = AtomicU64::new(0);
-    let mut tee = Tee(spill, facts);
-    let result = mesh_interval_streamed(
-        grid,
-        opts,
-        &|done, total| {
-            pb.set_length(total as u64);
-            let d = high
-                .fetch_max(done as u64, Ordering::Relaxed)
-                .max(done as u64);
-            pb.set_position(d);
-        },
-        &mut tee,
-    );
-    pb.finish_and_clear();
-    result
-}
-
-/// What [`improve_with_progress`] did and found, and the seconds of each part.
-pub(crate) struct Improved {
-    /// The pass.
-    pub(crate) report: ImproveReport,
-    /// The tets left below the floor with their reasons (when asked for).
-    pub(crate) forced: Option<ForcedReport>,
-    /// The tets left off the targets.
-    pub(crate) outcome: TargetCounts,
-    /// Seconds of the pass.
-    pub(crate) pass_seconds: f64,
-    /// Seconds of `forced` and `outcome`.
-    pub(crate) outcome_seconds: f64,
-}
-
-/// Runs the quality pass on `out`'s mesh (in `job`'s thread pool), with a spinner on stderr
-/// unless `quiet` or stderr is not a terminal; then counts the tets left off the targets and,
-/// if `classify`, lists those below the floor with their reasons. Quality is measured
-/// through `map` (a curvilinear grid's geometry map; `None`: as the mesh is).
-pub(crate) fn improve_with_progress(
-    out: &mut MeshOutput,
-    (grid, job): (&ScalarGrid, &Job),
-    opts: &QualityOptions,
-    (quiet, classify): (bool, bool),
-    map: Option<PointMap>,
-) -> Improved {
-    let pb = if quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        let pb = ProgressBar::new_spinner();
-        pb.set_message("improving elements");
-        pb.enable_steady_tick(std::time::Duration::from_millis(200));
-        pb
-    };
-    let (alpha, beta) = (job.opts.alpha, job.opts.beta);
-    let pool = job
-        .opts
-        .threads
-        .and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
-    let work = |out: &mut MeshOutput| {
-        let t = Instant::now();
-        let report = improve_meshed_mapped(out, grid, alpha, beta, opts, map);
-        let pass_seconds = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let mesh = &out.mesh;
-        pb.set_message(format!(
-            "giving a reason for each element below {}°",
-            opts.forced_floor
-        ));
-        let forced = classify.then(|| classify_forced_mapped(mesh, grid, alpha, beta, opts, map));
-        let outcome = target_counts(mesh, opts, map);
-        Improved {
-            report,
-            forced,
-            outcome,
-            pass_seconds,
-            outcome_seconds: t.elapsed().as_secs_f64(),
+impl TermProgress {
+    /// Progress on stderr, without bars and spinners when `quiet`.
+    pub(crate) fn new(quiet: bool) -> Self {
+        TermProgress {
+            quiet,
+            current: Mutex::new(None),
         }
-    };
-    let report = match pool {
-        Some(pool) => pool.install(|| work(out)),
-        None => work(out),
-    };
-    pb.finish_and_clear();
-    report
+    }
+
+    /// The current stage's display.
+    fn current(&self) -> std::sync::MutexGuard<'_, Option<Shown>> {
+        self.current.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+impl Progress for TermProgress {
+    fn stage(&self, name: &str, kind: StageKind) {
+        let shown = match kind {
+            StageKind::Step => Shown::Stage(Stage::start(name.to_string(), self.quiet)),
+            StageKind::Meshing { cells } => Shown::Bar(progress_bar(cells, self.quiet)),
+            StageKind::Pass => Shown::Bar(pass_spinner(name, self.quiet)),
+        };
+        *self.current() = Some(shown);
+    }
+
+    fn fraction(&self, done: u64, total: u64) {
+        if let Some(Shown::Bar(pb)) = &*self.current() {
+            pb.set_length(total);
+            pb.set_position(done);
+        }
+    }
+
+    fn message(&self, message: &str) {
+        match &*self.current() {
+            Some(Shown::Bar(pb)) => pb.set_message(message.to_string()),
+            Some(Shown::Stage(s)) => s.pb.set_message(message.to_string()),
+            None => {}
+        }
+    }
+
+    fn finish(&self) {
+        let shown = self.current().take();
+        if let Some(Shown::Bar(pb)) = shown {
+            pb.finish_and_clear();
+        }
+    }
+
+    fn warn(&self, message: &str) {
+        eprintln!("tptd-mesh: warning: {message}");
+    }
 }
 
 /// How long a stage runs before its spinner appears.

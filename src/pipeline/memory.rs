@@ -1,0 +1,62 @@
+//! The choice between streaming the mesh to disk and holding it in memory, and the memory
+//! estimate of the run, checked against the limit before the work (see [`crate::memory`]).
+
+use crate::io::SurfaceFormat;
+use crate::memory::{estimate_tets, mesh_bytes, stream_bytes};
+use crate::ScalarGrid;
+
+use super::request::Job;
+use super::text::fmt_interval;
+use super::PipelineError;
+
+/// Whether the mesh goes straight to disk slab by slab: a volume mesh output without the
+/// quality pass (which needs the whole mesh), a curvilinear mapping or the check (which reads
+/// the whole mesh).
+pub(crate) fn streams(job: &Job, curvilinear: bool) -> bool {
+    job.req.quality.is_none()
+        && !job.req.check
+        && !curvilinear
+        && SurfaceFormat::from_path(&job.output).is_none()
+}
+
+/// Checks the memory estimate of meshing, analysis, the quality pass and the check before
+/// the work.
+pub(crate) fn check_memory(
+    grid: &ScalarGrid,
+    job: &Job,
+    streaming: bool,
+) -> Result<(), PipelineError> {
+    let tets = estimate_tets(grid, job.opts.alpha, job.opts.beta);
+    let bytes = grid.values.bytes_per_sample() as u64;
+    let voxels = grid.num_vertices() as u64;
+    let need = if streaming {
+        let layers = grid.cell_dims()[2] as u64;
+        // Two windows: one meshed while the other is handed on.
+        stream_bytes(voxels, bytes, tets, layers, 2 * job.opts.window() as u64)
+    } else {
+        let pass = if job.req.quality.is_some() {
+            tets.saturating_mul(crate::memory::QUALITY_BYTES_PER_TET)
+        } else {
+            0
+        };
+        let checker = if job.req.check {
+            tets.saturating_mul(crate::check::CHECK_BYTES_PER_TET)
+        } else {
+            0
+        };
+        mesh_bytes(voxels, bytes, tets)
+            .saturating_add(pass)
+            .saturating_add(checker)
+    };
+    let what = format!(
+        "meshing {} (about {:.1} M tetrahedra)",
+        fmt_interval(job.opts.alpha, job.opts.beta),
+        tets as f64 / 1e6
+    );
+    crate::memory::check(need, what).map_err(|e| {
+        PipelineError::file(
+            &job.input_name,
+            format_args!("{e}; narrow the interval, crop the volume or raise --memory-limit"),
+        )
+    })
+}

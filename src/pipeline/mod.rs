@@ -1,0 +1,128 @@
+//! One meshing run as a library call: [`mesh_file`] takes a [`MeshRequest`] (input,
+//! interval, method, outputs, quality pass, check, threads, memory limit) and a
+//! [`Progress`] receiver, and does what `tptd-mesh` does between parsing its arguments and
+//! printing its summary:
+//!
+//! 1. checks the request (`request.rs`): the interval, the thread count, the output format,
+//!    that the outputs can be written and that none is an input file or another output;
+//! 2. reads the input (`read.rs`): a volume, the demo volume or a curvilinear grid;
+//! 3. warns about the bounds (`bounds.rs`): bounds equal to grid values, a nearly singular
+//!    direction matrix, bounds near critical values;
+//! 4. chooses between streaming the mesh to disk and holding it in memory, and checks the
+//!    memory estimate (`memory.rs`);
+//! 5. meshes (`run.rs`), with the quality pass in its own thread pool and the reasons of the
+//!    tets it left below the floor (`quality.rs`), the curvilinear map, the analysis and the
+//!    check, and writes the output under a temporary name;
+//! 6. builds the report (`report.rs`), writes it and renames both files onto their names.
+//!
+//! The result ([`MeshRun`]) holds the report, with every warning given on the way; the
+//! warnings also go to [`Progress::warn`] as they occur. Nothing here prints. Every failure
+//! is a [`PipelineError`]: one line naming the file and the problem, and whether the run was
+//! refused for how it was asked ([`PipelineError::is_usage`]). A failed run leaves no output.
+
+mod bounds;
+mod error;
+mod memory;
+mod progress;
+mod quality;
+mod read;
+mod report;
+mod request;
+mod run;
+pub mod text;
+
+use std::time::Instant;
+
+use crate::report::{QualityTimings, Report, Timings};
+use crate::{MeshOutput, Method, ScalarGrid};
+
+pub use error::PipelineError;
+pub use progress::{NoProgress, Progress, StageKind};
+pub use read::read_grid;
+pub use request::{check_threads, MeshRequest, QualityRequest, DEMO_OUTPUT};
+
+use progress::Reporter;
+use run::secs;
+
+/// What the demo shows: the same interval meshed with a method of the other kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DemoComparison {
+    /// The method of the other kind.
+    pub other: Method,
+    /// The number of components `other` gives.
+    pub other_b0: usize,
+}
+
+/// The result of a run: its report (with its warnings), the demo's comparison, and the grid
+/// and the mesh it made.
+pub struct MeshRun {
+    /// The report, as written to the request's report path.
+    pub report: Report,
+    /// For the demo volume (with analysis): the components with a method of the other kind.
+    pub comparison: Option<DemoComparison>,
+    /// The input grid (a curvilinear grid's values in parameter space).
+    pub grid: ScalarGrid,
+    /// The mesh, when it was held in memory (not when it was streamed to disk).
+    pub mesh: Option<MeshOutput>,
+}
+
+impl MeshRun {
+    /// The warnings of the run, in the order they were given.
+    pub fn warnings(&self) -> &[String] {
+        &self.report.warnings
+    }
+}
+
+/// Runs `req`: checks it, reads the input, warns about the bounds, checks the memory
+/// estimate, meshes (streamed or in memory), improves, analyses, checks and writes the output
+/// and the report. Stages, meshing progress and warnings go to `progress` as they happen.
+///
+/// # Errors
+/// The first failure, as one line naming the file; no output is left behind.
+pub fn mesh_file(req: &MeshRequest, progress: &dyn Progress) -> Result<MeshRun, PipelineError> {
+    let t_total = Instant::now();
+    crate::memory::set_limit(req.memory_limit);
+    let reporter = Reporter::new(progress);
+    let job = request::check_request(req)?;
+    let t_args = secs(t_total);
+
+    let t = Instant::now();
+    let (grid, curvilinear) = read::read_input(&job, &reporter)?;
+    let t_read = secs(t);
+    let t = Instant::now();
+    let streaming = memory::streams(&job, curvilinear.is_some());
+    bounds::warn_input(&grid, &job, curvilinear.is_some(), &reporter);
+    memory::check_memory(&grid, &job, streaming)?;
+    let t_checks = t_args + secs(t);
+
+    let mut w = if streaming {
+        run::stream_to_disk(&job, &grid, &reporter)?
+    } else {
+        run::mesh_in_memory(&job, &grid, curvilinear.as_ref(), &reporter)?
+    };
+    let t_quality = w.t_quality.take();
+    let mut timings = Timings {
+        streamed: streaming,
+        read: t_read,
+        checks: t_checks,
+        mesh: w.t_mesh,
+        analysis: w.t_analysis,
+        quality: t_quality.as_ref().map(QualityTimings::total),
+        quality_stages: t_quality,
+        map: w.t_map,
+        check: w.t_check,
+        write: w.t_write,
+        other: 0.0,
+        total: secs(t_total),
+    };
+    timings.close();
+    let mut report = report::make_report(&job, &grid, &mut w, timings);
+    report.warnings = reporter.take_warnings();
+    report::commit(&report, req.report.as_deref(), w.file)?;
+    Ok(MeshRun {
+        report,
+        comparison: w.comparison,
+        grid,
+        mesh: w.mesh,
+    })
+}

@@ -1,0 +1,258 @@
+//! What a run is asked to do ([`MeshRequest`]) and the checks of the request before any work:
+//! the interval, the thread count, the output format and that every output can be written
+//! and is neither an input file nor another output.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use crate::demo::{DEMO_ALPHA, DEMO_BETA};
+use crate::improve::QualityOptions;
+use crate::io::{
+    check_clashes, check_writable, input_files, MeshFormat, RunFile, SurfaceFormat, WriteOptions,
+};
+use crate::{MeshOptions, Method};
+
+use super::text::fmt_bound;
+use super::PipelineError;
+
+/// Output written for the demo volume when no output is given.
+pub const DEMO_OUTPUT: &str = "tptd-demo.vtu";
+
+/// One meshing run: the input, the interval and method, the outputs and what to do between.
+/// Plain data; [`MeshRequest::default`] meshes the demo volume with the defaults of
+/// `tptd-mesh --demo`.
+#[derive(Clone, Debug)]
+pub struct MeshRequest {
+    /// The input volume (a curvilinear grid for `.vts` and Plot3D `.xyz`); `None`: the demo
+    /// volume ([`crate::demo::demo_volume`]).
+    pub input: Option<PathBuf>,
+    /// The Plot3D function file (`.q` or `.f`) of an `.xyz` input.
+    pub function: Option<PathBuf>,
+    /// The field of a curvilinear input to mesh (its first one when `None`).
+    pub field: Option<String>,
+    /// The grid spacing instead of the file's (not with a curvilinear input).
+    pub spacing: Option<[f64; 3]>,
+    /// Lower bound of the interval (`None`: `-inf`). One bound at least is needed, except
+    /// for the demo, whose interval is its own without both.
+    pub alpha: Option<f64>,
+    /// Upper bound of the interval (`None`: `inf`).
+    pub beta: Option<f64>,
+    /// The cell decomposition.
+    pub method: Method,
+    /// Worker threads (`None`: all cores).
+    pub threads: Option<usize>,
+    /// The output: a mesh (`.msh`, `.inp`, `.vtu`) or the level sets (`.obj`, `.ply`,
+    /// `.stl`); `None` only for the demo, which writes [`DEMO_OUTPUT`].
+    pub output: Option<PathBuf>,
+    /// Where to write the JSON report, if anywhere.
+    pub report: Option<PathBuf>,
+    /// The writers' options.
+    pub write: WriteOptions,
+    /// Surface output: the box triangles too.
+    pub caps: bool,
+    /// The quality pass after meshing, if any.
+    pub quality: Option<QualityRequest>,
+    /// Check the mesh before writing it (a failed check is an error and writes nothing).
+    pub check: bool,
+    /// Compute the Betti numbers, the dihedral angles and the quality summaries.
+    pub analysis: bool,
+    /// Check the bounds against the critical values of the field before meshing.
+    pub critical_check: bool,
+    /// The tolerance of that check (`None`: 1e-5 of the data range).
+    pub critical_tol: Option<f64>,
+    /// The memory limit of the estimates ([`crate::memory::set_limit`]; `None`: the
+    /// available memory).
+    pub memory_limit: Option<u64>,
+}
+
+impl Default for MeshRequest {
+    fn default() -> Self {
+        MeshRequest {
+            input: None,
+            function: None,
+            field: None,
+            spacing: None,
+            alpha: None,
+            beta: None,
+            method: Method::Ctd,
+            threads: None,
+            output: None,
+            report: None,
+            write: WriteOptions::default(),
+            caps: false,
+            quality: None,
+            check: false,
+            analysis: true,
+            critical_check: true,
+            critical_tol: None,
+            memory_limit: None,
+        }
+    }
+}
+
+/// The quality pass of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QualityRequest {
+    /// The pass's options (their `time_budget` is replaced by [`QualityRequest::seconds`]
+    /// when that is given).
+    pub options: QualityOptions,
+    /// The time budget in seconds, as given (it is named so in the warning of a pass it
+    /// stopped).
+    pub seconds: Option<f64>,
+}
+
+impl QualityRequest {
+    /// The options of the pass, with the time budget of `seconds`.
+    pub(crate) fn pass_options(&self) -> QualityOptions {
+        QualityOptions {
+            time_budget: self
+                .seconds
+                .map(Duration::from_secs_f64)
+                .or(self.options.time_budget),
+            ..self.options.clone()
+        }
+    }
+
+    /// The time budget in seconds, for messages.
+    pub(crate) fn budget_seconds(&self) -> Option<f64> {
+        self.seconds
+            .or(self.options.time_budget.map(|d| d.as_secs_f64()))
+    }
+}
+
+/// The checked request of a run.
+pub(crate) struct Job<'a> {
+    /// The request.
+    pub(crate) req: &'a MeshRequest,
+    /// The input as named in messages (`demo` for the demo volume).
+    pub(crate) input_name: String,
+    /// The output path.
+    pub(crate) output: PathBuf,
+    /// The meshing options.
+    pub(crate) opts: MeshOptions,
+}
+
+impl Job<'_> {
+    /// Whether the input is the demo volume.
+    pub(crate) fn demo(&self) -> bool {
+        self.req.input.is_none()
+    }
+}
+
+/// Checks the request before any work: the interval, the thread count, the output format
+/// and that the outputs can be written.
+pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError> {
+    let demo = req.input.is_none();
+    let input_name = match &req.input {
+        Some(p) => p.display().to_string(),
+        None => "demo".to_string(),
+    };
+    let output = match (&req.output, demo) {
+        (Some(p), _) => p.clone(),
+        (None, true) => PathBuf::from(DEMO_OUTPUT),
+        (None, false) => return Err(PipelineError::file(&input_name, "no output given")),
+    };
+    let (alpha, beta) = interval(req, &input_name)?;
+    check_threads(req.threads)?;
+    check_outputs(req, &output)?;
+    let opts = MeshOptions {
+        alpha,
+        beta,
+        method: req.method,
+        threads: req.threads,
+        warp: if req.quality.is_some() {
+            crate::improve::DEFAULT_WARP
+        } else {
+            0.0
+        },
+        ..MeshOptions::default()
+    };
+    Ok(Job {
+        req,
+        input_name,
+        output,
+        opts,
+    })
+}
+
+/// The interval `(alpha, beta)` of the request (the demo's without both bounds), which must
+/// not be empty.
+fn interval(req: &MeshRequest, input_name: &str) -> Result<(f64, f64), PipelineError> {
+    let (alpha, beta) = match (req.alpha, req.beta) {
+        (None, None) if req.input.is_none() => (DEMO_ALPHA, DEMO_BETA),
+        (None, None) => {
+            return Err(PipelineError::file(
+                input_name,
+                "no interval given: use --alpha A and/or --beta B (meshes alpha <= f <= beta)",
+            ))
+        }
+        (a, b) => (a.unwrap_or(f64::NEG_INFINITY), b.unwrap_or(f64::INFINITY)),
+    };
+    if alpha >= beta {
+        return Err(PipelineError::file(
+            input_name,
+            format_args!(
+                "empty interval: --alpha ({}) must be less than --beta ({})",
+                fmt_bound(alpha),
+                fmt_bound(beta)
+            ),
+        ));
+    }
+    Ok((alpha, beta))
+}
+
+/// Most worker threads accepted per core: more only adds overhead.
+const MAX_THREADS_PER_CORE: usize = 16;
+
+/// Checks a thread count against the machine at once (a huge pool takes long to start and
+/// to fail).
+///
+/// # Errors
+/// `-j {n}: too many worker threads: …`.
+pub fn check_threads(threads: Option<usize>) -> Result<(), PipelineError> {
+    let Some(n) = threads else { return Ok(()) };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let max = (cores * MAX_THREADS_PER_CORE).max(MAX_THREADS_PER_CORE);
+    if n > max {
+        return Err(PipelineError::file(
+            format_args!("-j {n}"),
+            format_args!("too many worker threads: at most {max} on this machine ({cores} cores)"),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks the output (a known mesh or surface format, writable) and the report output
+/// (writable), then that no output is an input file or another output (compared by
+/// identity, not spelling).
+fn check_outputs(req: &MeshRequest, output: &Path) -> Result<(), PipelineError> {
+    if SurfaceFormat::from_path(output).is_none() {
+        MeshFormat::from_path(output)?;
+    }
+    check_writable(output)?;
+    if let Some(r) = &req.report {
+        check_writable(r)?;
+    }
+    check_files(req, output)
+}
+
+/// Refuses, before any sample is read, an output (the mesh, the report) that is the same file
+/// as a file of the input (the volume and the files read with it) or as the other output. A
+/// clash is a usage error.
+fn check_files(req: &MeshRequest, output: &Path) -> Result<(), PipelineError> {
+    let mut inputs = Vec::new();
+    if let Some(input) = &req.input {
+        let files = input_files(input, req.function.as_deref()).map_err(PipelineError::other)?;
+        let read_with = format!("read with the input {}", input.display());
+        for (n, f) in files.into_iter().enumerate() {
+            let role = if n == 0 { "the input" } else { &read_with };
+            inputs.push(RunFile::new(role, f));
+        }
+    }
+    let outputs: Vec<RunFile> = [("-o", Some(output)), ("--report", req.report.as_deref())]
+        .into_iter()
+        .filter_map(|(role, path)| path.map(|p| RunFile::new(role, p)))
+        .collect();
+    check_clashes(&inputs, &outputs)?;
+    Ok(())
+}

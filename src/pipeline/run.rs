@@ -1,0 +1,294 @@
+//! Meshing, either streamed to disk slab by slab or in memory (with the quality pass, the
+//! curvilinear map, the analysis and the check), and writing the output under a temporary
+//! name.
+
+use std::time::Instant;
+
+use crate::check::{check_mesh, CheckOptions, CheckReport};
+use crate::curvilinear::map_mesh;
+use crate::facts::{FactsSink, MeshFacts, Tee};
+use crate::io::{
+    spill_for, write_mesh_pending, write_spilled_pending, write_surface_pending, PendingFile,
+    SurfaceFormat,
+};
+use crate::quality::summarize;
+use crate::report::{QualitySection, QualityTimings};
+use crate::surface::analysis::{analyse_surface, SurfaceAnalysis};
+use crate::{
+    level_surface, mesh_interval, mesh_interval_streamed, mesh_interval_with_progress,
+    CurvilinearGrid, MeshError, MeshOptions, MeshOutput, MeshStats, Method, ScalarGrid,
+    SurfaceOptions,
+};
+
+use super::progress::{Reporter, StageKind};
+use super::quality::improve_mesh;
+use super::request::Job;
+use super::text::fmt_interval;
+use super::{DemoComparison, PipelineError};
+
+/// What meshing, analysing and writing produced (the output file still pending).
+pub(crate) struct Written {
+    pub(crate) facts: MeshFacts,
+    pub(crate) stats: MeshStats,
+    pub(crate) quality: Option<QualitySection>,
+    pub(crate) surface: Option<SurfaceAnalysis>,
+    pub(crate) comparison: Option<DemoComparison>,
+    pub(crate) check: Option<CheckReport>,
+    pub(crate) file: PendingFile,
+    /// The mesh (when it was held in memory).
+    pub(crate) mesh: Option<MeshOutput>,
+    /// Seconds of meshing, analysis (with the demo's comparison), the quality step (by part),
+    /// the curvilinear map, the check and writing.
+    pub(crate) t_mesh: f64,
+    pub(crate) t_analysis: f64,
+    pub(crate) t_quality: Option<QualityTimings>,
+    pub(crate) t_map: Option<f64>,
+    pub(crate) t_check: Option<f64>,
+    pub(crate) t_write: f64,
+}
+
+/// Seconds since `t`.
+pub(crate) fn secs(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64()
+}
+
+/// Meshes slab by slab into spill files next to the output, gathering the facts on the way,
+/// then writes the output from the spill files: memory stays the grid plus a few slabs.
+pub(crate) fn stream_to_disk(
+    job: &Job,
+    grid: &ScalarGrid,
+    reporter: &Reporter,
+) -> Result<Written, PipelineError> {
+    let t = Instant::now();
+    let mut spill = spill_for(&job.output)?;
+    let mut facts = FactsSink::new(job.req.analysis);
+    let stage = reporter.stage("meshing", meshing(grid));
+    let stats = mesh_interval_streamed(
+        grid,
+        &job.opts,
+        &stage.counter(),
+        &mut Tee(&mut spill, &mut facts),
+    );
+    stage.finish();
+    let stats = stats.map_err(|e| match e {
+        MeshError::Output(e) => PipelineError::file(job.output.display(), e),
+        e => PipelineError::file(&job.input_name, e),
+    })?;
+    let facts = facts.finish();
+    check_not_empty(grid, job, facts.tets)?;
+    let t_mesh = secs(t);
+    let t = Instant::now();
+    let stage = reporter.stage(
+        &format!("writing {}", job.output.display()),
+        StageKind::Step,
+    );
+    let file = write_spilled_pending(&job.output, &mut spill, &job.req.write);
+    stage.finish();
+    let t_write = secs(t);
+    let t = Instant::now();
+    let comparison = compare_demo(grid, job)?;
+    // Only the demo is compared: otherwise nothing is analysed here (the rest is `other`).
+    let t_analysis = if comparison.is_some() { secs(t) } else { 0.0 };
+    Ok(Written {
+        facts,
+        stats,
+        quality: None,
+        surface: None,
+        comparison,
+        check: None,
+        file: file?,
+        mesh: None,
+        t_mesh,
+        t_analysis,
+        t_quality: None,
+        t_map: None,
+        t_check: None,
+        t_write,
+    })
+}
+
+/// The stage kind of meshing `grid`.
+fn meshing(grid: &ScalarGrid) -> StageKind {
+    StageKind::Meshing {
+        cells: grid.num_cells(),
+    }
+}
+
+/// Meshes into memory, improves (quality pass), maps (curvilinear), analyses, checks and
+/// writes.
+pub(crate) fn mesh_in_memory(
+    job: &Job,
+    grid: &ScalarGrid,
+    curvilinear: Option<&CurvilinearGrid>,
+    reporter: &Reporter,
+) -> Result<Written, PipelineError> {
+    let t = Instant::now();
+    let mut out = mesh(grid, job, reporter)?;
+    let t_mesh = secs(t);
+
+    let improved = improve_mesh((grid, job), &mut out, curvilinear, reporter);
+    let (quality, t_quality) = improved.unzip();
+    // The level-set distance of a curvilinear mesh is checked in parameter space.
+    let parameter_points =
+        (job.req.check && curvilinear.is_some()).then(|| out.mesh.points.clone());
+    let t = Instant::now();
+    let t_map = match curvilinear {
+        Some(c) => {
+            map_mesh(&mut out.mesh, c).map_err(|e| PipelineError::file(&job.input_name, e))?;
+            Some(secs(t))
+        }
+        None => None,
+    };
+
+    let t = Instant::now();
+    let stage = reporter.stage("analysing the mesh", StageKind::Step);
+    let facts = MeshFacts::of(&out.mesh, job.req.analysis);
+    let after = (quality.is_some() && job.req.analysis).then(|| summarize(&out.mesh));
+    stage.finish();
+    let quality = quality.map(|q| QualitySection { after, ..q });
+    let comparison = compare_demo(grid, job)?;
+    let t_analysis = secs(t);
+    let parameter_points = parameter_points.as_deref();
+    let (check, t_check) = check_output(job, grid, parameter_points, &out.mesh, reporter)?;
+
+    // The output stays under its temporary name until the report is written too.
+    let t = Instant::now();
+    let (surface, file) = write_output(job, &out, reporter)?;
+    let t_write = secs(t);
+    Ok(Written {
+        facts,
+        stats: out.stats.clone(),
+        quality,
+        surface,
+        comparison,
+        check,
+        file,
+        mesh: Some(out),
+        t_mesh,
+        t_analysis,
+        t_quality,
+        t_map,
+        t_check,
+        t_write,
+    })
+}
+
+/// With the check: the validity check of the mesh, before anything is written; a mesh that
+/// fails it is an error naming the count of each problem. A curvilinear mesh (mapped to
+/// physical space) has its level-set distance checked at its points in parameter space
+/// (`parameter_points`), where its grid's values are.
+fn check_output(
+    job: &Job,
+    grid: &ScalarGrid,
+    parameter_points: Option<&[[f64; 3]]>,
+    mesh: &crate::TetMesh,
+    reporter: &Reporter,
+) -> Result<(Option<CheckReport>, Option<f64>), PipelineError> {
+    if !job.req.check {
+        return Ok((None, None));
+    }
+    let t = Instant::now();
+    let stage = reporter.stage("checking the mesh", StageKind::Step);
+    let opts = CheckOptions {
+        level_points: parameter_points,
+        ..CheckOptions::for_method(grid, job.opts.alpha, job.opts.beta, job.opts.method)
+    };
+    let report = check_mesh(mesh, &opts);
+    stage.finish();
+    if !report.valid {
+        let how_far = match &report.level {
+            Some(l) if l.beyond > 0 => format!(
+                "; boundary points up to {:.3} voxel from their level set",
+                l.max_beyond
+            ),
+            _ => String::new(),
+        };
+        return Err(PipelineError::file(
+            job.output.display(),
+            format_args!(
+                "the mesh fails --check ({}{how_far}); nothing written",
+                report.summary_line()
+            ),
+        ));
+    }
+    Ok((Some(report), Some(secs(t))))
+}
+
+/// Writes the mesh (or, for a surface extension, the level sets, with their analysis) under
+/// a temporary name.
+fn write_output(
+    job: &Job,
+    out: &MeshOutput,
+    reporter: &Reporter,
+) -> Result<(Option<SurfaceAnalysis>, PendingFile), PipelineError> {
+    let stage = reporter.stage(
+        &format!("writing {}", job.output.display()),
+        StageKind::Step,
+    );
+    let write = &job.req.write;
+    let written = match SurfaceFormat::from_path(&job.output) {
+        Some(_) => {
+            let opts = SurfaceOptions {
+                caps: job.req.caps,
+                beta: job.opts.beta,
+            };
+            let s = level_surface(&out.mesh, &opts);
+            let file = write_surface_pending(&job.output, &s, write)?;
+            (Some(analyse_surface(&s)), file)
+        }
+        None => (None, write_mesh_pending(&job.output, &out.mesh, write)?),
+    };
+    stage.finish();
+    Ok(written)
+}
+
+/// Meshes the interval; an empty mesh is an error.
+fn mesh(grid: &ScalarGrid, job: &Job, reporter: &Reporter) -> Result<MeshOutput, PipelineError> {
+    let stage = reporter.stage("meshing", meshing(grid));
+    let out = mesh_interval_with_progress(grid, &job.opts, &stage.counter());
+    stage.finish();
+    let out = out.map_err(|e| PipelineError::file(&job.input_name, e))?;
+    check_not_empty(grid, job, out.mesh.tets.len())?;
+    Ok(out)
+}
+
+/// An empty mesh is an error that names the data range.
+fn check_not_empty(grid: &ScalarGrid, job: &Job, tets: usize) -> Result<(), PipelineError> {
+    if tets > 0 {
+        return Ok(());
+    }
+    let (lo, hi) = grid.value_range();
+    Err(PipelineError::file(
+        &job.input_name,
+        format_args!(
+            "the interval {} contains no part of the volume; data range is {}",
+            fmt_interval(job.opts.alpha, job.opts.beta),
+            fmt_interval(lo, hi)
+        ),
+    ))
+}
+
+/// For the demo (with analysis): the components the same interval has when meshed with a
+/// method of the other kind.
+fn compare_demo(grid: &ScalarGrid, job: &Job) -> Result<Option<DemoComparison>, PipelineError> {
+    if !job.demo() || !job.req.analysis {
+        return Ok(None);
+    }
+    let other = match job.opts.method {
+        Method::Six | Method::Five => Method::Ctd,
+        _ => Method::Six,
+    };
+    let o = mesh_interval(
+        grid,
+        &MeshOptions {
+            method: other,
+            warp: 0.0,
+            ..job.opts.clone()
+        },
+    )
+    .map_err(|e| PipelineError::file(&job.input_name, e))?;
+    Ok(Some(DemoComparison {
+        other,
+        other_b0: crate::topology::betti(&o.mesh)[0],
+    }))
+}

@@ -1,0 +1,193 @@
+//! The meshing run as a library call ([`tptd::pipeline::mesh_file`]), without the binary:
+//! the stages reach the progress receiver in order and each one ends, the warnings reach it
+//! as they occur and come back in the report, errors are one line with their kind, and a
+//! failed run leaves no output.
+
+mod common;
+
+use std::path::Path;
+use std::sync::Mutex;
+
+use common::files::write_npy;
+use tptd::pipeline::{
+    mesh_file, MeshRequest, NoProgress, PipelineError, Progress, QualityRequest, StageKind,
+};
+
+/// A [`Progress`] that records every call, one line each.
+#[derive(Default)]
+struct Record(Mutex<Vec<String>>);
+
+impl Record {
+    fn push(&self, line: String) {
+        self.0.lock().unwrap().push(line);
+    }
+
+    fn lines(&self) -> Vec<String> {
+        self.0.lock().unwrap().clone()
+    }
+}
+
+impl Progress for Record {
+    fn stage(&self, name: &str, kind: StageKind) {
+        let kind = match kind {
+            StageKind::Step => "step",
+            StageKind::Meshing { .. } => "meshing",
+            StageKind::Pass => "pass",
+        };
+        self.push(format!("stage {kind} {name}"));
+    }
+    fn fraction(&self, _done: u64, _total: u64) {}
+    fn message(&self, message: &str) {
+        self.push(format!("message {message}"));
+    }
+    fn finish(&self) {
+        self.push("finish".into());
+    }
+    fn warn(&self, message: &str) {
+        self.push(format!("warn {message}"));
+    }
+}
+
+/// The stage lines of `lines`, each checked to be followed by its `finish` before the next.
+fn stages(lines: &[String]) -> Vec<String> {
+    let mut open = false;
+    let mut out = Vec::new();
+    for l in lines {
+        if let Some(s) = l.strip_prefix("stage ") {
+            assert!(!open, "stages nest: {lines:?}");
+            open = true;
+            out.push(s.to_string());
+        } else if l == "finish" {
+            assert!(open, "a finish without a stage: {lines:?}");
+            open = false;
+        }
+    }
+    assert!(!open, "a stage never finished: {lines:?}");
+    out
+}
+
+#[test]
+fn the_demo_streams_to_disk_with_its_comparison_and_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let req = MeshRequest {
+        output: Some(dir.path().join("demo.vtu")),
+        report: Some(dir.path().join("demo.json")),
+        ..MeshRequest::default()
+    };
+    let record = Record::default();
+    let run = mesh_file(&req, &record).unwrap();
+    assert!(run.report.tets > 0);
+    assert_eq!(run.report.betti.map(|b| b[0]), Some(2));
+    assert_eq!(run.comparison.map(|c| c.other_b0), Some(1));
+    assert!(run.report.timings_seconds.streamed && run.mesh.is_none());
+    assert!(dir.path().join("demo.vtu").is_file() && dir.path().join("demo.json").is_file());
+    let out = dir.path().join("demo.vtu").display().to_string();
+    let expected = [
+        "step reading demo",
+        "meshing meshing",
+        &format!("step writing {out}"),
+    ];
+    assert_eq!(stages(&record.lines()), expected);
+}
+
+#[test]
+fn the_quality_pass_holds_the_mesh_and_names_its_stages() {
+    let dir = tempfile::tempdir().unwrap();
+    let req = MeshRequest {
+        output: Some(dir.path().join("q.msh")),
+        quality: Some(QualityRequest {
+            options: Default::default(),
+            seconds: None,
+        }),
+        check: true,
+        ..MeshRequest::default()
+    };
+    let record = Record::default();
+    let run = mesh_file(&req, &record).unwrap();
+    assert!(run.mesh.is_some() && run.report.quality.is_some() && run.report.check.is_some());
+    let stages = stages(&record.lines());
+    let names: Vec<&str> = stages
+        .iter()
+        .map(|s| s.split(' ').next().unwrap())
+        .collect();
+    assert_eq!(names, ["step", "meshing", "pass", "step", "step", "step"]);
+    assert_eq!(stages[2], "pass improving elements");
+    assert!(record
+        .lines()
+        .iter()
+        .any(|l| l.starts_with("message giving a reason")));
+}
+
+#[test]
+fn warnings_reach_the_progress_as_they_occur_and_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("steps.npy");
+    write_npy(&input, [12, 12, 12], |i, j, k| ((i + j + k) % 5) as f64);
+    let req = MeshRequest {
+        input: Some(input.clone()),
+        alpha: Some(2.0),
+        beta: Some(3.5),
+        output: Some(dir.path().join("steps.inp")),
+        ..MeshRequest::default()
+    };
+    let record = Record::default();
+    let run = mesh_file(&req, &record).unwrap();
+    let given: Vec<String> = record
+        .lines()
+        .iter()
+        .filter_map(|l| l.strip_prefix("warn ").map(str::to_string))
+        .collect();
+    assert!(!given.is_empty());
+    assert_eq!(run.warnings(), given.as_slice());
+    let name = input.display().to_string();
+    assert!(given[0].starts_with(&format!("{name}: --alpha 2 equals the value of")));
+}
+
+/// Runs `req` and expects an error; no file of `dir` but `keep` is left.
+fn fails(req: &MeshRequest, dir: &Path, keep: &[&str]) -> PipelineError {
+    let e = match mesh_file(req, &NoProgress) {
+        Ok(_) => panic!("the run succeeded"),
+        Err(e) => e,
+    };
+    for f in std::fs::read_dir(dir).unwrap() {
+        let name = f.unwrap().file_name().to_string_lossy().to_string();
+        assert!(keep.contains(&name.as_str()), "{name} left behind");
+    }
+    e
+}
+
+#[test]
+fn errors_are_one_line_with_their_kind_and_leave_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.vtu");
+    let empty = MeshRequest {
+        alpha: Some(2.0),
+        beta: Some(1.0),
+        output: Some(out.clone()),
+        ..MeshRequest::default()
+    };
+    let e = fails(&empty, dir.path(), &[]);
+    assert_eq!(
+        e.to_string(),
+        "demo: empty interval: --alpha (2) must be less than --beta (1)"
+    );
+    assert!(!e.is_usage());
+
+    let clash = MeshRequest {
+        output: Some(out.clone()),
+        report: Some(out.clone()),
+        ..MeshRequest::default()
+    };
+    assert!(fails(&clash, dir.path(), &[]).is_usage());
+
+    let nothing = MeshRequest {
+        alpha: Some(1e9),
+        output: Some(out),
+        ..MeshRequest::default()
+    };
+    let e = fails(&nothing, dir.path(), &[]);
+    assert!(
+        e.message().contains("contains no part of the volume"),
+        "{e}"
+    );
+}
