@@ -29,6 +29,7 @@ mod read;
 mod report;
 mod request;
 mod run;
+mod summary;
 pub mod text;
 
 use std::time::Instant;
@@ -40,6 +41,7 @@ pub use error::PipelineError;
 pub use progress::{NoProgress, Progress, StageKind};
 pub use read::read_grid;
 pub use request::{check_threads, MeshRequest, QualityRequest, DEMO_OUTPUT};
+pub use summary::summary;
 
 use progress::Reporter;
 use run::secs;

@@ -19,7 +19,7 @@ use tptd::ScalarGrid;
 use crate::cli::{Cli, Spacing};
 use crate::error::{file_error, write_error};
 use crate::progress::Stage;
-use crate::summary::fmt_interval;
+use tptd::pipeline::text::fmt_interval;
 
 /// Runs `tptd-mesh --inspect MESH... [--volume VOLUME --alpha A --beta B] [--json FILE]`.
 pub(crate) fn run(cli: Cli) -> Result<()> {

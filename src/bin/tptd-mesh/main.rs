@@ -15,8 +15,8 @@
 //!
 //! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
 //! that do nothing are refused), [`inspect`] (`--inspect`: meshes side by side), [`run`] (the
-//! meshing run: request, progress, summary), [`critical`] (`--critical`), [`summary`]
-//! (stdout), [`progress`] (the progress bar and the warnings on stderr), [`error`]
+//! meshing run: request, progress, the library's summary on stdout), [`critical`]
+//! (`--critical`), [`progress`] (the progress bar and the warnings on stderr), [`error`]
 //! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
 //! output).
 
@@ -29,7 +29,6 @@ mod files;
 mod inspect;
 mod progress;
 mod run;
-mod summary;
 
 #[global_allocator]
 static ALLOC: alloc::CappedAlloc = alloc::CappedAlloc;

@@ -7,12 +7,11 @@ use std::io::Write;
 use anyhow::Result;
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
-use tptd::pipeline::{mesh_file, MeshRequest, QualityRequest};
+use tptd::pipeline::{mesh_file, summary, MeshRequest, QualityRequest};
 use tptd::ScalarGrid;
 
 use crate::cli::{Cli, Spacing};
 use crate::progress::TermProgress;
-use crate::summary::summary;
 
 pub(crate) use tptd::pipeline::DEMO_OUTPUT;
 

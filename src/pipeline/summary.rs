@@ -1,20 +1,18 @@
-//! The human-readable summary printed on stdout (the number formats of messages are the
-//! pipeline's, [`tptd::pipeline::text`]).
-
-pub(crate) use tptd::pipeline::text::{fmt_bound, fmt_interval};
+//! The human-readable summary of a run, as `tptd-mesh` prints it on stdout: input, mesh,
+//! analysis, quality, cells, outputs (number formats from [`super::text`]).
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use tptd::improve::ImproveReport;
-use tptd::pipeline::text::{fmt_angle, reasons, target_line};
-use tptd::pipeline::DemoComparison;
-use tptd::quality::BELOW_ANGLES;
-use tptd::report::Report;
-use tptd::CellCase;
+use super::text::{fmt_angle, fmt_bound, reasons, target_line};
+use super::DemoComparison;
+use crate::improve::ImproveReport;
+use crate::quality::BELOW_ANGLES;
+use crate::report::Report;
+use crate::CellCase;
 
 /// The check's findings on a valid mesh.
-fn check_line(c: &tptd::check::CheckReport) -> String {
+fn check_line(c: &crate::check::CheckReport) -> String {
     let mut line = c.summary_line();
     if let Some(w) = &c.winding {
         line += &format!(
@@ -31,12 +29,9 @@ fn check_line(c: &tptd::check::CheckReport) -> String {
     line
 }
 
-/// The human-readable summary printed on stdout.
-pub(crate) fn summary(
-    r: &Report,
-    cmp: Option<&DemoComparison>,
-    report_path: Option<&Path>,
-) -> String {
+/// The human-readable summary of a run's report `r` (with the demo's comparison `cmp`, and
+/// the report file's path when one was written), one line per fact, each ending in a newline.
+pub fn summary(r: &Report, cmp: Option<&DemoComparison>, report_path: Option<&Path>) -> String {
     let mut s = String::new();
     input_lines(&mut s, r);
     mesh_lines(&mut s, r);
