@@ -18,6 +18,7 @@
 
 mod labels;
 mod reference;
+mod table;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -30,6 +31,7 @@ use crate::quality::{dihedral_angles, summarize, ABOVE_ANGLES, BELOW_ANGLES};
 
 pub use labels::label_boundary;
 pub use reference::{reference, trilinear_volume, Reference, ReferenceOptions, TrilinearVolume};
+pub use table::table;
 
 /// Percentiles of each tet's smallest dihedral angle in [`Dihedral::min_percentiles`].
 pub const MIN_PERCENTILES: [f64; 3] = [1.0, 5.0, 50.0];
