@@ -19,8 +19,13 @@
 //! warnings also go to [`Progress::warn`] as they occur. Nothing here prints. Every failure
 //! is a [`PipelineError`]: one line naming the file and the problem, and whether the run was
 //! refused for how it was asked ([`PipelineError::is_usage`]). A failed run leaves no output.
+//!
+//! The critical points of a volume (`tptd-mesh --critical`) are a run of their own
+//! (`critical.rs`): [`critical_file`] takes a [`CriticalRequest`] and gives a
+//! [`CriticalRun`], whose table is [`critical_table`].
 
 mod bounds;
+mod critical;
 mod error;
 mod memory;
 mod progress;
@@ -37,6 +42,7 @@ use std::time::Instant;
 use crate::report::{QualityTimings, Report, Timings};
 use crate::{MeshOutput, Method, ScalarGrid};
 
+pub use critical::{critical_file, critical_table, transfer_line, CriticalRequest, CriticalRun};
 pub use error::PipelineError;
 pub use progress::{NoProgress, Progress, StageKind};
 pub use read::read_grid;

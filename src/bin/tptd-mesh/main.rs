@@ -16,9 +16,9 @@
 //! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
 //! that do nothing are refused), [`inspect`] (`--inspect`: meshes side by side), [`run`] (the
 //! meshing run: request, progress, the library's summary on stdout), [`critical`]
-//! (`--critical`), [`progress`] (the progress bar and the warnings on stderr), [`error`]
-//! (`{file}: {problem}` errors), [`files`] (the check that no output is an input or another
-//! output).
+//! (`--critical`: request, the library's run and table), [`progress`] (the progress bar and
+//! the warnings on stderr), [`error`] (`{file}: {problem}` errors), [`files`] (the check of
+//! `--inspect` that no output is an input or another output).
 
 mod alloc;
 mod applies;

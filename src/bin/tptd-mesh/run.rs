@@ -8,7 +8,6 @@ use anyhow::Result;
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
 use tptd::pipeline::{mesh_file, summary, MeshRequest, QualityRequest};
-use tptd::ScalarGrid;
 
 use crate::cli::{Cli, Spacing};
 use crate::progress::TermProgress;
@@ -71,10 +70,4 @@ fn request(cli: &Cli) -> MeshRequest {
 /// Checks `-j` against the machine at once (a huge pool takes long to start and to fail).
 pub(crate) fn check_threads(threads: Option<u32>) -> Result<()> {
     Ok(tptd::pipeline::check_threads(threads.map(|n| n as usize))?)
-}
-
-/// Reads the input volume (or generates the demo volume) and applies `--spacing`.
-pub(crate) fn read_grid(cli: &Cli) -> Result<ScalarGrid> {
-    let spacing = cli.spacing.map(|Spacing(s)| s);
-    Ok(tptd::pipeline::read_grid(cli.input.as_deref(), spacing)?)
 }
