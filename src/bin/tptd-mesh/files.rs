@@ -1,18 +1,17 @@
-//! The files a run reads and writes, and the check before any work that no output is an
-//! input file (detached data and function files included) or another output.
-
-use std::path::Path;
+//! The files `--inspect` reads and writes, and the check before any work that no output is
+//! an input file or another output (meshing and `--critical` check theirs in the library,
+//! [`tptd::pipeline`]).
 
 use anyhow::Result;
 use tptd::io::{check_clashes, input_files, mesh_files, RunFile};
 
 use crate::cli::Cli;
 
-/// Refuses, before any sample is read, an output of the run (`output`: the mesh, absent with
-/// `--critical` and `--inspect`; `--report`, `--json`, `--spectrum`, `--transfer`) that is
-/// the same file as a file of the input (the volume, `--volume`, every file of every
-/// `--inspect` mesh) or as another output. A clash is a [`tptd::io::FileClash`] (exit 2).
-pub(crate) fn check_files(cli: &Cli, output: Option<&Path>) -> Result<()> {
+/// Refuses, before any sample is read, an output of the run (`--json`; the others are refused
+/// with `--inspect`) that is the same file as a file of the input (`--volume` with its
+/// detached data files, every file of every `--inspect` mesh) or as another output. A clash
+/// is a [`tptd::io::FileClash`] (exit 2).
+pub(crate) fn check_files(cli: &Cli) -> Result<()> {
     let mut inputs = Vec::new();
     if let Some(input) = cli.input.as_ref().or(cli.volume.as_ref()) {
         let files = input_files(input, cli.function.as_deref())?;
@@ -29,7 +28,6 @@ pub(crate) fn check_files(cli: &Cli, output: Option<&Path>) -> Result<()> {
         }
     }
     let outputs: Vec<RunFile> = [
-        ("-o", output),
         ("--report", cli.report.as_deref()),
         ("--json", cli.json.as_deref()),
         ("--spectrum", cli.spectrum.as_deref()),

@@ -28,7 +28,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     if let Some(j) = &cli.json {
         check_writable(j).map_err(write_error)?;
     }
-    crate::files::check_files(&cli, None)?;
+    crate::files::check_files(&cli)?;
     let volume = match &cli.volume {
         Some(path) => Some(read_reference(&cli, path)?),
         None => None,
