@@ -52,6 +52,28 @@ impl RunFile {
     }
 }
 
+/// The files of input `path` ([`input_files`]) as run files: the input itself, then the files
+/// read with it (`read with the input PATH`).
+///
+/// # Errors
+/// As [`input_files`].
+pub fn input_run_files(path: &Path, function: Option<&Path>) -> Result<Vec<RunFile>, ReadError> {
+    let read_with = format!("read with the input {}", path.display());
+    Ok(input_files(path, function)?
+        .into_iter()
+        .enumerate()
+        .map(|(n, f)| RunFile::new(if n == 0 { "the input" } else { &read_with }, f))
+        .collect())
+}
+
+/// The outputs that are given, each named by its option (`-o`, `--report`, …), in order.
+pub fn output_run_files(outputs: &[(&str, Option<&Path>)]) -> Vec<RunFile> {
+    outputs
+        .iter()
+        .filter_map(|&(role, path)| path.map(|p| RunFile::new(role, p)))
+        .collect()
+}
+
 /// An output that is the same file as an input or as another output. Displays as one line
 /// naming both files.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

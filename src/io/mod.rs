@@ -37,7 +37,9 @@ pub use atomic::{
     check_writable, remove_pending_temporaries, same_file, write_atomically, write_pending,
     PendingFile, WriteError,
 };
-pub use inputs::{check_clashes, input_files, FileClash, RunFile};
+pub use inputs::{
+    check_clashes, input_files, input_run_files, output_run_files, FileClash, RunFile,
+};
 pub use mesh_out::{
     spill_for, write_mesh, write_mesh_pending, write_spilled_pending, write_surface,
     write_surface_pending, MeshFormat, SurfaceFormat, WriteOptions,

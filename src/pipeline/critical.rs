@@ -15,8 +15,8 @@ use crate::critical::{
     CriticalPoint, TransferDesign, TransferFunction, TransferOptions,
 };
 use crate::io::{
-    check_clashes, check_writable, input_files, write_atomically, write_transfer, RunFile,
-    TransferFormat, TransferTable,
+    check_clashes, check_writable, input_run_files, output_run_files, write_atomically,
+    write_transfer, TransferFormat, TransferTable,
 };
 use crate::ScalarGrid;
 
@@ -177,23 +177,15 @@ pub fn critical_file(
 /// Refuses, before any sample is read, an output (`--json`, `--spectrum`, `--transfer`) that
 /// is the same file as a file of the input or as another output. A clash is a usage error.
 fn check_files(req: &CriticalRequest) -> Result<(), PipelineError> {
-    let mut inputs = Vec::new();
-    if let Some(input) = &req.input {
-        let files = input_files(input, None).map_err(PipelineError::other)?;
-        let read_with = format!("read with the input {}", input.display());
-        for (n, f) in files.into_iter().enumerate() {
-            let role = if n == 0 { "the input" } else { &read_with };
-            inputs.push(RunFile::new(role, f));
-        }
-    }
-    let outputs: Vec<RunFile> = [
+    let inputs = match &req.input {
+        Some(input) => input_run_files(input, None).map_err(PipelineError::other)?,
+        None => Vec::new(),
+    };
+    let outputs = output_run_files(&[
         ("--json", req.json.as_deref()),
         ("--spectrum", req.spectrum.as_deref()),
         ("--transfer", req.transfer.as_deref()),
-    ]
-    .into_iter()
-    .filter_map(|(role, path)| path.map(|p| RunFile::new(role, p)))
-    .collect();
+    ]);
     check_clashes(&inputs, &outputs)?;
     Ok(())
 }

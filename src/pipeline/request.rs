@@ -8,7 +8,8 @@ use std::time::Duration;
 use crate::demo::{DEMO_ALPHA, DEMO_BETA};
 use crate::improve::QualityOptions;
 use crate::io::{
-    check_clashes, check_writable, input_files, MeshFormat, RunFile, SurfaceFormat, WriteOptions,
+    check_clashes, check_writable, input_run_files, output_run_files, MeshFormat, SurfaceFormat,
+    WriteOptions,
 };
 use crate::{MeshOptions, Method};
 
@@ -240,19 +241,13 @@ fn check_outputs(req: &MeshRequest, output: &Path) -> Result<(), PipelineError> 
 /// as a file of the input (the volume and the files read with it) or as the other output. A
 /// clash is a usage error.
 fn check_files(req: &MeshRequest, output: &Path) -> Result<(), PipelineError> {
-    let mut inputs = Vec::new();
-    if let Some(input) = &req.input {
-        let files = input_files(input, req.function.as_deref()).map_err(PipelineError::other)?;
-        let read_with = format!("read with the input {}", input.display());
-        for (n, f) in files.into_iter().enumerate() {
-            let role = if n == 0 { "the input" } else { &read_with };
-            inputs.push(RunFile::new(role, f));
+    let inputs = match &req.input {
+        Some(input) => {
+            input_run_files(input, req.function.as_deref()).map_err(PipelineError::other)?
         }
-    }
-    let outputs: Vec<RunFile> = [("-o", Some(output)), ("--report", req.report.as_deref())]
-        .into_iter()
-        .filter_map(|(role, path)| path.map(|p| RunFile::new(role, p)))
-        .collect();
+        None => Vec::new(),
+    };
+    let outputs = output_run_files(&[("-o", Some(output)), ("--report", req.report.as_deref())]);
     check_clashes(&inputs, &outputs)?;
     Ok(())
 }

@@ -3,7 +3,7 @@
 //! [`tptd::pipeline`]).
 
 use anyhow::Result;
-use tptd::io::{check_clashes, input_files, mesh_files, RunFile};
+use tptd::io::{check_clashes, input_run_files, mesh_files, output_run_files, RunFile};
 
 use crate::cli::Cli;
 
@@ -12,30 +12,20 @@ use crate::cli::Cli;
 /// detached data files, every file of every `--inspect` mesh) or as another output. A clash
 /// is a [`tptd::io::FileClash`] (exit 2).
 pub(crate) fn check_files(cli: &Cli) -> Result<()> {
-    let mut inputs = Vec::new();
-    if let Some(input) = cli.input.as_ref().or(cli.volume.as_ref()) {
-        let files = input_files(input, cli.function.as_deref())?;
-        let read_with = format!("read with the input {}", input.display());
-        for (n, f) in files.into_iter().enumerate() {
-            let role = if n == 0 { "the input" } else { &read_with };
-            inputs.push(RunFile::new(role, f));
-        }
-    }
+    let mut inputs = match cli.input.as_ref().or(cli.volume.as_ref()) {
+        Some(input) => input_run_files(input, cli.function.as_deref())?,
+        None => Vec::new(),
+    };
     for mesh in &cli.inspect {
         let role = format!("the mesh {}", mesh.display());
-        for f in mesh_files(mesh) {
-            inputs.push(RunFile::new(role.clone(), f));
-        }
+        inputs.extend(mesh_files(mesh).into_iter().map(|f| RunFile::new(&role, f)));
     }
-    let outputs: Vec<RunFile> = [
+    let outputs = output_run_files(&[
         ("--report", cli.report.as_deref()),
         ("--json", cli.json.as_deref()),
         ("--spectrum", cli.spectrum.as_deref()),
         ("--transfer", cli.transfer.as_deref()),
-    ]
-    .into_iter()
-    .filter_map(|(role, path)| path.map(|p| RunFile::new(role, p)))
-    .collect();
+    ]);
     check_clashes(&inputs, &outputs)?;
     Ok(())
 }
