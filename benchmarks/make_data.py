@@ -122,6 +122,17 @@ def nilearn_data_dir():
     return d if os.path.isdir(d) else None
 
 
+def safe_level(x):
+    """A bound for integer data just above the grey level below x.
+
+    Not an integer, so no vertex equals it, and not k + 0.5, the saddle of every checkerboard
+    face with corners k, k+1 (real MRI has many): 0.0135 above an integer is not a simple
+    fraction. tptd-mesh checks each bound against the critical values and face saddles near it
+    and warns; it gives no warning for these bounds on the two MNI volumes.
+    """
+    return float(np.floor(x - 0.5)) + 0.0135
+
+
 def t1_grey_matter_band(values):
     """Grey-matter band from the T1 intensity histogram.
 
@@ -147,9 +158,8 @@ def t1_grey_matter_band(values):
     left = gm
     while left > 0 and s[left - 1] >= 0.5 * s[gm]:
         left -= 1
-    # Half-integer bounds lie between the uint8 data values: no vertex equals a bound.
-    alpha = float(round(centers[left])) - 0.5
-    beta = float(round(centers[valley])) - 0.5
+    alpha = safe_level(centers[left])
+    beta = safe_level(centers[valley])
     return alpha, beta, {"gm_mode": float(centers[gm]), "wm_mode": float(centers[wm]),
                          "valley": float(centers[valley])}
 
@@ -217,11 +227,11 @@ def main():
         if os.path.exists(wm):
             img = nib.load(wm)
             a = np.asarray(img.dataobj)
-            mx = float(a.max())
+            lo = safe_level(0.5 * float(a.max()))
             ds["mni_wm"] = {"kind": "mri", "path": wm, "shape": list(a.shape), "dtype": str(a.dtype),
-                            "voxels": int(a.size), "intervals": [[0.5 * mx, None]],
-                            "note": "MNI ICBM152 2009a white-matter probability map; [0.5*max, inf)"}
-            print(f"[make_data] mni_wm: {a.shape} {a.dtype} interval [{0.5 * mx}, inf) <- {wm}")
+                            "voxels": int(a.size), "intervals": [[lo, None]],
+                            "note": "MNI ICBM152 2009a white-matter probability map; [half the maximum, inf)"}
+            print(f"[make_data] mni_wm: {a.shape} {a.dtype} interval [{lo}, inf) <- {wm}")
         else:
             print(f"[make_data] WARNING: {wm} not found")
 

@@ -16,8 +16,8 @@ MNI=$(python3 -c "import nilearn, os; print(os.path.dirname(nilearn.__file__))")
 CASES=(
   "benchmarks/data/noisy_256.npy --alpha -2 --beta 2"
   "benchmarks/data/noisy_256.npy --beta 0"
-  "$MNI/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz --alpha 151.5 --beta 201.5"
-  "$MNI/mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz --alpha 127.5"
+  "$MNI/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz --alpha 151.0135 --beta 201.0135"
+  "$MNI/mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz --alpha 127.0135"
 )
 for c in "${CASES[@]}"; do
   for rep in $(seq "$REPS"); do

@@ -7,7 +7,9 @@
 # Volumes: the demo, the MNI152 T1 and white-matter templates of the `nilearn` package and
 # benchmarks/data/noisy_256.npy (make it with `python3 benchmarks/make_data.py --sizes 256`).
 # Missing volumes are reported and skipped. Every method, every format (msh 4.1 and 2.2, inp,
-# vtu). Outputs go to a temporary folder and are deleted; only the sums are printed.
+# vtu). Then `--quality` on the demo and on two small volumes of benchmarks/data/thin/ (made by
+# `python3 benchmarks/thin_intervals.py`), for every method, in msh 4.1 and vtu. Outputs go to a
+# temporary folder and are deleted; only the sums are printed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=$(realpath "${1:-target/release/tptd-mesh}")
@@ -42,6 +44,32 @@ for entry in "${VOLUMES[@]}"; do
         --no-analysis -q "${args[@]}"
       echo "$(sha256sum <"$TMP/out.${out##*.}" | cut -c1-64)  $name $method $out"
       rm -f "$TMP/out.${out##*.}"
+    done
+  done
+done
+
+# name | input | interval arguments  (`--quality`: every method, msh 4.1 and vtu)
+THIN=benchmarks/data/thin
+QUALITY=(
+  "demo|demo|"
+  "t1_crop64|$THIN/t1_crop64.npy|--alpha 100.3 --beta 140.2"
+  "smooth48|$THIN/smooth48.npy|--alpha -0.3 --beta 0.3"
+)
+for entry in "${QUALITY[@]}"; do
+  IFS='|' read -r name input interval <<<"$entry"
+  src=("$input")
+  [ "$input" = demo ] && src=(--demo)
+  if [ "$input" != demo ] && [ ! -f "$input" ]; then
+    echo "missing  $name ($input)" >&2
+    continue
+  fi
+  for method in ctd tptd std six five; do
+    for out in msh vtu; do
+      # shellcheck disable=SC2086
+      "$BIN" "${src[@]}" $interval --method "$method" --quality -o "$TMP/out.$out" \
+        --no-analysis -q 2>/dev/null
+      echo "$(sha256sum <"$TMP/out.$out" | cut -c1-64)  $name $method quality $out"
+      rm -f "$TMP/out.$out"
     done
   done
 done
