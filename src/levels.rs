@@ -11,7 +11,7 @@ use crate::grid::ScalarGrid;
 use crate::samples::Samples;
 
 /// Number of levels a [`Levels`] holds: the two bounds of one interval. Point keys reserve
-/// [`crate::keys::LEVEL_BITS`] bits for a level index, enough for this many.
+/// enough bits for a level index to name this many (`keys::LEVEL_BITS`).
 pub const MAX_LEVELS: usize = 2;
 
 /// Fraction of the smallest gap between a level and the data values by which tied values are
@@ -91,7 +91,7 @@ impl Levels {
     /// Whether level `i` is a lower bound (a value equal to it counts as below).
     #[inline]
     pub const fn is_lower(i: usize) -> bool {
-        i % 2 == 0
+        i.is_multiple_of(2)
     }
 
     /// Whether `v` lies below level `i` (equal counts as below for a lower bound). False for
