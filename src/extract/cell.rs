@@ -37,10 +37,10 @@ impl Ctx<'_> {
 
     /// Clipping value of a face or body point of the decomposition with value `val`: on the
     /// level when within [`Ctx::near_tie`] of it. The grid's values are
-    /// ([`Levels::without_near_ties`]),
-    /// but these points' values are computed from them: a face saddle at -3e-19 with alpha 0
-    /// put the cuts of its edges within rounding of it, and tets between them were inverted
-    /// or flat. On the level they follow the ties rule like tied grid values.
+    /// ([`Levels::without_near_ties`]), but these points' values are computed from them: a
+    /// face saddle at -3e-19 with alpha 0 put the cuts of its edges within rounding of it, and
+    /// tets between them were inverted or flat. On the level they follow the ties rule like
+    /// tied grid values.
     #[inline]
     fn point_value(&self, val: f64) -> f64 {
         self.levels.onto_near(val, self.near_tie)
