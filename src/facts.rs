@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::geom::signed_volume;
 use crate::mesh::{MeshChunk, MeshSink};
-use crate::mesh::{TetMesh, VOLUME_BLOCK};
+use crate::mesh::{TetMesh, NUM_LABELS, VOLUME_BLOCK};
 use crate::quality::{cosine_extremes, cosines_to_degrees, dihedral_range, widest, NO_COSINES};
 use crate::topology::{betti, tet_links, triangle_links};
 use crate::union_find::UnionFind;
@@ -23,7 +23,7 @@ pub struct MeshFacts {
     /// Number of tets.
     pub tets: usize,
     /// Boundary triangles per label, in [`crate::BoundaryLabel::ALL`] order.
-    pub boundary_triangles: [usize; 3],
+    pub boundary_triangles: [usize; NUM_LABELS],
     /// Total volume.
     pub volume: f64,
     /// Smallest and largest dihedral angle in degrees (`None`: not analysed, or no tet).
@@ -35,9 +35,9 @@ pub struct MeshFacts {
 impl MeshFacts {
     /// The facts of `mesh`; `analyse`: with the dihedral range and the Betti numbers.
     pub fn of(mesh: &TetMesh, analyse: bool) -> Self {
-        let mut boundary_triangles = [0; 3];
+        let mut boundary_triangles = [0; NUM_LABELS];
         for &l in &mesh.boundary_labels {
-            boundary_triangles[l as usize] += 1;
+            boundary_triangles[l.index()] += 1;
         }
         MeshFacts {
             nodes: mesh.points.len(),
@@ -101,7 +101,7 @@ pub struct FactsSink {
     analyse: bool,
     nodes: usize,
     tets: usize,
-    boundary_triangles: [usize; 3],
+    boundary_triangles: [usize; NUM_LABELS],
     /// Volumes of the tets of the unfinished block, and the sums of the finished ones.
     block: Vec<f64>,
     partials: Vec<f64>,
@@ -118,7 +118,7 @@ impl FactsSink {
             analyse,
             nodes: 0,
             tets: 0,
-            boundary_triangles: [0; 3],
+            boundary_triangles: [0; NUM_LABELS],
             block: Vec::with_capacity(VOLUME_BLOCK),
             partials: Vec::new(),
             cos_range: NO_COSINES,
@@ -198,7 +198,7 @@ impl MeshSink for FactsSink {
         self.nodes += c.points.len();
         self.tets += c.tets.len();
         for &l in &c.boundary_labels {
-            self.boundary_triangles[l as usize] += 1;
+            self.boundary_triangles[l.index()] += 1;
         }
         self.add_volumes(&c.tets);
         if self.analyse {

@@ -6,7 +6,9 @@
 //!   vertex), or [`BODY`]` + n` (point `n` inside the cell whose smallest corner is the grid
 //!   vertex: its body saddles, then the points that split its edges).
 //! * A [`PointKey`] names an output point: a decomposition vertex, or the cut of a
-//!   decomposition edge by level alpha (0) or beta (1). Its order (the clipper's last
+//!   decomposition edge by a level, named by its index in the run's
+//!   [`Levels`](crate::levels::Levels) (for one interval: alpha 0, beta 1) in the low
+//!   [`LEVEL_BITS`] bits. Its order (the clipper's last
 //!   tie-break when it picks cone and fan apexes) is a function of the identity only, so every
 //!   cell and thread agrees on it.
 
@@ -48,15 +50,25 @@ pub const fn vertex_point(k: VertexKey) -> PointKey {
     (k as u128) << 64
 }
 
-/// Output-point key of the cut of edge `{a, b}` by level `level` (0 = alpha, 1 = beta).
+/// Bits of a cut's point key that hold the index of its level.
+pub const LEVEL_BITS: u32 = 1;
+
+/// Mask of the level bits of a point key.
+const LEVEL_MASK: u64 = (1 << LEVEL_BITS) - 1;
+
+const _: () = assert!(crate::levels::MAX_LEVELS <= 1 << LEVEL_BITS);
+
+/// Output-point key of the cut of edge `{a, b}` by level `level` (its index in the run's
+/// [`Levels`](crate::levels::Levels): for one interval, 0 = alpha, 1 = beta).
 #[inline]
 pub fn cut_point(a: VertexKey, b: VertexKey, level: u8) -> PointKey {
+    debug_assert!(u64::from(level) <= LEVEL_MASK);
     let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-    ((lo as u128) << 64) | (((hi as u128) + 1) << 1) | level as u128
+    ((lo as u128) << 64) | (((hi as u128) + 1) << LEVEL_BITS) | level as u128
 }
 
 /// The decomposition vertices a point key is made of: `(a, None)` for a vertex,
-/// `(a, Some((b, level)))` for a cut of edge `{a, b}`.
+/// `(a, Some((b, level)))` for a cut of edge `{a, b}` by level index `level`.
 #[inline]
 pub fn split(p: PointKey) -> (VertexKey, Option<(VertexKey, u8)>) {
     let a = (p >> 64) as u64;
@@ -64,7 +76,7 @@ pub fn split(p: PointKey) -> (VertexKey, Option<(VertexKey, u8)>) {
     if low == 0 {
         (a, None)
     } else {
-        (a, Some(((low >> 1) - 1, (low & 1) as u8)))
+        (a, Some(((low >> LEVEL_BITS) - 1, (low & LEVEL_MASK) as u8)))
     }
 }
 

@@ -29,6 +29,7 @@ pub mod improve;
 pub mod inspect;
 pub mod io;
 pub(crate) mod keys;
+pub mod levels;
 pub mod memory;
 pub mod mesh;
 pub mod pipeline;
@@ -49,6 +50,7 @@ pub use extract::{
     MeshOutput, MeshStats, Method,
 };
 pub use grid::{CurvilinearGrid, ScalarGrid};
+pub use levels::Levels;
 pub use mesh::{BoundaryLabel, TetMesh, TriSurface};
 pub use mesh::{MeshChunk, MeshSink};
 pub use samples::{SampleStorage, Samples};

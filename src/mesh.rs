@@ -6,34 +6,91 @@ use std::io;
 use serde::Serialize;
 
 use crate::geom::signed_volume;
+use crate::levels::MAX_LEVELS;
 
-/// Which surface a boundary triangle lies on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
-#[repr(u8)]
+/// Which surface a boundary triangle lies on: the level set of one of the run's levels
+/// ([`crate::levels::Levels`]), or the grid box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum BoundaryLabel {
-    /// On the level set f = alpha (the lower bound).
-    Alpha = 0,
-    /// On the level set f = beta (the upper bound).
-    Beta = 1,
+    /// On the level set of level `i` (for one interval, 0: f = alpha, the lower bound; 1:
+    /// f = beta, the upper bound).
+    Level(u8),
     /// On the outer boundary of the grid box.
-    Box = 2,
+    Box,
 }
 
+/// Number of boundary labels: one per level, then the box.
+pub const NUM_LABELS: usize = MAX_LEVELS + 1;
+
 impl BoundaryLabel {
-    /// All labels, in tag order.
-    pub const ALL: [BoundaryLabel; 3] = [
-        BoundaryLabel::Alpha,
-        BoundaryLabel::Beta,
+    /// The level set f = alpha (level 0, the lower bound of an interval).
+    pub const ALPHA: BoundaryLabel = BoundaryLabel::Level(0);
+    /// The level set f = beta (level 1, the upper bound of an interval).
+    pub const BETA: BoundaryLabel = BoundaryLabel::Level(1);
+
+    /// All labels, in tag order ([`BoundaryLabel::index`]).
+    pub const ALL: [BoundaryLabel; NUM_LABELS] = [
+        BoundaryLabel::Level(0),
+        BoundaryLabel::Level(1),
         BoundaryLabel::Box,
     ];
+
+    /// The label's number: the level index, or [`MAX_LEVELS`] for the box. Writers emit it
+    /// (as is or plus one) as the label's tag; per-label tables are indexed by it.
+    #[inline]
+    pub const fn index(self) -> usize {
+        match self {
+            BoundaryLabel::Level(i) => i as usize,
+            BoundaryLabel::Box => MAX_LEVELS,
+        }
+    }
+
+    /// The label numbered `i` ([`BoundaryLabel::index`]); `i <= MAX_LEVELS`.
+    #[inline]
+    pub const fn from_index(i: usize) -> BoundaryLabel {
+        if i < MAX_LEVELS {
+            BoundaryLabel::Level(i as u8)
+        } else {
+            BoundaryLabel::Box
+        }
+    }
+
+    /// The level index of a level label, `None` for the box.
+    #[inline]
+    pub const fn level(self) -> Option<usize> {
+        match self {
+            BoundaryLabel::Level(i) => Some(i as usize),
+            BoundaryLabel::Box => None,
+        }
+    }
+
+    /// Bit `1 << index` of the label, for per-vertex label sets.
+    #[inline]
+    pub const fn bit(self) -> u8 {
+        1 << self.index()
+    }
 
     /// Lower-case name used by every writer (`alpha`, `beta`, `box`).
     pub fn name(self) -> &'static str {
         match self {
-            BoundaryLabel::Alpha => "alpha",
-            BoundaryLabel::Beta => "beta",
+            BoundaryLabel::Level(0) => "alpha",
+            BoundaryLabel::Level(1) => "beta",
+            BoundaryLabel::Level(_) => "level",
             BoundaryLabel::Box => "box",
         }
+    }
+}
+
+impl Serialize for BoundaryLabel {
+    /// As a unit variant: `Alpha`, `Beta` or `Box`.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let variant = match self {
+            BoundaryLabel::Level(0) => "Alpha",
+            BoundaryLabel::Level(1) => "Beta",
+            BoundaryLabel::Level(_) => "Level",
+            BoundaryLabel::Box => "Box",
+        };
+        s.serialize_unit_variant("BoundaryLabel", self.index() as u32, variant)
     }
 }
 
@@ -69,7 +126,7 @@ impl TetMesh {
         let mut bits = vec![0u8; self.points.len()];
         for (tri, &label) in self.boundary.iter().zip(&self.boundary_labels) {
             for &v in tri {
-                bits[v as usize] |= 1 << (label as u8);
+                bits[v as usize] |= label.bit();
             }
         }
         bits
@@ -143,7 +200,7 @@ pub struct MeshChunk {
     pub boundary_labels: Vec<BoundaryLabel>,
     /// Per label (in [`BoundaryLabel::ALL`] order) the bounding box `[min xyz, max xyz]` of the
     /// vertices of this chunk's triangles with that label (`±inf` when there are none).
-    pub label_boxes: [[f64; 6]; 3],
+    pub label_boxes: [[f64; 6]; NUM_LABELS],
 }
 
 /// Where [`crate::mesh_interval_streamed`] delivers the mesh, one slab at a time.

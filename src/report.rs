@@ -264,7 +264,7 @@ pub fn build_report(
 ) -> Report {
     let boundary_triangles: BTreeMap<&'static str, usize> = BoundaryLabel::ALL
         .iter()
-        .map(|&l| (l.name(), facts.boundary_triangles[l as usize]))
+        .map(|&l| (l.name(), facts.boundary_triangles[l.index()]))
         .collect();
     let cells_meshed: u64 = stats.cells_by_case.iter().sum();
     let cells_by_case = CaseCounts(
@@ -336,8 +336,8 @@ mod tests {
             boundary_labels: vec![
                 BoundaryLabel::Box,
                 BoundaryLabel::Box,
-                BoundaryLabel::Alpha,
-                BoundaryLabel::Alpha,
+                BoundaryLabel::ALPHA,
+                BoundaryLabel::ALPHA,
             ],
         };
         let stats = MeshStats {

@@ -16,7 +16,7 @@ use rustc_hash::FxHashMap;
 use crate::clip::{ClipPoint, ClipSink};
 use crate::grid::ScalarGrid;
 use crate::keys::{grid_vertex, on_z_plane, vertex_key, vertex_point, PointKey, CORNER};
-use crate::mesh::{grow_box, BoundaryLabel, MeshChunk, EMPTY_BOX};
+use crate::mesh::{grow_box, BoundaryLabel, MeshChunk, EMPTY_BOX, NUM_LABELS};
 
 /// Points, tets and boundary triangles of one slab, numbered locally.
 pub(crate) struct Slab {
@@ -293,7 +293,7 @@ impl Welder {
                 }
             })
             .collect();
-        let mut label_boxes = [EMPTY_BOX; 3];
+        let mut label_boxes = [EMPTY_BOX; NUM_LABELS];
         let boundary = s
             .tris
             .iter()
@@ -301,7 +301,7 @@ impl Welder {
             .map(|(t, &l)| {
                 for &i in t {
                     grow_box(
-                        &mut label_boxes[l as usize],
+                        &mut label_boxes[l.index()],
                         self.physical(s.pos[i as usize]),
                     );
                 }

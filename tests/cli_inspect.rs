@@ -125,7 +125,7 @@ fn write_tetgen(dir: &Path, stem: &str, mesh: &TetMesh, base: usize) {
     let mut face = format!("{} 1\n", mesh.boundary.len());
     for (i, (t, l)) in mesh.boundary.iter().zip(&mesh.boundary_labels).enumerate() {
         let [a, b, c] = t.map(|v| v as usize + base);
-        writeln!(face, "{} {a} {b} {c} {}", i + base, *l as usize + 1).unwrap();
+        writeln!(face, "{} {a} {b} {c} {}", i + base, l.index() + 1).unwrap();
     }
     fs::write(dir.join(format!("{stem}.node")), node).unwrap();
     fs::write(dir.join(format!("{stem}.ele")), ele).unwrap();

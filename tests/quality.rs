@@ -223,8 +223,8 @@ fn check_on_level(name: &str, field: &Field, alpha: f64, beta: f64, mesh: &TetMe
     let tol = 1e-6 * (hi - lo);
     for (tri, &label) in mesh.boundary.iter().zip(&mesh.boundary_labels) {
         let level = match label {
-            tptd::BoundaryLabel::Alpha => alpha,
-            tptd::BoundaryLabel::Beta => beta,
+            tptd::BoundaryLabel::Level(0) => alpha,
+            tptd::BoundaryLabel::Level(_) => beta,
             tptd::BoundaryLabel::Box => continue,
         };
         for &v in tri {

@@ -251,8 +251,8 @@ fn calculix_heat_on_shell_obeys_maximum_principle() {
     write_atomically(&dir.path().join("mesh.inp"), |w| write_inp(&mesh, w)).unwrap();
     let deck = heat_deck(&[("ALPHA", 0.0), ("BETA", 1.0)]) + DECK_TAIL;
     let temps = run_ccx(dir.path(), "shell", &deck, &mesh);
-    let alpha = label_nodes(&mesh, BoundaryLabel::Alpha);
-    let beta = label_nodes(&mesh, BoundaryLabel::Beta);
+    let alpha = label_nodes(&mesh, BoundaryLabel::ALPHA);
+    let beta = label_nodes(&mesh, BoundaryLabel::BETA);
     assert!(alpha.is_disjoint(&beta));
     let mut intermediate = 0;
     for (&id, &t) in &temps {
@@ -318,7 +318,7 @@ fn calculix_surface_flux_on_linear_slab_is_exact() {
         faces.len(),
         mesh.boundary_labels
             .iter()
-            .filter(|&&l| l == BoundaryLabel::Beta)
+            .filter(|&&l| l == BoundaryLabel::BETA)
             .count()
     );
     let q = 0.75;

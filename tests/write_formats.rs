@@ -117,8 +117,8 @@ fn cube6() -> TetMesh {
         [0.0; 3],
         [1.0; 3],
         |c| match c[0] {
-            x if x < 1e-9 => BoundaryLabel::Alpha,
-            x if x > 1.0 - 1e-9 => BoundaryLabel::Beta,
+            x if x < 1e-9 => BoundaryLabel::ALPHA,
+            x if x > 1.0 - 1e-9 => BoundaryLabel::BETA,
             _ => BoundaryLabel::Box,
         },
         |i, _| i as f64 * 0.1 - 1.0 / 3.0,
@@ -136,7 +136,7 @@ fn slab12() -> TetMesh {
         [0.7, 0.45, 0.3],
         |c| {
             if (c[2] - top).abs() < 1e-9 {
-                BoundaryLabel::Alpha
+                BoundaryLabel::ALPHA
             } else {
                 BoundaryLabel::Box
             }
@@ -158,9 +158,9 @@ fn bar() -> TetMesh {
         [0.25; 3],
         |c| {
             if c[0] < 1e-9 {
-                BoundaryLabel::Alpha
+                BoundaryLabel::ALPHA
             } else if c[0] > 1.5 - 1e-9 {
-                BoundaryLabel::Beta
+                BoundaryLabel::BETA
             } else {
                 BoundaryLabel::Box
             }

@@ -8,6 +8,7 @@ use serde::Serialize;
 use super::{ProblemKind, Problems};
 use crate::field::Field;
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 type P = [f64; 3];
@@ -272,7 +273,7 @@ fn samples(u: &[P; 3], bound: f64) -> Vec<P> {
 pub(crate) fn level_distance(
     (mesh, points): (&TetMesh, &[[f64; 3]]),
     grid: &ScalarGrid,
-    levels: (f64, f64),
+    levels: &Levels,
     bound: f64,
     problems: &mut Problems,
 ) -> LevelSummary {
@@ -289,12 +290,8 @@ pub(crate) fn level_distance(
 }
 
 /// The level a triangle's label stands for (`None`: a box triangle).
-fn level_of(label: BoundaryLabel, levels: (f64, f64)) -> Option<f64> {
-    match label {
-        BoundaryLabel::Alpha => Some(levels.0),
-        BoundaryLabel::Beta => Some(levels.1),
-        BoundaryLabel::Box => None,
-    }
+fn level_of(label: BoundaryLabel, levels: &Levels) -> Option<f64> {
+    label.level().map(|i| levels.get(i))
 }
 
 /// The corners of the labelled triangles, searched once per (vertex, level).
@@ -311,18 +308,18 @@ impl Corners {
         mesh: &TetMesh,
         search: &Search,
         to_index: &(impl Fn(u32) -> P + Sync),
-        levels: (f64, f64),
+        levels: &Levels,
     ) -> Self {
         let mut list: Vec<(u32, u8)> = mesh
             .boundary
             .iter()
             .zip(&mesh.boundary_labels)
             .filter(|(_, &l)| l != BoundaryLabel::Box)
-            .flat_map(|(t, &l)| t.iter().map(move |&v| (v, l as u8)))
+            .flat_map(|(t, &l)| t.iter().map(move |&v| (v, l.index() as u8)))
             .collect();
         list.par_sort_unstable();
         list.dedup();
-        let level_for = |l: u8| if l == 0 { levels.0 } else { levels.1 };
+        let level_for = |l: u8| levels.get(l as usize);
         let found: Vec<Found> = list
             .par_iter()
             .map(|&(v, l)| search.distance(to_index(v), level_for(l)))
@@ -345,7 +342,7 @@ fn triangle(
     search: &Search,
     to_index: &impl Fn(u32) -> P,
     corners: &Corners,
-    levels: (f64, f64),
+    levels: &Levels,
 ) -> Tri {
     let u = t.map(to_index);
     let mut acc = Tri::default();
@@ -366,7 +363,7 @@ fn triangle(
         }
     }
     for &v in t {
-        match corners.at(v, label as u8) {
+        match corners.at(v, label.index() as u8) {
             Found::Within(d) => acc.max_distance = acc.max_distance.max(d),
             Found::Beyond(d) => {
                 acc.corner_beyond = true;

@@ -35,6 +35,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 use crate::mesh::TetMesh;
 use crate::Method;
 
@@ -53,8 +54,8 @@ pub struct CheckOptions<'a> {
     /// (its origin, spacing and direction map index space to them); `None` skips the
     /// level-set distance check.
     pub grid: Option<&'a ScalarGrid>,
-    /// `(alpha, beta)`: the levels of the alpha and beta triangles (used with `grid`).
-    pub levels: (f64, f64),
+    /// The levels of the level-labelled triangles (used with `grid`).
+    pub levels: Levels,
     /// Where the level-set distance is measured, per point of the mesh, when the mesh's
     /// points are not in `grid`'s coordinates: a curvilinear grid's mesh, mapped to
     /// physical space, is measured at its points in parameter space (`None`: the mesh's
@@ -78,7 +79,7 @@ impl Default for CheckOptions<'_> {
     fn default() -> Self {
         CheckOptions {
             grid: None,
-            levels: (f64::NEG_INFINITY, f64::INFINITY),
+            levels: Levels::interval(f64::NEG_INFINITY, f64::INFINITY),
             level_points: None,
             level_distance_bound: HALF_VOXEL,
             winding_samples: 2000,
@@ -115,7 +116,7 @@ impl<'a> CheckOptions<'a> {
     pub fn with_grid(grid: &'a ScalarGrid, alpha: f64, beta: f64) -> Self {
         CheckOptions {
             grid: Some(grid),
-            levels: (alpha, beta),
+            levels: Levels::interval(alpha, beta),
             ..CheckOptions::default()
         }
     }
@@ -389,7 +390,7 @@ pub fn check_mesh(mesh: &TetMesh, opts: &CheckOptions) -> CheckReport {
             report.level = Some(level::level_distance(
                 (mesh, points),
                 grid,
-                opts.levels,
+                &opts.levels,
                 opts.level_distance_bound,
                 &mut problems,
             ));

@@ -392,7 +392,7 @@ fn alpha_points(m: &TetMesh) -> Vec<u32> {
         .boundary
         .iter()
         .zip(&m.boundary_labels)
-        .filter(|(_, &l)| l == BoundaryLabel::Alpha)
+        .filter(|(_, &l)| l == BoundaryLabel::ALPHA)
         .flat_map(|(t, _)| *t)
         .collect();
     v.sort_unstable();
@@ -450,7 +450,7 @@ fn box_triangles_lie_on_the_box_and_labelled_points_in_it() {
     let t = relabelled
         .boundary_labels
         .iter()
-        .position(|&l| l == BoundaryLabel::Alpha)
+        .position(|&l| l == BoundaryLabel::ALPHA)
         .unwrap();
     relabelled.boundary_labels[t] = BoundaryLabel::Box;
     let r = check_mesh(&relabelled, &opts);

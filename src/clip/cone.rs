@@ -4,9 +4,10 @@
 use std::cmp::Reverse;
 
 use super::piece::Poly;
-use super::{ClipPoint, ClipSink, Interval};
+use super::{ClipPoint, ClipSink};
 use crate::geom::signed_volume;
 use crate::keys::{split, PointKey};
+use crate::levels::Levels;
 
 /// Cones the piece from its first point in [`rank`] order over the faces not containing it,
 /// each face fanned from its own first point; boundary faces also go out as triangles.
@@ -14,13 +15,13 @@ use crate::keys::{split, PointKey};
 pub(super) fn cone_and_fan(
     pts: &[ClipPoint],
     faces: &[Poly],
-    iv: &Interval,
+    lv: &Levels,
     sink: &mut impl ClipSink,
 ) {
     // Each point is ranked once (a piece has at most 12).
     let mut ranks = [(false, Reverse(0), 0); 12];
     for (r, p) in ranks.iter_mut().zip(pts) {
-        *r = rank(p, iv);
+        *r = rank(p, lv);
     }
     let v0 = (0..pts.len()).min_by_key(|&i| ranks[i]).unwrap_or(0);
     for poly in faces {
@@ -61,9 +62,12 @@ pub(super) fn cone_and_fan(
 /// level surface; it leaves about a quarter fewer tets below 15° than coning by key (noisy
 /// 256³ field, T1 band: docs/QUALITY-LOG.md, *Where the bad tets come from*).
 #[inline]
-fn rank(p: &ClipPoint, iv: &Interval) -> (bool, Reverse<u64>, PointKey) {
+fn rank(p: &ClipPoint, lv: &Levels) -> (bool, Reverse<u64>, PointKey) {
     let is_cut = split(p.key).1.is_some();
-    let depth = (p.val - iv.alpha).abs().min((p.val - iv.beta).abs());
+    let mut depth = (p.val - lv.get(0)).abs();
+    for i in 1..lv.len() {
+        depth = depth.min((p.val - lv.get(i)).abs());
+    }
     // Non-negative (or infinite, for a one-sided interval), so the bits order as the values.
     let depth = if depth.is_nan() { 0 } else { depth.to_bits() };
     (is_cut, Reverse(depth), p.key)

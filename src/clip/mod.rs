@@ -10,7 +10,7 @@
 //!
 //! **Ties.** A value equal to alpha counts as below and one equal to beta as above (the mesh
 //! is the closure of the open interval). For placing cuts, a tied vertex's value is moved
-//! outward by a per-run constant ([`Interval`]): the field stays linear on every tet, so each
+//! outward by a per-run constant ([`Levels::tie`]): the field stays linear on every tet, so each
 //! clipped piece stays convex, no output point coincides with another and no tet is flat.
 
 mod cone;
@@ -18,88 +18,10 @@ mod piece;
 
 use crate::geom::{cross, dot, sub};
 use crate::keys::{vertex_point, PointKey, VertexKey};
+use crate::levels::Levels;
 use crate::mesh::BoundaryLabel;
 use cone::cone_and_fan;
 use piece::{cut_points, level_faces, tet_faces, CutPoints, Faces, Poly};
-
-/// Fraction of the smallest gap between a level and the data values by which tied values are
-/// moved outward when cuts are placed.
-pub const TIE_FRACTION: f64 = 1e-3;
-
-/// The clipping interval and the values tied vertices are moved to.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Interval {
-    /// Lower bound (may be `-inf`).
-    pub alpha: f64,
-    /// Upper bound (may be `+inf`).
-    pub beta: f64,
-    /// Value used for cut placement at vertices whose value equals alpha (below alpha).
-    pub alpha_tie: f64,
-    /// Value used for cut placement at vertices whose value equals beta (above beta).
-    pub beta_tie: f64,
-}
-
-impl Interval {
-    /// The interval `(alpha, beta)` for data `values`: a tied value is moved outward by
-    /// [`TIE_FRACTION`] of the smallest non-zero distance between the level and a data value
-    /// (so, with integer data, by 10⁻³).
-    pub fn new(alpha: f64, beta: f64, values: &crate::samples::Samples) -> Self {
-        let gap = |level: f64| -> f64 {
-            if !level.is_finite() {
-                return 0.0;
-            }
-            let g = values.par_fold(
-                || f64::INFINITY,
-                |m, v| {
-                    let d = (v - level).abs();
-                    if d > 0.0 {
-                        m.min(d)
-                    } else {
-                        m
-                    }
-                },
-                f64::min,
-            );
-            if g.is_finite() {
-                g
-            } else {
-                1.0
-            }
-        };
-        let (ga, gb) = (gap(alpha), gap(beta));
-        let width = if alpha.is_finite() && beta.is_finite() {
-            beta - alpha
-        } else {
-            f64::INFINITY
-        };
-        let da = (TIE_FRACTION * ga)
-            .min(0.25 * width)
-            .max(alpha.abs() * 4.0 * f64::EPSILON);
-        let db = (TIE_FRACTION * gb)
-            .min(0.25 * width)
-            .max(beta.abs() * 4.0 * f64::EPSILON);
-        Interval {
-            alpha,
-            beta,
-            alpha_tie: alpha - da,
-            beta_tie: beta + db,
-        }
-    }
-}
-
-impl Interval {
-    /// Value of a (not snapped) vertex for cut placement: tied values moved outward.
-    #[inline]
-    pub fn effective(&self, v: f64) -> f64 {
-        if v == self.alpha {
-            self.alpha_tie
-        } else if v == self.beta {
-            self.beta_tie
-        } else {
-            v
-        }
-    }
-}
 
 /// A tet vertex handed to the clipper.
 #[derive(Clone, Copy, Debug)]
@@ -151,10 +73,10 @@ const ABOVE: u8 = 2;
 const INSIDE: u8 = 0;
 
 #[inline]
-fn classify(v: f64, alpha: f64, beta: f64) -> u8 {
-    if v <= alpha {
+fn classify(v: f64, lv: &Levels) -> u8 {
+    if lv.below(0, v) {
         BELOW
-    } else if v >= beta {
+    } else if lv.above(1, v) {
         ABOVE
     } else {
         INSIDE
@@ -164,9 +86,9 @@ fn classify(v: f64, alpha: f64, beta: f64) -> u8 {
 /// Value of a tet vertex for cut placement: a snapped vertex is exactly on its level, a tied
 /// one is moved outward.
 #[inline]
-fn placed(v: &ClipVertex, iv: &Interval) -> f64 {
+fn placed(v: &ClipVertex, lv: &Levels) -> f64 {
     if v.snap == SNAP_NONE {
-        iv.effective(v.val)
+        lv.effective(v.val)
     } else {
         v.val
     }
@@ -210,12 +132,12 @@ fn as_point(v: &ClipVertex) -> ClipPoint {
     }
 }
 
-/// Clips tet `tv` (positively oriented) to `alpha < f < beta` and sends the pieces to `sink`.
-/// `box_planes` selects which bits of [`ClipVertex::box_mask`] are grid-box planes.
-/// `iv.alpha` may be `-inf` and `iv.beta` `+inf`; `alpha < beta`.
-pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut impl ClipSink) {
+/// Clips tet `tv` (positively oriented) to the interval between levels 0 and 1 of `lv`
+/// (`alpha < f < beta`) and sends the pieces to `sink`. `box_planes` selects which bits of
+/// [`ClipVertex::box_mask`] are grid-box planes. Level 0 may be `-inf` and level 1 `+inf`.
+pub fn clip_tet(tv: &[ClipVertex; 4], lv: &Levels, box_planes: u8, sink: &mut impl ClipSink) {
     let cls: [u8; 4] = std::array::from_fn(|i| match tv[i].snap {
-        SNAP_NONE => classify(tv[i].val, iv.alpha, iv.beta),
+        SNAP_NONE => classify(tv[i].val, lv),
         _ => INSIDE,
     });
     if cls.iter().all(|&c| c == BELOW) || cls.iter().all(|&c| c == ABOVE) {
@@ -230,9 +152,9 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
         emit_whole(tv, box_face, sink);
         return;
     }
-    let cuts = cut_points(tv, &cls, iv);
+    let cuts = cut_points(tv, &cls, lv);
     // Only snapped vertices make a piece with every point on one level.
-    if tv.iter().any(|v| v.snap != SNAP_NONE) && flat(&cuts.pts[..cuts.np], iv) {
+    if tv.iter().any(|v| v.snap != SNAP_NONE) && flat(&cuts.pts[..cuts.np], lv) {
         snapped_face(tv, &cls, &cuts, sink);
         return;
     }
@@ -242,7 +164,7 @@ pub fn clip_tet(tv: &[ClipVertex; 4], iv: &Interval, box_planes: u8, sink: &mut 
     };
     tet_faces(&cls, box_face, &cuts, &mut faces);
     level_faces(&cls, &cuts, &mut faces);
-    cone_and_fan(&cuts.pts[..cuts.np], &faces.polys[..faces.n], iv, sink);
+    cone_and_fan(&cuts.pts[..cuts.np], &faces.polys[..faces.n], lv, sink);
 }
 
 /// A flat piece of three corners snapped to one level and a fourth outside (beyond that
@@ -260,9 +182,9 @@ fn snapped_face(tv: &[ClipVertex; 4], cls: &[u8; 4], cuts: &CutPoints, sink: &mu
         return;
     }
     let label = if cls[out] == BELOW {
-        BoundaryLabel::Alpha
+        BoundaryLabel::Level(0)
     } else {
-        BoundaryLabel::Beta
+        BoundaryLabel::Level(1)
     };
     let p = &cuts.pts[..3];
     let normal = cross(sub(p[1].pos, p[0].pos), sub(p[2].pos, p[0].pos));
@@ -295,9 +217,9 @@ fn emit_whole(tv: &[ClipVertex; 4], box_face: [bool; 4], sink: &mut impl ClipSin
 /// Whether every point of a piece lies on one level (a piece reduced to snapped vertices and
 /// their level's cuts: it has no volume and emits nothing).
 #[inline]
-fn flat(pts: &[ClipPoint], iv: &Interval) -> bool {
+fn flat(pts: &[ClipPoint], lv: &Levels) -> bool {
     let on = |level: f64| pts.iter().all(|p| p.val == level);
-    on(iv.alpha) || on(iv.beta)
+    on(lv.get(0)) || on(lv.get(1))
 }
 
 #[cfg(test)]

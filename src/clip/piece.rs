@@ -3,19 +3,20 @@
 //! interval, and the level faces).
 
 use super::{
-    as_point, edge_index, placed, ClipPoint, ClipVertex, Interval, ABOVE, BELOW, EDGES, INSIDE,
-    SNAP_ALPHA, SNAP_BETA, TET_FACES,
+    as_point, edge_index, placed, ClipPoint, ClipVertex, ABOVE, BELOW, EDGES, INSIDE, SNAP_ALPHA,
+    SNAP_BETA, TET_FACES,
 };
 use crate::keys::cut_point;
+use crate::levels::Levels;
 use crate::mesh::BoundaryLabel;
 
 /// Cut of edge (a, b) by `level`, computed from the key-ordered ends so that every tet
 /// sharing the edge gets the bit-identical point.
 #[inline]
-fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, iv: &Interval) -> ClipPoint {
+fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, lv: &Levels) -> ClipPoint {
     let (p, q) = if a.key < b.key { (a, b) } else { (b, a) };
-    let fp = placed(p, iv);
-    let fq = placed(q, iv);
+    let fp = placed(p, lv);
+    let fq = placed(q, lv);
     let t = (level - fp) / (fq - fp);
     ClipPoint {
         key: cut_point(p.key, q.key, which),
@@ -88,7 +89,7 @@ pub(super) struct CutPoints {
 /// The piece's points: inside vertices in vertex order, then per edge (in [`EDGES`] order)
 /// its alpha cut and its beta cut.
 #[inline]
-pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], iv: &Interval) -> CutPoints {
+pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], lv: &Levels) -> CutPoints {
     let mut c = CutPoints {
         pts: [ClipPoint {
             key: 0,
@@ -112,8 +113,8 @@ pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], iv: &Interval) -> 
             continue;
         }
         for (which, side, level, snap) in [
-            (0, BELOW, iv.alpha, SNAP_ALPHA),
-            (1, ABOVE, iv.beta, SNAP_BETA),
+            (0, BELOW, lv.get(0), SNAP_ALPHA),
+            (1, ABOVE, lv.get(1), SNAP_BETA),
         ] {
             if ci != side && cj != side {
                 continue;
@@ -123,7 +124,7 @@ pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], iv: &Interval) -> 
             } else if tv[j].snap == snap {
                 c.vid[j]
             } else {
-                c.pts[c.np] = cut(&tv[i], &tv[j], level, which as u8, iv);
+                c.pts[c.np] = cut(&tv[i], &tv[j], level, which as u8, lv);
                 c.np += 1;
                 c.np - 1
             };
@@ -168,8 +169,8 @@ pub(super) fn tet_faces(cls: &[u8; 4], box_face: [bool; 4], cuts: &CutPoints, fa
 #[inline]
 pub(super) fn level_faces(cls: &[u8; 4], cuts: &CutPoints, faces: &mut Faces) {
     for (which, side, label) in [
-        (0usize, BELOW, BoundaryLabel::Alpha),
-        (1, ABOVE, BoundaryLabel::Beta),
+        (0usize, BELOW, BoundaryLabel::Level(0)),
+        (1, ABOVE, BoundaryLabel::Level(1)),
     ] {
         let mut ins = [0usize; 4];
         let mut outs = [0usize; 4];

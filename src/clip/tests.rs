@@ -16,7 +16,7 @@ impl ClipSink for Collect {
         self.tets += 1;
     }
     fn triangle(&mut self, p: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
-        if label == BoundaryLabel::Alpha {
+        if label == BoundaryLabel::ALPHA {
             for &i in &t {
                 assert_eq!(p[i].val, 0.25);
             }
@@ -71,7 +71,12 @@ fn clip_of_linear_tet_has_exact_volume() {
             tets: 0,
             area_alpha: 0.0,
         };
-        clip_tet(&tv, &Interval::new(a, b, &vec![0.0, 1.0].into()), 0, &mut c);
+        clip_tet(
+            &tv,
+            &Levels::interval(a, b).with_ties(&vec![0.0, 1.0].into()),
+            0,
+            &mut c,
+        );
         let cube = |s: f64| s.clamp(0.0, 1.0).powi(3) / 6.0;
         let want = cube(b) - cube(a);
         assert!((c.vol - want).abs() < 1e-14, "{a} {b}: {} vs {want}", c.vol);
@@ -90,7 +95,7 @@ impl ClipSink for Keys {
 /// the interval, whichever key is smaller: every tet has it as a corner.
 #[test]
 fn pieces_are_coned_from_their_deepest_vertex() {
-    let iv = Interval::new(0.0, 1.0, &vec![-1.0, 1.0].into());
+    let iv = Levels::interval(0.0, 1.0).with_ties(&vec![-1.0, 1.0].into());
     let pos = [
         [0.0, 0.0, 0.0],
         [1.0, 0.0, 0.0],
@@ -197,7 +202,7 @@ fn tri_key(t: [PointKey; 3]) -> [PointKey; 3] {
 /// Checks one clip: positive pieces, the closed-form volume, and a closed boundary (each
 /// tet face shared by two pieces or emitted as a boundary triangle lying on its level or
 /// on its tet face, and every boundary edge used twice).
-fn check_clip(tv: &[ClipVertex; 4], iv: &Interval, case: &str) {
+fn check_clip(tv: &[ClipVertex; 4], iv: &Levels, case: &str) {
     let mut rec = Record::default();
     // each tet face f is on box plane f, so every boundary triangle is emitted
     clip_tet(tv, iv, 0b1111, &mut rec);
@@ -207,7 +212,7 @@ fn check_clip(tv: &[ClipVertex; 4], iv: &Interval, case: &str) {
     }
     let pos = tv.map(|v| v.pos);
     let eff = tv.map(|v| placed(&v, iv));
-    let want = sublevel_volume(&pos, &eff, iv.beta) - sublevel_volume(&pos, &eff, iv.alpha);
+    let want = sublevel_volume(&pos, &eff, iv.get(1)) - sublevel_volume(&pos, &eff, iv.get(0));
     let (got, faces) = pieces(&rec, case);
     let scale = signed_volume(pos[0], pos[1], pos[2], pos[3]);
     assert!(
@@ -252,13 +257,13 @@ fn check_clip(tv: &[ClipVertex; 4], iv: &Interval, case: &str) {
 
 /// If three corners are snapped to one level and the fourth lies beyond it (the piece
 /// is their face, with no volume): the fourth.
-fn snapped_face_corner(tv: &[ClipVertex; 4], iv: &Interval) -> Option<usize> {
+fn snapped_face_corner(tv: &[ClipVertex; 4], iv: &Levels) -> Option<usize> {
     [(SNAP_ALPHA, BELOW), (SNAP_BETA, ABOVE)]
         .into_iter()
         .find_map(|(snap, side)| {
             let snapped = tv.iter().filter(|v| v.snap == snap).count();
             let out = (0..4).find(|&i| tv[i].snap != snap)?;
-            let beyond = classify(tv[out].val, iv.alpha, iv.beta) == side;
+            let beyond = classify(tv[out].val, iv) == side;
             (snapped == 3 && tv[out].snap == SNAP_NONE && beyond).then_some(out)
         })
 }
@@ -272,8 +277,8 @@ fn check_snapped_face(tv: &[ClipVertex; 4], out: usize, rec: &Record, case: &str
         panic!("{case}: {} triangles instead of one", rec.tris.len());
     };
     let want = match tv[(out + 1) % 4].snap {
-        SNAP_ALPHA => BoundaryLabel::Alpha,
-        _ => BoundaryLabel::Beta,
+        SNAP_ALPHA => BoundaryLabel::ALPHA,
+        _ => BoundaryLabel::BETA,
     };
     assert_eq!(*label, want, "{case}");
     let corners = (0..4)
@@ -309,14 +314,14 @@ fn pieces(rec: &Record, case: &str) -> (f64, std::collections::HashMap<[PointKey
 /// A boundary triangle lies on its level, or (box) within one face of the tet.
 fn check_on_boundary(
     tv: &[ClipVertex; 4],
-    iv: &Interval,
+    iv: &Levels,
     t: &[ClipPoint; 3],
     label: BoundaryLabel,
     case: &str,
 ) {
     match label {
-        BoundaryLabel::Alpha => assert!(t.iter().all(|p| p.val == iv.alpha), "{case}"),
-        BoundaryLabel::Beta => assert!(t.iter().all(|p| p.val == iv.beta), "{case}"),
+        BoundaryLabel::ALPHA => assert!(t.iter().all(|p| p.val == iv.get(0)), "{case}"),
+        BoundaryLabel::BETA => assert!(t.iter().all(|p| p.val == iv.get(1)), "{case}"),
         _ => {
             let on = |f: usize| {
                 let [a, b, c] = TET_FACES[f].map(|i| tv[i].key);
@@ -361,7 +366,7 @@ fn clip_every_class_pattern() {
             for _ in 0..4 {
                 let tv = random_tet(&mut seed, cls, alpha, beta);
                 let vals: Vec<f64> = tv.iter().map(|v| v.val).collect();
-                let iv = Interval::new(a, b, &vals.into());
+                let iv = Levels::interval(a, b).with_ties(&vals.into());
                 check_clip(&tv, &iv, &format!("({a}, {b}) classes {cls:?}"));
             }
         }

@@ -1,11 +1,12 @@
 //! One slab of cells: each cell planned, decomposed and clipped into the slab (the most
 //! common cell, six whole tets, emitted straight from its corners).
 
-use crate::clip::{clip_tet, ClipVertex, Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
+use crate::clip::{clip_tet, ClipVertex, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
 use crate::decompose::plan::{plan_cell, Layout, Planner};
 use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM_LOCAL};
 use crate::grid::{cell_box_planes, corner_offset, ScalarGrid};
 use crate::keys::{key_index, local_key};
+use crate::levels::Levels;
 use crate::weld::Slab;
 
 use super::outside::outside_cells;
@@ -16,7 +17,8 @@ pub(super) struct Ctx<'a> {
     /// [`NEAR_TIE`](super::NEAR_TIE) × the data range: face and body points this near a
     /// level are put on it.
     pub(super) near_tie: f64,
-    pub(super) interval: Interval,
+    /// The levels, with their ties.
+    pub(super) levels: Levels,
     pub(super) planner: Planner<'a>,
     /// Per grid vertex, the level it is snapped to (empty: no warping).
     pub(super) snaps: Vec<u8>,
@@ -27,24 +29,21 @@ impl Ctx<'_> {
     #[inline]
     fn corner(&self, gi: usize, val: f64) -> (u8, f64) {
         match self.snaps.get(gi).copied().unwrap_or(SNAP_NONE) {
-            SNAP_ALPHA => (SNAP_ALPHA, self.interval.alpha),
-            SNAP_BETA => (SNAP_BETA, self.interval.beta),
+            SNAP_ALPHA => (SNAP_ALPHA, self.levels.get(0)),
+            SNAP_BETA => (SNAP_BETA, self.levels.get(1)),
             _ => (SNAP_NONE, val),
         }
     }
 
     /// Clipping value of a face or body point of the decomposition with value `val`: on the
-    /// level when within [`Ctx::near_tie`] of it. The grid's values are (`without_near_ties`),
-    /// but these points' values are computed from them: a face saddle at -3e-19 with alpha 0
-    /// put the cuts of its edges within rounding of it, and tets between them were inverted
-    /// or flat. On the level they follow the ties rule like tied grid values.
+    /// level when within [`Ctx::near_tie`] of it. The grid's values are
+    /// ([`Levels::without_near_ties`]), but these points' values are computed from them: a
+    /// face saddle at -3e-19 with alpha 0 put the cuts of its edges within rounding of it, and
+    /// tets between them were inverted or flat. On the level they follow the ties rule like
+    /// tied grid values.
     #[inline]
     fn point_value(&self, val: f64) -> f64 {
-        let iv = &self.interval;
-        [iv.alpha, iv.beta]
-            .into_iter()
-            .find(|&l| l.is_finite() && (val - l).abs() <= self.near_tie)
-            .unwrap_or(val)
+        self.levels.onto_near(val, self.near_tie)
     }
 }
 
@@ -54,7 +53,7 @@ pub(super) fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     let mut slab = Slab::new(ctx.grid.dims[0] * ctx.grid.dims[1], k);
     let mut tets: Vec<[u8; 4]> = Vec::with_capacity(64);
     let words = ctx.grid.dims[0].div_ceil(64);
-    let outside = outside_cells(ctx.grid, &ctx.interval, k);
+    let outside = outside_cells(ctx.grid, &ctx.levels, k);
     let skipped: usize = outside.iter().map(|w| w.count_ones() as usize).sum();
     slab.reserve(cx * cy - skipped);
     for j in 0..cy {
@@ -124,7 +123,7 @@ fn clip_cell(
                 }
             })
         });
-        clip_tet(&tv, &ctx.interval, box_planes, slab);
+        clip_tet(&tv, &ctx.levels, box_planes, slab);
     }
 }
 

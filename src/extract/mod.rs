@@ -7,24 +7,22 @@
 
 mod cell;
 mod outside;
-mod ties;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
-use crate::clip::Interval;
 use crate::decompose::plan::Planner;
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 use crate::mesh::TetMesh;
 use crate::mesh::{Gather, MeshSink};
 use crate::warp::{snap_vertices, Snapped};
 use crate::weld::{Slab, Welder};
 use cell::{process_slab, Ctx};
-use ties::without_near_ties;
 
 pub use crate::decompose::plan::Method;
-pub use ties::NEAR_TIE;
+pub use crate::levels::NEAR_TIE;
 
 /// Options of [`mesh_interval`].
 #[derive(Clone, Debug, PartialEq)]
@@ -265,24 +263,24 @@ fn run(
     progress: &(dyn Fn(usize, usize) + Sync),
     sink: &mut (dyn MeshSink + Send),
 ) -> Result<(MeshStats, Vec<Snapped>), MeshError> {
-    let (tied, alpha, beta) = without_near_ties(grid, opts.alpha, opts.beta);
+    let (tied, levels) = Levels::interval(opts.alpha, opts.beta).without_near_ties(grid);
     let grid = tied.as_ref().unwrap_or(grid);
     let [_, _, cz] = grid.cell_dims();
     let (lo, hi) = grid.value_range();
     let mut ctx = Ctx {
         grid,
         near_tie: NEAR_TIE * (hi - lo),
-        interval: Interval::new(alpha, beta, &grid.values),
+        levels: levels.with_ties(&grid.values),
         planner: Planner {
             grid,
             method: opts.method,
-            alpha,
-            beta,
+            alpha: levels.get(0),
+            beta: levels.get(1),
             split_sags: opts.split_sags,
         },
         snaps: Vec::new(),
     };
-    let warp = snap_vertices(grid, &ctx.planner, &ctx.interval, opts.warp);
+    let warp = snap_vertices(grid, &ctx.planner, &ctx.levels, opts.warp);
     ctx.snaps = warp.snaps;
     let window = opts.window();
     let mut stats = MeshStats {

@@ -1,8 +1,8 @@
 //! The cells of a layer entirely below alpha or entirely above beta, found 64 at a time from
 //! bit rows of the grid's vertex classes, so that the cell loop passes over them.
 
-use crate::clip::Interval;
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 
 /// Bit rows of the cells of layer `k` entirely below alpha or entirely above beta: bit `i`
 /// of word `j * words + i / 64` for cell `(i, j)` (`words` = `ceil(nx / 64)`).
@@ -10,10 +10,10 @@ use crate::grid::ScalarGrid;
 /// Bit i of a vertex-row word is set when vertex i of that grid row is below (resp. above);
 /// a cell is outside when its eight corners are, i.e. when the AND of its four rows has bits
 /// i and i + 1 set. Skips such cells 64 at a time.
-pub(super) fn outside_cells(grid: &ScalarGrid, iv: &Interval, k: usize) -> Vec<u64> {
+pub(super) fn outside_cells(grid: &ScalarGrid, lv: &Levels, k: usize) -> Vec<u64> {
     let cy = grid.dims[1] - 1;
     let words = grid.dims[0].div_ceil(64);
-    let planes = [plane_bits(grid, iv, k), plane_bits(grid, iv, k + 1)];
+    let planes = [plane_bits(grid, lv, k), plane_bits(grid, lv, k + 1)];
     let mut outside = vec![0u64; words * cy];
     for j in 0..cy {
         let out = &mut outside[j * words..(j + 1) * words];
@@ -32,19 +32,18 @@ pub(super) fn outside_cells(grid: &ScalarGrid, iv: &Interval, k: usize) -> Vec<u
 
 /// Class bits of grid plane `z`: `[below, above][j * words + i / 64]` bit `i % 64` for vertex
 /// `(i, j)`.
-fn plane_bits(grid: &ScalarGrid, iv: &Interval, z: usize) -> [Vec<u64>; 2] {
+fn plane_bits(grid: &ScalarGrid, lv: &Levels, z: usize) -> [Vec<u64>; 2] {
     let [nx, ny, _] = grid.dims;
     let words = nx.div_ceil(64);
     let mut bits = [vec![0u64; ny * words], vec![0u64; ny * words]];
     let base = grid.index(0, 0, z);
-    let (alpha, beta) = (iv.alpha, iv.beta);
     for jj in 0..ny {
         let [below, above] = &mut bits;
         let (below, above) = (&mut below[jj * words..], &mut above[jj * words..]);
         let row = base + jj * nx..base + (jj + 1) * nx;
         grid.values.for_each_in(row, |i, v| {
-            below[i / 64] |= ((v <= alpha) as u64) << (i % 64);
-            above[i / 64] |= ((v >= beta) as u64) << (i % 64);
+            below[i / 64] |= (lv.below(0, v) as u64) << (i % 64);
+            above[i / 64] |= (lv.above(1, v) as u64) << (i % 64);
         });
     }
     bits

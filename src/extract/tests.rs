@@ -169,6 +169,10 @@ fn integer_samples_near_a_level_move_the_level_not_the_grid() {
     let g = ScalarGrid::new([9, 9, 9], vals).unwrap();
     let (a, b) = (100.0 + 1e-8, 190.0 - 1e-8);
     assert!(g.values.iter().any(|v| v == 100.0) && g.values.iter().any(|v| v == 190.0));
+    let without_near_ties = |g: &ScalarGrid, a: f64, b: f64| {
+        let (copy, lv) = Levels::interval(a, b).without_near_ties(g);
+        (copy, lv.get(0), lv.get(1))
+    };
     let (copy, a2, b2) = without_near_ties(&g, a, b);
     assert!(copy.is_none());
     assert_eq!((a2, b2), (100.0, 190.0));

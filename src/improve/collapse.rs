@@ -692,10 +692,15 @@ mod tests {
             values: vec![21.0, 22.0, 25.0, 37.0],
             tets: vec![[0, 1, 2, 3]],
             boundary: vec![[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]],
-            boundary_labels: vec![crate::mesh::BoundaryLabel::Alpha; 4],
+            boundary_labels: vec![crate::mesh::BoundaryLabel::ALPHA; 4],
         };
         let opts = crate::improve::QualityOptions::default();
-        let ctx = crate::improve::ctx::context(&grid, 20.0, 40.0, &opts, std::time::Instant::now());
+        let ctx = crate::improve::ctx::context(
+            &grid,
+            &crate::Levels::interval(20.0, 40.0),
+            &opts,
+            std::time::Instant::now(),
+        );
         let quality = crate::improve::quality_cache::tet_qualities(&mesh, &ctx);
         let (regions, _) =
             crate::improve::region::extract_regions(&mesh, (&[true; 4], None), &quality, &ctx, 0);

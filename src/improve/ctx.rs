@@ -6,14 +6,15 @@ use std::time::Instant;
 use super::QualityOptions;
 use crate::field::Field;
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 use crate::quality::biased_min_sine;
 
 /// Everything an operation needs besides the local mesh.
 pub struct Ctx<'a> {
     /// The trilinear field.
     pub field: Field<'a>,
-    /// `[alpha, beta]`.
-    pub levels: [f64; 2],
+    /// The levels (for one interval: alpha, beta).
+    pub levels: Levels,
     /// Absolute tolerance on `|f - level|` for boundary vertices.
     pub tol: f64,
     /// Weight of obtuse angles in [`biased_min_sine`].
@@ -64,7 +65,7 @@ impl Ctx<'_> {
     /// must stay).
     pub fn inside_interval(&self, u: [f64; 3]) -> bool {
         let f = self.field.value(u);
-        f > self.levels[0] && f < self.levels[1]
+        self.levels.inside(f)
     }
 }
 
@@ -72,8 +73,7 @@ impl Ctx<'_> {
 /// budget counted from `start`; the flags of the rounds are off.
 pub(super) fn context<'a>(
     grid: &'a ScalarGrid,
-    alpha: f64,
-    beta: f64,
+    levels: &Levels,
     opts: &QualityOptions,
     start: Instant,
 ) -> Ctx<'a> {
@@ -84,7 +84,7 @@ pub(super) fn context<'a>(
     let obtuse_weight = (lo_s / hi_s).min(1.0);
     Ctx {
         field: Field::new(grid),
-        levels: [alpha, beta],
+        levels: *levels,
         tol: opts.level_tolerance * range,
         obtuse_weight,
         target: lo_s.min(obtuse_weight * hi_s),

@@ -16,18 +16,15 @@ use super::Ctx;
 use crate::check::triangles_cross;
 use crate::field::GUARD_DISTANCE;
 use crate::geom::sample_points_spaced;
+use crate::levels::Levels;
 use crate::mesh::BoundaryLabel;
 
 /// Spacing (index units) of the sample points of a triangle.
 const SAMPLE_SPACING: f64 = 0.25;
 
 /// The level a boundary label lies on (`None` for the grid box).
-pub fn label_level(label: BoundaryLabel, levels: [f64; 2]) -> Option<f64> {
-    match label {
-        BoundaryLabel::Alpha => Some(levels[0]),
-        BoundaryLabel::Beta => Some(levels[1]),
-        BoundaryLabel::Box => None,
-    }
+pub fn label_level(label: BoundaryLabel, levels: &Levels) -> Option<f64> {
+    label.level().map(|i| levels.get(i))
 }
 
 /// The points of triangle `t` (index space) at which its distance to the level set is
@@ -48,7 +45,7 @@ pub fn near_level(ctx: &Ctx, u: [f64; 3], level: f64, bound: f64) -> bool {
 /// Whether every sample point of triangle `t` (index space) with label `label` lies within
 /// [`GUARD_DISTANCE`] of its level set (box triangles: always).
 pub fn triangle_near_level(ctx: &Ctx, t: [[f64; 3]; 3], label: BoundaryLabel) -> bool {
-    let Some(level) = label_level(label, ctx.levels) else {
+    let Some(level) = label_level(label, &ctx.levels) else {
         return true;
     };
     match sample_points(t) {
@@ -196,7 +193,12 @@ mod tests {
     use crate::improve::QualityOptions;
 
     fn ctx_of(grid: &ScalarGrid) -> Ctx<'_> {
-        context(grid, 2.0, 3.0, &QualityOptions::default(), Instant::now())
+        context(
+            grid,
+            &Levels::interval(2.0, 3.0),
+            &QualityOptions::default(),
+            Instant::now(),
+        )
     }
 
     /// f = x on a 5³ grid: the level set f = 2 is the plane x = 2.
@@ -222,13 +224,13 @@ mod tests {
         let grid = linear_x();
         let ctx = ctx_of(&grid);
         let on = [[2.0, 0.5, 0.5], [2.0, 3.5, 0.5], [2.0, 0.5, 3.5]];
-        assert!(triangle_near_level(&ctx, on, BoundaryLabel::Alpha));
+        assert!(triangle_near_level(&ctx, on, BoundaryLabel::ALPHA));
         // Corners on the level, the triangle bent away from it: a corner at x = 3 would put
         // the midpoints of its edges half a voxel off.
         let off = [[2.0, 0.5, 0.5], [2.0, 3.5, 0.5], [3.0, 2.0, 2.0]];
-        assert!(!triangle_near_level(&ctx, off, BoundaryLabel::Alpha));
+        assert!(!triangle_near_level(&ctx, off, BoundaryLabel::ALPHA));
         // The same triangle on the beta level (x = 3) is off at two corners.
-        assert!(!triangle_near_level(&ctx, on, BoundaryLabel::Beta));
+        assert!(!triangle_near_level(&ctx, on, BoundaryLabel::BETA));
         // Box triangles are not measured.
         assert!(triangle_near_level(&ctx, off, BoundaryLabel::Box));
     }

@@ -6,6 +6,7 @@ use super::ctx::context;
 use super::quality_cache::tet_qualities;
 use super::region::{extract_regions, LocalMesh};
 use super::{Ctx, QualityOptions, DEFAULT_WARP};
+use crate::levels::Levels;
 use crate::mesh::TetMesh;
 use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
 
@@ -40,8 +41,7 @@ pub fn wavy_torus_mesh_at(grid: &ScalarGrid, (alpha, beta): (f64, f64)) -> (TetM
     let mesh = mesh_interval(grid, &opts).unwrap().mesh;
     let ctx = context(
         grid,
-        alpha,
-        beta,
+        &Levels::interval(alpha, beta),
         &QualityOptions::default(),
         Instant::now(),
     );

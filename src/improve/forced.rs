@@ -41,6 +41,7 @@ use crate::field::Field;
 use crate::field::GUARD_DISTANCE;
 use crate::geom::{distance, dot, norm};
 use crate::grid::{corner_offset, ScalarGrid};
+use crate::levels::Levels;
 use crate::mesh::{BoundaryLabel, TetMesh};
 use crate::quality::{cosine_extremes, tet_dihedral_range};
 use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle};
@@ -154,7 +155,7 @@ const LATTICE_DIRECTIONS: [[f64; 3]; 13] = [
 struct Classifier<'a> {
     mesh: &'a TetMesh,
     field: Field<'a>,
-    levels: [f64; 2],
+    levels: Levels,
     range: f64,
     /// The floor, radians.
     floor: f64,
@@ -195,7 +196,7 @@ pub fn classify_forced_mapped(
     let c = Classifier {
         mesh,
         field: Field::new(grid),
-        levels: [alpha, beta],
+        levels: Levels::interval(alpha, beta),
         range: (hi - lo).max(f64::MIN_POSITIVE),
         floor: floor.to_radians(),
         target_sine: opts.min_angle.to_radians().sin(),
@@ -385,9 +386,9 @@ impl Classifier<'_> {
             self.shortest_chord(centroid, g, reach)
                 .unwrap_or(f64::INFINITY)
         };
-        let on = |i: usize, l: BoundaryLabel| self.labels[tet[i] as usize] & (1 << l as u8) != 0;
-        for i in (0..4).filter(|&i| on(i, BoundaryLabel::Alpha)) {
-            for j in (0..4).filter(|&j| j != i && on(j, BoundaryLabel::Beta)) {
+        let on = |i: usize, l: BoundaryLabel| self.labels[tet[i] as usize] & l.bit() != 0;
+        for i in (0..4).filter(|&i| on(i, BoundaryLabel::Level(0))) {
+            for j in (0..4).filter(|&j| j != i && on(j, BoundaryLabel::Level(1))) {
                 thinnest = thinnest.min(distance(index[i], index[j]));
             }
         }
@@ -432,7 +433,7 @@ impl Classifier<'_> {
             })
             .flat_map(|c| self.cell_critical_points(c))
             .map(|(v, hess, pos)| {
-                let [da, db] = self.levels.map(|l| (v - l).abs());
+                let [da, db] = self.levels.values().map(|l| (v - l).abs());
                 if da <= db {
                     (da, self.levels[0], hess, pos)
                 } else {
@@ -608,7 +609,7 @@ impl Classifier<'_> {
     fn box_angle(&self, verts: [u32; 4], index: &[[f64; 3]; 4]) -> Option<f64> {
         let dims = self.field.grid().dims;
         let mut best: Option<f64> = None;
-        for (l, &level) in self.levels.iter().enumerate() {
+        for (l, level) in self.levels.iter().enumerate() {
             let on: Vec<usize> = (0..4)
                 .filter(|&i| self.mesh.values[verts[i] as usize] == level)
                 .collect();

@@ -52,6 +52,7 @@ pub use report::{ImproveReport, StageSeconds};
 
 use crate::extract::MeshOutput;
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 use crate::mesh::TetMesh;
 
 /// The warping threshold ([`crate::MeshOptions::warp`]) to mesh with before improving: grid
@@ -79,7 +80,8 @@ pub fn improve(
     beta: f64,
     opts: &QualityOptions,
 ) -> ImproveReport {
-    outcome::improve_keeping_better(mesh, grid, [alpha, beta], opts, &[], None)
+    let levels = Levels::interval(alpha, beta);
+    outcome::improve_keeping_better(mesh, grid, &levels, opts, &[], None)
 }
 
 /// [`improve`] on the output of [`crate::mesh_interval`]: the volume that its warping moved

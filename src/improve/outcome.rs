@@ -11,6 +11,7 @@ use super::pass::{improve_keeping_volume, runs_again_for_volume};
 use super::{ImproveReport, QualityOptions, StageSeconds};
 use crate::extract::MeshOutput;
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 use crate::mesh::TetMesh;
 use crate::quality::tet_dihedral_range;
 use crate::warp::Snapped;
@@ -152,7 +153,14 @@ pub fn improve_meshed_mapped(
     map: Option<PointMap>,
 ) -> ImproveReport {
     let (mesh, snapped) = (&mut out.mesh, &out.snapped);
-    improve_keeping_better(mesh, grid, [alpha, beta], opts, snapped, map)
+    improve_keeping_better(
+        mesh,
+        grid,
+        &Levels::interval(alpha, beta),
+        opts,
+        snapped,
+        map,
+    )
 }
 
 /// The pass ([`improve_keeping_volume`]); with a time budget, a copy of the mesh before it is
@@ -162,7 +170,7 @@ pub fn improve_meshed_mapped(
 pub(super) fn improve_keeping_better(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,
-    levels: [f64; 2],
+    levels: &Levels,
     opts: &QualityOptions,
     snapped: &[Snapped],
     map: Option<PointMap>,

@@ -12,6 +12,7 @@ use super::rounds::{run_rounds, Rounds};
 use super::stages::{run_stage, stage_targets};
 use super::{project, region, submesh, warped, ImproveReport, QualityOptions};
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 use crate::mesh::TetMesh;
 use crate::warp::Snapped;
 
@@ -44,7 +45,7 @@ const VOLUME_RETRY_RATIOS: [f64; 3] = [0.5, 0.25, 0.125];
 pub(super) fn improve_keeping_volume(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,
-    levels: [f64; 2],
+    levels: &Levels,
     opts: &QualityOptions,
     (snapped, copy): (&[Snapped], Option<&TetMesh>),
 ) -> ImproveReport {
@@ -57,7 +58,7 @@ pub(super) fn improve_keeping_volume(
     let mut spent = report.stage_seconds.clone();
     let mut clock = Instant::now();
     let off = |m: &TetMesh| (m.volume() - plain).abs() / plain.abs();
-    let ctx = context(grid, levels[0], levels[1], opts, start);
+    let ctx = context(grid, levels, opts, start);
     let worst = |m: &TetMesh| {
         tet_qualities(m, &ctx)
             .into_iter()
@@ -119,7 +120,7 @@ pub(super) fn runs_again_for_volume(mesh: &TetMesh, opts: &QualityOptions) -> bo
 pub(super) fn improve_in(
     mesh: &mut TetMesh,
     grid: &ScalarGrid,
-    [alpha, beta]: [f64; 2],
+    levels: &Levels,
     opts: &QualityOptions,
     rings: Option<usize>,
     snapped: &[Snapped],
@@ -132,7 +133,7 @@ pub(super) fn improve_in(
         removed: Vec::new(),
     };
     let ladder = stage_targets(opts);
-    let mut ctx = context(grid, alpha, beta, opts, start);
+    let mut ctx = context(grid, levels, opts, start);
     warped::seed(mesh, &ctx.field, snapped, &mut state.drift);
     // The volume of the mesh before warping, which the restoration aims at.
     let plain = mesh.volume() - state.drift.iter().sum::<f64>();
@@ -142,7 +143,7 @@ pub(super) fn improve_in(
             max_angle: hi,
             ..opts.clone()
         };
-        ctx = context(grid, alpha, beta, &stage, start);
+        ctx = context(grid, levels, &stage, start);
         improve_stage(
             mesh,
             &ctx,

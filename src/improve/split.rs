@@ -51,7 +51,7 @@ pub fn sagging_points(mesh: &TetMesh, ctx: &Ctx, min_sag: f64) -> Vec<bool> {
         .par_iter()
         .zip(&mesh.boundary_labels)
         .flat_map_iter(|(tri, &label)| {
-            let level = (label != BoundaryLabel::Box).then_some(label as usize);
+            let level = label.level();
             let u = |v: u32| ctx.field.to_index(mesh.points[v as usize]);
             (0..3).filter_map(move |i| {
                 let (a, b) = (tri[i], tri[(i + 1) % 3]);
@@ -209,7 +209,7 @@ fn candidates(lm: &LocalMesh, ctx: &Ctx, min_sag: f64, sagging: Option<&[bool]>)
         .faces
         .values()
         .filter(|f| f.label != BoundaryLabel::Box)
-        .flat_map(|f| (0..3).map(move |i| (f.tri[i], f.tri[(i + 1) % 3], f.label as usize)))
+        .flat_map(|f| (0..3).map(move |i| (f.tri[i], f.tri[(i + 1) % 3], f.label.index())))
         .map(|(a, b, l)| (a.min(b), a.max(b), l))
         .filter(|&(a, b, _)| marked(a) && marked(b))
         .collect();
@@ -369,7 +369,7 @@ fn faces_on_edge(lm: &LocalMesh, around: &[u32], a: u32, b: u32) -> Vec<Boundary
         }
     }
     let label = lm.con[a as usize].level.map(|l| l as u8);
-    if out.iter().any(|f| Some(f.label as u8) != label) {
+    if out.iter().any(|f| Some(f.label.index() as u8) != label) {
         out.clear();
     }
     out

@@ -304,7 +304,14 @@ mod tests {
         for opts in [QualityOptions::default(), staged] {
             let run = |rings| {
                 let mut m = mesh.clone();
-                let (r, _) = improve_in(&mut m, &grid, [alpha, beta], &opts, rings, &[]);
+                let (r, _) = improve_in(
+                    &mut m,
+                    &grid,
+                    &crate::Levels::interval(alpha, beta),
+                    &opts,
+                    rings,
+                    &[],
+                );
                 (m, r)
             };
             let (whole, report) = run(None);

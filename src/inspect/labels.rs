@@ -35,9 +35,9 @@ pub fn label_boundary(mesh: &mut TetMesh, grid: &ScalarGrid, levels: (f64, f64))
                 }
             };
             if gap(levels.1) < gap(levels.0) {
-                BoundaryLabel::Beta
+                BoundaryLabel::Level(1)
             } else {
-                BoundaryLabel::Alpha
+                BoundaryLabel::Level(0)
             }
         })
         .collect();

@@ -26,7 +26,8 @@ use serde::Serialize;
 use crate::check::{check_mesh, CheckOptions, LevelSummary, Problem, ProblemKind, WindingSummary};
 use crate::geom::signed_volume;
 use crate::grid::ScalarGrid;
-use crate::mesh::TetMesh;
+use crate::levels::Levels;
+use crate::mesh::{TetMesh, NUM_LABELS};
 use crate::quality::{dihedral_angles, summarize, ABOVE_ANGLES, BELOW_ANGLES};
 
 pub use labels::label_boundary;
@@ -94,7 +95,7 @@ pub struct Labels {
     /// `file` (the file's alpha/beta/box groups) or `nearest_level` ([`label_boundary`]).
     pub source: &'static str,
     /// Triangles labelled alpha, beta and box.
-    pub counts: [usize; 3],
+    pub counts: [usize; NUM_LABELS],
 }
 
 /// Everything an inspection found about one mesh.
@@ -155,16 +156,16 @@ pub fn inspect(file: &str, mut mesh: TetMesh, opts: &InspectOptions) -> Inspecti
     let mut labels = None;
     if let Some((grid, r)) = opts.volume {
         check_opts.grid = Some(grid);
-        check_opts.levels = r.levels;
+        check_opts.levels = Levels::interval(r.levels.0, r.levels.1);
         let source = if mesh.boundary.is_empty() {
             label_boundary(&mut mesh, grid, r.levels);
             "nearest_level"
         } else {
             "file"
         };
-        let mut counts = [0; 3];
+        let mut counts = [0; NUM_LABELS];
         for &l in &mesh.boundary_labels {
-            counts[l as usize] += 1;
+            counts[l.index()] += 1;
         }
         labels = Some(Labels { source, counts });
     }

@@ -269,7 +269,7 @@ mod tests {
             values: vec![0.0, 1.0, 2.0, 3.0],
             tets: vec![[0, 1, 2, 3]],
             boundary: vec![[0, 2, 1]],
-            boundary_labels: vec![BoundaryLabel::Alpha],
+            boundary_labels: vec![BoundaryLabel::ALPHA],
         }
     }
 

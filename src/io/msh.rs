@@ -40,7 +40,7 @@ pub const DOMAIN_PHYSICAL_TAG: u32 = 4;
 /// Physical (and elementary surface) tag of the boundary group of `label`: 1, 2, 3 for
 /// alpha, beta, box.
 pub fn label_tag(label: BoundaryLabel) -> u32 {
-    label as u32 + 1
+    label.index() as u32 + 1
 }
 
 /// Gmsh element type of a 3-node triangle.
@@ -576,7 +576,7 @@ mod tests {
         fn num_tets(&self) -> usize {
             self.0.num_tets()
         }
-        fn label_counts(&self) -> [usize; 3] {
+        fn label_counts(&self) -> [usize; crate::mesh::NUM_LABELS] {
             self.0.label_counts()
         }
         fn bbox(&self, label: Option<BoundaryLabel>) -> [f64; 6] {
@@ -612,7 +612,7 @@ mod tests {
             values: vec![0.5, 1.0, 1.5, 2.0, -0.25],
             tets: vec![[0, 1, 2, 3], [1, 2, 3, 4]],
             boundary: vec![[0, 2, 1], [1, 2, 4], [0, 1, 3]],
-            boundary_labels: vec![BoundaryLabel::Alpha, BoundaryLabel::Box, BoundaryLabel::Box],
+            boundary_labels: vec![BoundaryLabel::ALPHA, BoundaryLabel::Box, BoundaryLabel::Box],
         }
     }
 

@@ -60,7 +60,7 @@ fn vertex_labels(s: &TriSurface) -> Vec<u8> {
     let mut l = vec![u8::MAX; s.points.len()];
     for (t, &label) in s.triangles.iter().zip(&s.labels) {
         for &i in t {
-            l[i as usize] = l[i as usize].min(label as u8);
+            l[i as usize] = l[i as usize].min(label.index() as u8);
         }
     }
     l
@@ -118,7 +118,7 @@ mod tests {
             points: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             values: vec![0.5; 3],
             triangles: vec![[0, 1, 2]],
-            labels: vec![BoundaryLabel::Beta],
+            labels: vec![BoundaryLabel::BETA],
         };
         let mut b = Vec::new();
         write_ply(&s, &mut b, false).unwrap();

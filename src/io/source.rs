@@ -10,7 +10,7 @@ use rustc_hash::FxHashMap;
 
 use super::write_common::invalid;
 use crate::mesh::{grow_box, EMPTY_BOX};
-use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::mesh::{BoundaryLabel, TetMesh, NUM_LABELS};
 
 /// A visitor of consecutive slices of one list.
 pub(crate) type Visit<'a, T> = &'a mut dyn FnMut(&[T]) -> io::Result<()>;
@@ -25,7 +25,7 @@ pub(crate) trait MeshSource {
     /// Number of tets.
     fn num_tets(&self) -> usize;
     /// Boundary triangles per label, in [`BoundaryLabel::ALL`] order.
-    fn label_counts(&self) -> [usize; 3];
+    fn label_counts(&self) -> [usize; NUM_LABELS];
     /// Bounding box `[min xyz, max xyz]` of all points (`None`) or of the vertices of the
     /// triangles labelled `label`; [`EMPTY_BOX`] when there are none.
     fn bbox(&self, label: Option<BoundaryLabel>) -> [f64; 6];
@@ -49,8 +49,8 @@ pub(crate) trait MeshSource {
         let c = self.label_counts();
         BoundaryLabel::ALL
             .into_iter()
-            .filter(|&l| c[l as usize] > 0)
-            .map(|l| (l, c[l as usize]))
+            .filter(|&l| c[l.index()] > 0)
+            .map(|l| (l, c[l.index()]))
             .collect()
     }
 
@@ -114,10 +114,10 @@ impl MeshSource for InMemory<'_> {
     fn num_tets(&self) -> usize {
         self.mesh.tets.len()
     }
-    fn label_counts(&self) -> [usize; 3] {
-        let mut count = [0usize; 3];
+    fn label_counts(&self) -> [usize; NUM_LABELS] {
+        let mut count = [0usize; NUM_LABELS];
         for &l in &self.mesh.boundary_labels {
-            count[l as usize] += 1;
+            count[l.index()] += 1;
         }
         count
     }

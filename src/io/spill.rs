@@ -16,7 +16,7 @@ use bytemuck::Pod;
 
 use super::source::{boundary_faces, MeshSource, Visit};
 use crate::mesh::BoundaryLabel;
-use crate::mesh::{grow_box, MeshChunk, MeshSink, EMPTY_BOX};
+use crate::mesh::{grow_box, MeshChunk, MeshSink, EMPTY_BOX, NUM_LABELS};
 
 /// Items read back per slice.
 const READ_SLICE: usize = 1 << 16;
@@ -80,13 +80,15 @@ impl<T: Pod> SpillFile<T> {
     }
 }
 
-/// Three spill files (one per boundary label).
-fn three<T: Pod>(dir: &Path) -> io::Result<[SpillFile<T>; 3]> {
-    Ok([
-        SpillFile::create(dir)?,
-        SpillFile::create(dir)?,
-        SpillFile::create(dir)?,
-    ])
+/// One spill file per boundary label, in [`BoundaryLabel::index`] order.
+fn per_label<T: Pod>(dir: &Path) -> io::Result<[SpillFile<T>; NUM_LABELS]> {
+    let files = (0..NUM_LABELS)
+        .map(|_| SpillFile::create(dir))
+        .collect::<io::Result<Vec<_>>>()?;
+    match files.try_into() {
+        Ok(files) => Ok(files),
+        Err(_) => unreachable!("one file per label"),
+    }
 }
 
 impl<T> Drop for SpillFile<T> {
@@ -152,11 +154,11 @@ pub struct SpilledMesh {
     points: SpillFile<[f64; 3]>,
     values: SpillFile<f64>,
     tets: SpillFile<[u32; 4]>,
-    triangles: [SpillFile<[u32; 3]>; 3],
+    triangles: [SpillFile<[u32; 3]>; NUM_LABELS],
     /// Per label, `[tet, C3D4 face]` of each triangle (only when asked for: `.inp`).
-    faces: Option<[SpillFile<[u32; 2]>; 3]>,
+    faces: Option<[SpillFile<[u32; 2]>; NUM_LABELS]>,
     bbox: [f64; 6],
-    label_boxes: [[f64; 6]; 3],
+    label_boxes: [[f64; 6]; NUM_LABELS],
 }
 
 impl SpilledMesh {
@@ -170,10 +172,10 @@ impl SpilledMesh {
             points: SpillFile::create(dir)?,
             values: SpillFile::create(dir)?,
             tets: SpillFile::create(dir)?,
-            triangles: three(dir)?,
-            faces: if faces { Some(three(dir)?) } else { None },
+            triangles: per_label(dir)?,
+            faces: if faces { Some(per_label(dir)?) } else { None },
             bbox: EMPTY_BOX,
-            label_boxes: [EMPTY_BOX; 3],
+            label_boxes: [EMPTY_BOX; NUM_LABELS],
         })
     }
 
@@ -204,13 +206,13 @@ impl SpilledMesh {
             let of_l = |b: &usize| c.boundary_labels[*b] == l;
             let idx: Vec<usize> = (0..c.boundary.len()).filter(of_l).collect();
             let tris: Vec<[u32; 3]> = idx.iter().map(|&b| c.boundary[b]).collect();
-            self.triangles[l as usize].push(&tris)?;
+            self.triangles[l.index()].push(&tris)?;
             if let (Some(files), Some(faces)) = (&mut self.faces, &faces) {
                 let tf: Vec<[u32; 2]> = idx
                     .iter()
                     .map(|&b| [faces[b].0, u32::from(faces[b].1)])
                     .collect();
-                files[l as usize].push(&tf)?;
+                files[l.index()].push(&tf)?;
             }
         }
         Ok(())
@@ -241,13 +243,13 @@ impl MeshSource for SpilledMesh {
     fn num_tets(&self) -> usize {
         self.tets.len
     }
-    fn label_counts(&self) -> [usize; 3] {
+    fn label_counts(&self) -> [usize; NUM_LABELS] {
         self.triangles.each_ref().map(|t| t.len)
     }
     fn bbox(&self, label: Option<BoundaryLabel>) -> [f64; 6] {
         match label {
             None => self.bbox,
-            Some(l) => self.label_boxes[l as usize],
+            Some(l) => self.label_boxes[l.index()],
         }
     }
     fn points(&self, f: Visit<[f64; 3]>) -> io::Result<()> {
@@ -260,7 +262,7 @@ impl MeshSource for SpilledMesh {
         self.tets.visit(f)
     }
     fn triangles(&self, label: BoundaryLabel, f: Visit<[u32; 3]>) -> io::Result<()> {
-        self.triangles[label as usize].visit(f)
+        self.triangles[label.index()].visit(f)
     }
     fn faces(&self, label: BoundaryLabel, f: Visit<(u32, u8)>) -> io::Result<()> {
         let Some(files) = &self.faces else {
@@ -269,7 +271,7 @@ impl MeshSource for SpilledMesh {
             ));
         };
         let mut buf = Vec::with_capacity(READ_SLICE);
-        files[label as usize].visit(&mut |tf| {
+        files[label.index()].visit(&mut |tf| {
             buf.clear();
             buf.extend(tf.iter().map(|&[t, k]| (t, k as u8)));
             f(&buf)

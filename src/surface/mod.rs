@@ -36,9 +36,9 @@ impl Default for SurfaceOptions {
 fn selection(label: BoundaryLabel, opts: &SurfaceOptions) -> Option<bool> {
     match label {
         // the mesh boundary points out of {f > alpha}: flip to point towards increasing f
-        BoundaryLabel::Alpha => Some(true),
+        BoundaryLabel::Level(0) => Some(true),
         // out of {f < beta}: already towards increasing f
-        BoundaryLabel::Beta => Some(false),
+        BoundaryLabel::Level(_) => Some(false),
         BoundaryLabel::Box if opts.caps => Some(opts.beta == f64::INFINITY),
         BoundaryLabel::Box => None,
     }
@@ -107,7 +107,7 @@ mod tests {
             .unwrap()
             .mesh;
         let s = level_surface(&m, &SurfaceOptions::default());
-        assert!(s.labels.iter().all(|&l| l == BoundaryLabel::Alpha));
+        assert!(s.labels.iter().all(|&l| l == BoundaryLabel::ALPHA));
         let a = analysis::analyse_surface(&s);
         assert_eq!(a.betti, [1, 0, 1]);
         assert!(a.closed_manifold && a.oriented);

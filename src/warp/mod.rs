@@ -63,12 +63,13 @@
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use crate::clip::{Interval, SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
+use crate::clip::{SNAP_ALPHA, SNAP_BETA, SNAP_NONE};
 use crate::decompose::decompose_cell;
 use crate::decompose::plan::{plan_cell, Layout, Planner};
 use crate::geom::interval_volume;
 use crate::grid::{corner_offset, ScalarGrid};
 use crate::keys::{key_index, key_kind, local_key, vertex_key, VertexKey, CORNER};
+use crate::levels::Levels;
 use crate::union_find::UnionFind;
 use near::TrilinearNear;
 
@@ -117,11 +118,11 @@ pub(crate) struct Warp {
 }
 
 /// The snaps for threshold `eps` (none when `eps <= 0`).
-pub(crate) fn snap_vertices(grid: &ScalarGrid, planner: &Planner, iv: &Interval, eps: f64) -> Warp {
+pub(crate) fn snap_vertices(grid: &ScalarGrid, planner: &Planner, lv: &Levels, eps: f64) -> Warp {
     if eps <= 0.0 || grid.dims.iter().any(|&n| n < 3) {
         return Warp::default();
     }
-    let cand = candidates(grid, iv, eps);
+    let cand = candidates(grid, lv, eps);
     let listed: Vec<(usize, u8)> = cand
         .par_iter()
         .enumerate()
@@ -132,8 +133,8 @@ pub(crate) fn snap_vertices(grid: &ScalarGrid, planner: &Planner, iv: &Interval,
     let near = TrilinearNear::new(grid, eps);
     let stars: Vec<Star> = listed
         .par_iter()
-        .filter_map(|&(v, snap)| Star::new(grid, planner, iv, v, snap, eps))
-        .filter(|s| near.holds(s.v, level_of(s.snap, iv)))
+        .filter_map(|&(v, snap)| Star::new(grid, planner, lv, v, snap, eps))
+        .filter(|s| near.holds(s.v, level_of(s.snap, lv)))
         .collect();
     let mut snaps = vec![SNAP_NONE; grid.num_vertices()];
     let mut snapped = Vec::new();
@@ -145,7 +146,7 @@ pub(crate) fn snap_vertices(grid: &ScalarGrid, planner: &Planner, iv: &Interval,
     for _ in 0..ROUNDS {
         let tested: Vec<(usize, bool)> = dirty
             .par_iter()
-            .map(|&s| (s, stars[s].regular(&snaps, iv)))
+            .map(|&s| (s, stars[s].regular(&snaps, lv)))
             .collect();
         for (s, p) in tested {
             passes[s] = p;
@@ -159,7 +160,7 @@ pub(crate) fn snap_vertices(grid: &ScalarGrid, planner: &Planner, iv: &Interval,
         // chosen in the next round.
         let near_ok: Vec<bool> = chosen
             .par_iter()
-            .map(|&s| stars[s].surface_near(grid, &near, &snaps, iv))
+            .map(|&s| stars[s].surface_near(grid, &near, &snaps, lv))
             .collect();
         for (&s, _) in chosen.iter().zip(&near_ok).filter(|(_, &ok)| !ok) {
             passes[s] = false;
@@ -169,7 +170,7 @@ pub(crate) fn snap_vertices(grid: &ScalarGrid, planner: &Planner, iv: &Interval,
         // Stars snapped in one round share no tet, so their volume changes add up.
         let moved: Vec<f64> = chosen
             .par_iter()
-            .map(|&s| stars[s].snap_volume(grid, &snaps, iv))
+            .map(|&s| stars[s].snap_volume(grid, &snaps, lv))
             .collect();
         for (&s, volume) in chosen.iter().zip(moved) {
             snaps[stars[s].v] = stars[s].snap;
@@ -213,19 +214,19 @@ fn snap_round(stars: &[Star], open: &[usize], passes: &[bool]) -> Vec<usize> {
 }
 
 /// Whether value `u` lies on the domain side of level `snap` (ties count as outside).
-fn domain_side(u: f64, snap: u8, iv: &Interval) -> bool {
+fn domain_side(u: f64, snap: u8, lv: &Levels) -> bool {
     if snap == SNAP_ALPHA {
-        u > iv.alpha
+        u > lv.get(0)
     } else {
-        u < iv.beta
+        u < lv.get(1)
     }
 }
 
-fn level_of(snap: u8, iv: &Interval) -> f64 {
+fn level_of(snap: u8, lv: &Levels) -> f64 {
     if snap == SNAP_ALPHA {
-        iv.alpha
+        lv.get(0)
     } else {
-        iv.beta
+        lv.get(1)
     }
 }
 
@@ -248,14 +249,14 @@ fn neighbour(grid: &ScalarGrid, ijk: [usize; 3], d: [isize; 3]) -> usize {
 /// Per grid vertex, the level it is a candidate for (step 1, on the 26-neighbourhood, which
 /// holds every link vertex's value range: a superset of the close vertices). Only vertices
 /// with a neighbour on the other side of a level are examined (found 64 at a time).
-fn candidates(grid: &ScalarGrid, iv: &Interval, eps: f64) -> Vec<u8> {
+fn candidates(grid: &ScalarGrid, lv: &Levels, eps: f64) -> Vec<u8> {
     let [nx, ny, nz] = grid.dims;
     let mut cand = vec![SNAP_NONE; grid.num_vertices()];
     cand.par_chunks_mut(nx * ny)
         .enumerate()
         .filter(|(k, _)| *k > 0 && *k + 1 < nz)
         .for_each(|(k, plane)| {
-            let sides = [k - 1, k, k + 1].map(|z| side_bits(grid, iv, z));
+            let sides = [k - 1, k, k + 1].map(|z| side_bits(grid, lv, z));
             let words = nx.div_ceil(64);
             for j in 1..ny - 1 {
                 let mixed = mixed_row(&sides, j, words);
@@ -265,7 +266,7 @@ fn candidates(grid: &ScalarGrid, iv: &Interval, eps: f64) -> Vec<u8> {
                         let i = 64 * w + b.trailing_zeros() as usize;
                         b &= b - 1;
                         if i > 0 && i + 1 < nx {
-                            plane[j * nx + i] = candidate_level(grid, iv, [i, j, k], eps);
+                            plane[j * nx + i] = candidate_level(grid, lv, [i, j, k], eps);
                         }
                     }
                 }
@@ -276,12 +277,12 @@ fn candidates(grid: &ScalarGrid, iv: &Interval, eps: f64) -> Vec<u8> {
 
 /// Side bits of grid plane `z` for both levels: `[alpha, beta][j * words + i / 64]` bit
 /// `i % 64` set when vertex `(i, j)` lies on the domain side of that level.
-fn side_bits(grid: &ScalarGrid, iv: &Interval, z: usize) -> [Vec<u64>; 2] {
+fn side_bits(grid: &ScalarGrid, lv: &Levels, z: usize) -> [Vec<u64>; 2] {
     let [nx, ny, _] = grid.dims;
     let words = nx.div_ceil(64);
     let mut bits = [vec![0u64; ny * words], vec![0u64; ny * words]];
     let base = grid.index(0, 0, z);
-    let (alpha, beta) = (iv.alpha, iv.beta);
+    let (alpha, beta) = (lv.get(0), lv.get(1));
     for j in 0..ny {
         let [up, down] = &mut bits;
         let (up, down) = (&mut up[j * words..], &mut down[j * words..]);
@@ -328,20 +329,20 @@ fn mixed_row(sides: &[[Vec<u64>; 2]; 3], j: usize, words: usize) -> Vec<u64> {
     mixed
 }
 
-fn candidate_level(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], eps: f64) -> u8 {
+fn candidate_level(grid: &ScalarGrid, lv: &Levels, ijk: [usize; 3], eps: f64) -> u8 {
     let f = grid.value(ijk[0], ijk[1], ijk[2]);
-    let e = iv.effective(f);
+    let e = lv.effective(f);
     let mut found = SNAP_NONE;
     for snap in [SNAP_ALPHA, SNAP_BETA] {
-        let level = level_of(snap, iv);
+        let level = level_of(snap, lv);
         if !level.is_finite() {
             continue;
         }
         let d = (e - level).abs();
-        let side = domain_side(f, snap, iv);
+        let side = domain_side(f, snap, lv);
         let close = neighbours26().any(|o| {
             let u = grid.values.get(neighbour(grid, ijk, o));
-            domain_side(u, snap, iv) != side && d < eps * (u - e).abs()
+            domain_side(u, snap, lv) != side && d < eps * (u - e).abs()
         });
         if close {
             if found != SNAP_NONE {
@@ -350,7 +351,7 @@ fn candidate_level(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], eps: f64) 
             found = snap;
         }
     }
-    if found != SNAP_NONE && other_level_near(grid, iv, ijk, found) {
+    if found != SNAP_NONE && other_level_near(grid, lv, ijk, found) {
         return SNAP_NONE;
     }
     found
@@ -368,23 +369,23 @@ const THIN_LAYER: f64 = 0.4;
 /// band of a smooth random field, 24³: +0.50 % of the volume from warping alone, +0.25 %
 /// without these snaps), and the pass, which leaves the layer's tets alone, could not give
 /// that volume back.
-fn other_level_near(grid: &ScalarGrid, iv: &Interval, ijk: [usize; 3], snap: u8) -> bool {
+fn other_level_near(grid: &ScalarGrid, lv: &Levels, ijk: [usize; 3], snap: u8) -> bool {
     let other = if snap == SNAP_ALPHA {
         SNAP_BETA
     } else {
         SNAP_ALPHA
     };
-    let level = level_of(other, iv);
+    let level = level_of(other, lv);
     if !level.is_finite() {
         return false;
     }
     let f = grid.value(ijk[0], ijk[1], ijk[2]);
-    let (e, side) = (iv.effective(f), domain_side(f, other, iv));
+    let (e, side) = (lv.effective(f), domain_side(f, other, lv));
     let d = (e - level).abs();
     neighbours26().any(|o| {
         let u = grid.values.get(neighbour(grid, ijk, o));
         let len = ((o[0] * o[0] + o[1] * o[1] + o[2] * o[2]) as f64).sqrt();
-        domain_side(u, other, iv) != side && d * len < THIN_LAYER * (u - e).abs()
+        domain_side(u, other, lv) != side && d * len < THIN_LAYER * (u - e).abs()
     })
 }
 
@@ -440,21 +441,21 @@ impl Star {
     fn new(
         grid: &ScalarGrid,
         planner: &Planner,
-        iv: &Interval,
+        lv: &Levels,
         v: usize,
         snap: u8,
         eps: f64,
     ) -> Option<Star> {
         let mut link = Link::default();
         star_link(grid, planner, v, &mut link);
-        link.add_outside_octants(grid, iv, v);
+        link.add_outside_octants(grid, lv, v);
         let f = grid.values.get(v);
-        let side = domain_side(f, snap, iv);
-        let (e, level) = (iv.effective(f), level_of(snap, iv));
+        let side = domain_side(f, snap, lv);
+        let (e, level) = (lv.effective(f), level_of(snap, lv));
         let t = link
             .nodes
             .iter()
-            .filter(|n| domain_side(n.val, snap, iv) != side)
+            .filter(|n| domain_side(n.val, snap, lv) != side)
             .map(|n| (e - level).abs() / (n.val - e).abs())
             .fold(f64::INFINITY, f64::min);
         let from_down = !side;
@@ -468,8 +469,8 @@ impl Star {
         })
     }
 
-    fn regular(&self, snaps: &[u8], iv: &Interval) -> bool {
-        self.link.regular(self.snap, self.from_down, snaps, iv)
+    fn regular(&self, snaps: &[u8], lv: &Levels) -> bool {
+        self.link.regular(self.snap, self.from_down, snaps, lv)
     }
 
     /// Whether the surface the snap leaves in the star, in state `snaps`, stays near the
@@ -485,22 +486,18 @@ impl Star {
         grid: &ScalarGrid,
         near: &TrilinearNear,
         snaps: &[u8],
-        iv: &Interval,
+        lv: &Levels,
     ) -> bool {
         let centre = grid.vertex_ijk(self.v).map(|c| c as f64);
-        let level = level_of(self.snap, iv);
+        let level = level_of(self.snap, lv);
         let value = |n: &Node| match n.state(snaps) {
-            SNAP_NONE => iv.effective(n.val),
-            snap => level_of(snap, iv),
+            SNAP_NONE => lv.effective(n.val),
+            snap => level_of(snap, lv),
         };
         self.link.tris.iter().all(|t| {
             let [a, b, c] = t.map(|i| &self.link.nodes[i]);
             let p = [centre, a.pos, b.pos, c.pos];
-            near.tet_levels_near(
-                p,
-                [level, value(a), value(b), value(c)],
-                [iv.alpha, iv.beta],
-            )
+            near.tet_levels_near(p, [level, value(a), value(b), value(c)], lv)
         })
     }
 
@@ -508,14 +505,14 @@ impl Star {
     /// piecewise-linear field in its star, in state `snaps` (snapped link nodes on their
     /// level): the interval volume of each tet of the star with the centre's value on the
     /// level, less that with its own value.
-    fn snap_volume(&self, grid: &ScalarGrid, snaps: &[u8], iv: &Interval) -> f64 {
+    fn snap_volume(&self, grid: &ScalarGrid, snaps: &[u8], lv: &Levels) -> f64 {
         let centre = grid.vertex_ijk(self.v).map(|c| c as f64);
         // The values the clipper cuts with (`clip::placed`): tied ones moved outward.
-        let own = iv.effective(grid.values.get(self.v));
-        let level = level_of(self.snap, iv);
+        let own = lv.effective(grid.values.get(self.v));
+        let level = level_of(self.snap, lv);
         let value = |n: &Node| match n.state(snaps) {
-            SNAP_NONE => iv.effective(n.val),
-            snap => level_of(snap, iv),
+            SNAP_NONE => lv.effective(n.val),
+            snap => level_of(snap, lv),
         };
         self.link
             .tris
@@ -524,8 +521,8 @@ impl Star {
                 let [a, b, c] = t.map(|i| &self.link.nodes[i]);
                 let p = [centre, a.pos, b.pos, c.pos];
                 let f = |x: f64| [x, value(a), value(b), value(c)];
-                interval_volume(p, f(level), iv.alpha, iv.beta)
-                    - interval_volume(p, f(own), iv.alpha, iv.beta)
+                interval_volume(p, f(level), lv.get(0), lv.get(1))
+                    - interval_volume(p, f(own), lv.get(0), lv.get(1))
             })
             .sum()
     }
@@ -569,13 +566,14 @@ impl Link {
 
     /// Joins, for each of the eight cells around `v` that lies entirely outside the
     /// interval, its other corners and every link node in its closed box.
-    fn add_outside_octants(&mut self, grid: &ScalarGrid, iv: &Interval, v: usize) {
+    fn add_outside_octants(&mut self, grid: &ScalarGrid, lv: &Levels, v: usize) {
         let ijk = grid.vertex_ijk(v);
         for corner in 0..8 {
             let o = corner_offset(corner);
             let cell = [0, 1, 2].map(|a| ijk[a] + o[a] - 1);
             let vals = grid.cell_values(cell[0], cell[1], cell[2]);
-            let outside = vals.iter().all(|&x| x <= iv.alpha) || vals.iter().all(|&x| x >= iv.beta);
+            let outside =
+                vals.iter().all(|&x| x <= lv.get(0)) || vals.iter().all(|&x| x >= lv.get(1));
             if !outside {
                 continue;
             }
@@ -600,12 +598,12 @@ impl Link {
 
     /// Classes of the nodes for a snap to `snap` in state `snaps`: a node at, beyond or
     /// snapped to the interval's other level is up (on the domain side of `snap`).
-    fn classes(&self, snap: u8, snaps: &[u8], iv: &Interval) -> Vec<u8> {
+    fn classes(&self, snap: u8, snaps: &[u8], lv: &Levels) -> Vec<u8> {
         self.nodes
             .iter()
             .map(|n| match n.state(snaps) {
                 s if s == snap => ON,
-                SNAP_NONE if !domain_side(n.val, snap, iv) => DOWN,
+                SNAP_NONE if !domain_side(n.val, snap, lv) => DOWN,
                 _ => UP,
             })
             .collect()
@@ -614,8 +612,8 @@ impl Link {
     /// Whether snapping the centre keeps the domain homeomorphic (module docs): the closed
     /// set `S` of the link where the field is at least the level (up nodes, and snapped
     /// nodes on the level) is a disk whose complement (down nodes) is connected.
-    fn regular(&self, snap: u8, from_down: bool, snaps: &[u8], iv: &Interval) -> bool {
-        let cls = self.classes(snap, snaps, iv);
+    fn regular(&self, snap: u8, from_down: bool, snaps: &[u8], lv: &Levels) -> bool {
+        let cls = self.classes(snap, snaps, lv);
         let groups_ok = self.groups.iter().all(|g| {
             let c = cls[g[0]];
             c != ON && g.iter().all(|&i| cls[i] == c)

@@ -5,6 +5,7 @@ use crate::field::GUARD_DISTANCE;
 use crate::geom::level_polygon;
 use crate::geom::sample_points_spaced;
 use crate::grid::ScalarGrid;
+use crate::levels::Levels;
 
 /// Step 1 on the trilinear field: the crossing found there may lie on a diagonal of the
 /// decomposition, where the piecewise-linear level set is closer to the vertex than the
@@ -45,8 +46,8 @@ impl TrilinearNear<'_> {
     /// `f` on tet `p` (index space) lie within [`GUARD_DISTANCE`] of the trilinear level sets,
     /// at points [`SAMPLE_SPACING`] apart (the guard's own are twice as fine; a snap is tested for every
     /// candidate, and the checker after it allows half a voxel).
-    pub(super) fn tet_levels_near(&self, p: [[f64; 3]; 4], f: [f64; 4], levels: [f64; 2]) -> bool {
-        levels.into_iter().filter(|l| l.is_finite()).all(|level| {
+    pub(super) fn tet_levels_near(&self, p: [[f64; 3]; 4], f: [f64; 4], levels: &Levels) -> bool {
+        levels.iter().filter(|l| l.is_finite()).all(|level| {
             let (q, n) = level_polygon(p, f, level);
             let tris: &[[usize; 3]] = match n {
                 0 => &[],

@@ -1,6 +1,7 @@
 //! Tests of warping: the candidates, the link test, and the meshes it gives.
 use std::collections::HashMap;
 
+use crate::levels::Levels;
 use crate::{mesh_interval, MeshOptions, Method, ScalarGrid};
 
 fn noise(dims: [usize; 3], seed: u64, levels: f64) -> ScalarGrid {
@@ -117,13 +118,13 @@ fn boundary_fan_problems(m: &crate::TetMesh) -> Vec<String> {
 fn candidates_match_the_plain_scan() {
     for seed in 0..20u64 {
         let g = noise([70, 7, 6], seed, 0.0);
-        let iv = crate::clip::Interval::new(0.3, 0.8, &g.values);
-        let fast = super::candidates(&g, &iv, 0.2);
+        let lv = Levels::interval(0.3, 0.8).with_ties(&g.values);
+        let fast = super::candidates(&g, &lv, 0.2);
         let mut plain = vec![0u8; g.num_vertices()];
         for k in 1..5 {
             for j in 1..6 {
                 for i in 1..69 {
-                    plain[g.index(i, j, k)] = super::candidate_level(&g, &iv, [i, j, k], 0.2);
+                    plain[g.index(i, j, k)] = super::candidate_level(&g, &lv, [i, j, k], 0.2);
                 }
             }
         }
@@ -206,8 +207,8 @@ fn vertices_whose_link_the_other_level_crosses_are_snapped() {
             beta: o.beta,
             split_sags: true,
         };
-        let iv = crate::clip::Interval::new(o.alpha, o.beta, &g.values);
-        let warp = super::snap_vertices(&g, &planner, &iv, 0.3);
+        let lv = Levels::interval(o.alpha, o.beta).with_ties(&g.values);
+        let warp = super::snap_vertices(&g, &planner, &lv, 0.3);
         both += snapped_to_both(&g, &warp.snaps);
         across += warp
             .snapped
@@ -218,9 +219,9 @@ fn vertices_whose_link_the_other_level_crosses_are_snapped() {
                 super::neighbours26().any(|d| {
                     let u = g.values.get(super::neighbour(&g, ijk, d));
                     if alpha {
-                        u >= iv.beta
+                        u >= lv.get(1)
                     } else {
-                        u <= iv.alpha
+                        u <= lv.get(0)
                     }
                 })
             })

@@ -251,12 +251,8 @@ pub fn label_errors(mesh: &TetMesh, alpha: f64, beta: f64, extent: [f64; 3]) -> 
     let vmax = mesh.values.iter().fold(1.0f64, |m, v| m.max(v.abs()));
     for (bi, (&tri, &lab)) in mesh.boundary.iter().zip(&mesh.boundary_labels).enumerate() {
         let bad = match lab {
-            BoundaryLabel::Alpha | BoundaryLabel::Beta => {
-                let lvl = if lab == BoundaryLabel::Alpha {
-                    alpha
-                } else {
-                    beta
-                };
+            BoundaryLabel::Level(l) => {
+                let lvl = if l == 0 { alpha } else { beta };
                 let tol = 1e-9 * vmax.max(lvl.abs());
                 !lvl.is_finite()
                     || tri

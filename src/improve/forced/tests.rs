@@ -113,7 +113,7 @@ fn measurer<'a>(g: &'a ScalarGrid, alpha: f64, beta: f64, mesh: &'a TetMesh) -> 
     Classifier {
         mesh,
         field: Field::new(g),
-        levels: [alpha, beta],
+        levels: Levels::interval(alpha, beta),
         range: 1.0,
         floor: 5f64.to_radians(),
         target_sine: 15f64.to_radians().sin(),
@@ -210,7 +210,7 @@ fn the_quick_reasons_are_those_of_the_full_measures() {
     let c = Classifier {
         mesh: &mesh,
         field: Field::new(&g),
-        levels: [3.5, 5.5],
+        levels: Levels::interval(3.5, 5.5),
         range: 7.0,
         floor: 15f64.to_radians(),
         target_sine: opts.min_angle.to_radians().sin(),
@@ -247,7 +247,7 @@ fn the_neck_width_is_measured_across_the_saddle() {
     let c = Classifier {
         mesh: &mesh,
         field: Field::new(&g),
-        levels: [0.01, f64::INFINITY],
+        levels: Levels::interval(0.01, f64::INFINITY),
         range: 1.0,
         floor: 5f64.to_radians(),
         target_sine: 15f64.to_radians().sin(),

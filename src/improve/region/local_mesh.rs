@@ -11,6 +11,7 @@ use crate::field::Field;
 use crate::improve::constraint::Constraint;
 use crate::improve::face_grid::FaceGrid;
 use crate::improve::Ctx;
+use crate::levels::Levels;
 use crate::mesh::{BoundaryLabel, TetMesh};
 use crate::quality::biased_min_sine;
 
@@ -156,7 +157,7 @@ impl LocalMesh {
         for f in faces {
             lm.insert_face(f);
         }
-        lm.classify(&ctx.field, ctx.levels);
+        lm.classify(&ctx.field, &ctx.levels);
         if let Some(off) = copy.off_level {
             lm.seed_on_level(off, &ctx.field);
         }
@@ -316,11 +317,11 @@ impl LocalMesh {
 
     /// Sets the constraints of the free vertices from their boundary faces and box planes,
     /// snapping box coordinates exactly onto their plane. Frozen vertices are pinned.
-    fn classify(&mut self, field: &Field, levels: [f64; 2]) {
+    fn classify(&mut self, field: &Field, levels: &Levels) {
         let mut labels = vec![0u8; self.global.len()];
         for f in self.faces.values() {
             for v in f.tri {
-                labels[v as usize] |= 1 << (f.label as u8);
+                labels[v as usize] |= f.label.bit();
             }
         }
         let dims = field.grid().dims;
