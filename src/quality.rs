@@ -6,6 +6,7 @@
 //! oriented when `(b-a)·((c-a)×(d-a)) > 0`. Measures that can be signed (biased sine, SICN)
 //! are negative for inverted elements.
 
+use nalgebra::{Matrix3, Point3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -151,33 +152,30 @@ pub fn radius_ratio(p: [[f64; 3]; 4]) -> f64 {
 /// regular tetrahedron, 0 for a flat one, negative for an inverted one.
 pub fn sicn(p: [[f64; 3]; 4]) -> f64 {
     // Regular tet with corners 0, e_x, (1/2, √3/2, 0), (1/2, √3/6, √(2/3)): J = E W⁻¹ where E
-    // holds the edge vectors from corner 0 and W those of the regular tet.
-    const W_INV: [[f64; 3]; 3] = [
-        [1.0, -0.577_350_269_189_625_8, -0.408_248_290_463_863],
-        [0.0, 1.154_700_538_379_251_7, -0.408_248_290_463_863],
-        [0.0, 0.0, 1.224_744_871_391_589],
-    ];
-    let e = [sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0])];
-    // j[r][c] = sum_k e[k][r] * W_INV[k][c]
-    let mut j = [[0.0; 3]; 3];
-    for r in 0..3 {
-        for c in 0..3 {
-            j[r][c] = (0..3).map(|k| e[k][r] * W_INV[k][c]).sum();
-        }
-    }
-    let det = crate::grid::det3(&j);
-    let fro2: f64 = j.iter().flatten().map(|x| x * x).sum();
-    // ||J||_F ||J⁻¹||_F = ||J||_F ||adj J||_F / |det J|; adj J has the cofactors.
-    let cof = |r: usize, c: usize| {
-        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
-        let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
-        j[r1][c1] * j[r2][c2] - j[r1][c2] * j[r2][c1]
+    // holds the edge vectors from corner 0 (columns) and W those of the regular tet.
+    let w_inv = Matrix3::new(
+        1.0,
+        -0.577_350_269_189_625_8,
+        -0.408_248_290_463_863,
+        0.0,
+        1.154_700_538_379_251_7,
+        -0.408_248_290_463_863,
+        0.0,
+        0.0,
+        1.224_744_871_391_589,
+    );
+    let e = Matrix3::from_columns(&[1, 2, 3].map(|k| Point3::from(p[k]) - Point3::from(p[0])));
+    let j = e * w_inv;
+    let det = j.determinant();
+    // ||J||_F ||J⁻¹||_F
+    let Some(inv) = j.try_inverse().filter(|_| det != 0.0) else {
+        return 0.0;
     };
-    let adj2: f64 = (0..9).map(|i| cof(i / 3, i % 3).powi(2)).sum();
-    if det == 0.0 || adj2 == 0.0 {
+    let norms = j.norm() * inv.norm();
+    if norms == 0.0 || !norms.is_finite() {
         return 0.0;
     }
-    3.0 * det / (fro2 * adj2).sqrt()
+    3.0f64.copysign(det) / norms
 }
 
 /// Gmsh's gamma: inscribed radius over longest edge, normalised so that the regular
