@@ -6,11 +6,12 @@
 //! conforming. Every tet is checked after mapping: a grid whose map would invert one is
 //! rejected with the cell named, never written.
 
+use nalgebra::Matrix3;
 use rayon::prelude::*;
 
 use crate::extract::{mesh_interval, MeshError, MeshOptions, MeshOutput};
 use crate::geom::signed_volume;
-use crate::grid::{corner_offset, det3, CurvilinearGrid};
+use crate::grid::{corner_offset, CurvilinearGrid};
 use crate::mesh::TetMesh;
 
 /// Why a curvilinear grid could not be meshed.
@@ -56,14 +57,11 @@ fn cell_orientation(g: &CurvilinearGrid, c: [usize; 3]) -> i8 {
     let mut sign = 0i8;
     for k in 0..8 {
         // columns: derivative along each axis at corner k (the edge vector through it)
-        let mut m = [[0.0; 3]; 3];
-        for a in 0..3 {
+        let m = Matrix3::from_fn(|r, a| {
             let (lo, hi) = (k & !(1 << a), k | (1 << a));
-            for r in 0..3 {
-                m[r][a] = x[hi][r] - x[lo][r];
-            }
-        }
-        let d = det3(&m);
+            x[hi][r] - x[lo][r]
+        });
+        let d = m.determinant();
         let s = if d > 0.0 {
             1
         } else if d < 0.0 {

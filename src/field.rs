@@ -1,6 +1,9 @@
 //! The trilinear field of a grid, evaluated anywhere in index space, and Newton projection of
 //! a point onto one of its level sets along a subset of the axes.
 
+use nalgebra::{Matrix3, Point3};
+
+use crate::algebra::{array3, rows};
 use crate::geom::norm;
 use crate::grid::ScalarGrid;
 use crate::trilinear;
@@ -16,7 +19,9 @@ pub const GUARD_DISTANCE: f64 = 0.4;
 pub struct Field<'a> {
     grid: &'a ScalarGrid,
     /// Inverse of [`ScalarGrid::linear_map`]: physical offset → index offset.
-    inverse: [[f64; 3]; 3],
+    inverse: Matrix3<f64>,
+    /// `inverse` as row-major arrays (what [`Field::inverse`] lends).
+    inverse_rows: [[f64; 3]; 3],
 }
 
 /// `g` with the components of the axes whose bit is not set in `free_axes` zeroed.
@@ -35,23 +40,27 @@ const NEWTON_STEPS: usize = 30;
 impl<'a> Field<'a> {
     /// The interpolant of `grid`.
     pub fn new(grid: &'a ScalarGrid) -> Self {
-        let m = grid.linear_map();
-        let det = crate::grid::det3(&m);
-        let mut inverse = [[0.0; 3]; 3];
-        for r in 0..3 {
-            for c in 0..3 {
-                // inverse[r][c] = cofactor(c, r) / det
-                let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
-                let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
-                inverse[r][c] = (m[c1][r1] * m[c2][r2] - m[c1][r2] * m[c2][r1]) / det;
-            }
+        // A grid that passed `ScalarGrid::with_geometry` has an invertible map; one built
+        // field by field with a singular map gets NaN (as dividing by its zero determinant did).
+        let inverse = grid
+            .linear_matrix()
+            .try_inverse()
+            .unwrap_or_else(|| Matrix3::from_element(f64::NAN));
+        Field {
+            grid,
+            inverse,
+            inverse_rows: rows(&inverse),
         }
-        Field { grid, inverse }
     }
 
     /// Inverse of [`ScalarGrid::linear_map`] (physical offset → index offset); row `a` is the
     /// physical gradient of index coordinate `a`.
     pub fn inverse(&self) -> &[[f64; 3]; 3] {
+        &self.inverse_rows
+    }
+
+    /// [`Field::inverse`] as a `nalgebra` matrix.
+    pub fn inverse_matrix(&self) -> &Matrix3<f64> {
         &self.inverse
     }
 
@@ -62,9 +71,7 @@ impl<'a> Field<'a> {
 
     /// Index coordinates of physical point `x`.
     pub fn to_index(&self, x: [f64; 3]) -> [f64; 3] {
-        let d = [0, 1, 2].map(|i| x[i] - self.grid.origin[i]);
-        self.inverse
-            .map(|row| row[0] * d[0] + row[1] * d[1] + row[2] * d[2])
+        array3(&(self.inverse * (Point3::from(x) - self.grid.origin_point())))
     }
 
     /// Physical position of index point `u`.

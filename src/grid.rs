@@ -9,6 +9,9 @@
 //! * Index coordinates `(i + u, j + v, k + w)` map to physical coordinates by
 //!   `origin + direction * (spacing ⊙ index)` (see [`ScalarGrid::to_physical`]).
 
+use nalgebra::{Affine3, Matrix3, Matrix4, Point3};
+
+use crate::algebra::{array3, matrix3, rows};
 pub use crate::samples::{SampleStorage, Samples};
 
 /// A scalar field sampled at the vertices of a regular (possibly oriented) grid.
@@ -234,29 +237,79 @@ impl ScalarGrid {
 
     /// Linear map from index space to physical space: `direction * diag(spacing)`.
     pub fn linear_map(&self) -> [[f64; 3]; 3] {
-        let mut m = [[0.0; 3]; 3];
-        for (r, row) in m.iter_mut().enumerate() {
-            for (c, x) in row.iter_mut().enumerate() {
-                *x = self.direction[r][c] * self.spacing[c];
-            }
+        rows(&self.linear_matrix())
+    }
+
+    /// [`ScalarGrid::linear_map`] as a `nalgebra` matrix: column `a` is the physical step
+    /// along index axis `a`.
+    #[inline]
+    pub fn linear_matrix(&self) -> Matrix3<f64> {
+        let mut m = self.direction_matrix();
+        for (c, s) in self.spacing.iter().enumerate() {
+            m.column_mut(c).scale_mut(*s);
         }
         m
     }
 
+    /// The direction matrix as a `nalgebra` matrix (columns: unit index-axis directions).
+    pub fn direction_matrix(&self) -> Matrix3<f64> {
+        matrix3(&self.direction)
+    }
+
+    /// The physical position of vertex (0, 0, 0) as a `nalgebra` point.
+    pub fn origin_point(&self) -> Point3<f64> {
+        Point3::from(self.origin)
+    }
+
+    /// The whole index-to-physical map, `x = origin + linear_map · index`, as a `nalgebra`
+    /// affine transformation (apply it with `transform_point`).
+    pub fn affine(&self) -> Affine3<f64> {
+        let mut h = Matrix4::identity();
+        h.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&self.linear_matrix());
+        h.fixed_view_mut::<3, 1>(0, 3)
+            .copy_from(&self.origin_point().coords);
+        Affine3::from_matrix_unchecked(h)
+    }
+
+    /// Builds a grid whose index-to-physical map is `affine` (see [`ScalarGrid::affine`]):
+    /// spacing from the column norms of its linear part, direction from the normalised
+    /// columns, origin from its translation.
+    ///
+    /// # Errors
+    /// [`GridError::BadSpacing`] for a zero or non-finite column, else see
+    /// [`ScalarGrid::with_geometry`].
+    pub fn with_affine(
+        dims: [usize; 3],
+        affine: &Affine3<f64>,
+        values: impl Into<Samples>,
+    ) -> Result<Self, GridError> {
+        let h = affine.matrix();
+        let lin: Matrix3<f64> = h.fixed_view::<3, 3>(0, 0).into_owned();
+        let origin = array3(&h.fixed_view::<3, 1>(0, 3).into_owned());
+        let spacing: [f64; 3] = std::array::from_fn(|c| lin.column(c).norm());
+        if spacing.iter().any(|s| !s.is_finite() || *s == 0.0) {
+            return Err(GridError::BadSpacing(spacing));
+        }
+        let direction = std::array::from_fn(|r| std::array::from_fn(|c| lin[(r, c)] / spacing[c]));
+        Self::with_geometry(dims, spacing, origin, direction, values)
+    }
+
     /// Determinant of the index-to-physical map; negative means left-handed placement.
     pub fn affine_determinant(&self) -> f64 {
-        det3(&self.linear_map())
+        self.linear_matrix().determinant()
     }
 
     /// Physical position of index-space point `p`.
     #[inline]
     pub fn to_physical(&self, p: [f64; 3]) -> [f64; 3] {
-        let m = self.linear_map();
-        let mut out = self.origin;
-        for (r, o) in out.iter_mut().enumerate() {
-            *o += m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2];
-        }
-        out
+        self.to_physical_point(&Point3::from(p)).into()
+    }
+
+    /// [`ScalarGrid::to_physical`] on `nalgebra` points: `origin + linear_map · p`.
+    #[inline]
+    pub fn to_physical_point(&self, p: &Point3<f64>) -> Point3<f64> {
+        self.origin_point() + self.linear_matrix() * p.coords
     }
 
     /// Smallest and largest value.
@@ -273,62 +326,7 @@ pub const SINGULAR_CONDITION: f64 = 1e15;
 /// out nearly flat (the CLI warns).
 pub const NEAR_SINGULAR_CONDITION: f64 = 1e3;
 
-/// Condition number of a 3×3 matrix in the 2-norm: its largest singular value over its
-/// smallest (1 for a rotation, 2000 for `diag(1, 1, 0.0005)`); infinite when singular.
-pub fn condition_number(m: &[[f64; 3]; 3]) -> f64 {
-    // scaled to entries of at most 1, so that no square below overflows
-    let scale = m.iter().flatten().fold(0.0f64, |s, x| s.max(x.abs()));
-    if scale == 0.0 || !scale.is_finite() {
-        return f64::INFINITY;
-    }
-    let m = m.map(|row| row.map(|x| x / scale));
-    let det = det3(&m);
-    if det == 0.0 || !det.is_finite() {
-        return f64::INFINITY;
-    }
-    // The inverse is the transposed cofactor matrix over the determinant; a transpose keeps
-    // the 2-norm.
-    let cof: [[f64; 3]; 3] = std::array::from_fn(|r| {
-        std::array::from_fn(|c| {
-            let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
-            let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
-            m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]
-        })
-    });
-    spectral_norm(&m) * spectral_norm(&cof) / det.abs()
-}
-
-/// Largest singular value of a 3×3 matrix: the square root of the largest eigenvalue of
-/// `MᵀM`.
-fn spectral_norm(m: &[[f64; 3]; 3]) -> f64 {
-    let gram: [[f64; 3]; 3] =
-        std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|k| m[k][r] * m[k][c]).sum()));
-    largest_eigenvalue(&gram).max(0.0).sqrt()
-}
-
-/// Largest eigenvalue of a symmetric 3×3 matrix, in closed form (the trigonometric solution
-/// of the characteristic cubic).
-fn largest_eigenvalue(a: &[[f64; 3]; 3]) -> f64 {
-    let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-    let q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
-    let p2 = (0..3).map(|i| (a[i][i] - q).powi(2)).sum::<f64>() + 2.0 * off;
-    if p2 == 0.0 {
-        return q;
-    }
-    let p = (p2 / 6.0).sqrt();
-    let b: [[f64; 3]; 3] = std::array::from_fn(|r| {
-        std::array::from_fn(|c| (a[r][c] - if r == c { q } else { 0.0 }) / p)
-    });
-    let phi = (det3(&b) / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
-    q + 2.0 * p * phi.cos()
-}
-
-/// Determinant of a row-major 3×3 matrix.
-pub fn det3(m: &[[f64; 3]; 3]) -> f64 {
-    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-}
+pub use crate::algebra::{condition_number, det3};
 
 /// A curvilinear (structured, warped) grid: scalar values and a physical position at every
 /// vertex of a `dims` lattice. In each cell both the field and the geometry are trilinear in
@@ -404,6 +402,40 @@ mod tests {
         assert!(k > NEAR_SINGULAR_CONDITION);
         let flat = [[1.0, 2.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
         assert_eq!(condition_number(&flat), f64::INFINITY);
+    }
+
+    #[test]
+    fn the_affine_map_as_nalgebra_types_matches_the_arrays() {
+        let (c, s) = (0.6, 0.8);
+        let dir = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, -1.0]];
+        let vals: Vec<f64> = (0..24).map(|x| x as f64).collect();
+        let g = ScalarGrid::with_geometry([2, 3, 4], [0.5, 2.0, 1.5], [1.0, -2.0, 3.0], dir, vals)
+            .unwrap();
+        assert_eq!(crate::algebra::rows(&g.linear_matrix()), g.linear_map());
+        assert_eq!(crate::algebra::rows(&g.direction_matrix()), g.direction);
+        let p = [0.25, 1.5, 2.75];
+        let x = g.to_physical(p);
+        let a = g.affine().transform_point(&Point3::from(p));
+        for r in 0..3 {
+            assert!((a[r] - x[r]).abs() < 1e-12);
+        }
+        assert_eq!(g.to_physical_point(&Point3::from(p)), Point3::from(x));
+        assert!(g.affine_determinant() < 0.0);
+        let back = ScalarGrid::with_affine(g.dims, &g.affine(), g.values.clone()).unwrap();
+        for r in 0..3 {
+            assert!((back.origin[r] - g.origin[r]).abs() < 1e-15);
+            assert!((back.spacing[r] - g.spacing[r]).abs() < 1e-15);
+            for c in 0..3 {
+                assert!((back.direction[r][c] - g.direction[r][c]).abs() < 1e-15);
+            }
+        }
+        let flat = Affine3::from_matrix_unchecked(Matrix4::from_diagonal(&nalgebra::Vector4::new(
+            1.0, 0.0, 1.0, 1.0,
+        )));
+        assert!(matches!(
+            ScalarGrid::with_affine([2, 2, 2], &flat, vec![0.0; 8]),
+            Err(GridError::BadSpacing(_))
+        ));
     }
 
     #[test]

@@ -14,6 +14,7 @@
 // Index loops over small fixed arrays (corners, faces, axes) read better than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
+pub mod algebra;
 pub mod check;
 pub(crate) mod clip;
 pub mod critical;
@@ -53,6 +54,8 @@ pub use grid::{CurvilinearGrid, ScalarGrid};
 pub use levels::Levels;
 pub use mesh::{BoundaryLabel, TetMesh, TriSurface};
 pub use mesh::{MeshChunk, MeshSink};
+/// The `nalgebra` this crate's geometry types ([`algebra`], [`ScalarGrid::affine`]) come from.
+pub use nalgebra;
 pub use samples::{SampleStorage, Samples};
 pub use surface::{analysis::analyse_surface, level_surface, SurfaceOptions};
 pub use warp::Snapped;

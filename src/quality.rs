@@ -6,6 +6,7 @@
 //! oriented when `(b-a)·((c-a)×(d-a)) > 0`. Measures that can be signed (biased sine, SICN)
 //! are negative for inverted elements.
 
+use nalgebra::{Matrix3, Point3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -151,29 +152,26 @@ pub fn radius_ratio(p: [[f64; 3]; 4]) -> f64 {
 /// regular tetrahedron, 0 for a flat one, negative for an inverted one.
 pub fn sicn(p: [[f64; 3]; 4]) -> f64 {
     // Regular tet with corners 0, e_x, (1/2, √3/2, 0), (1/2, √3/6, √(2/3)): J = E W⁻¹ where E
-    // holds the edge vectors from corner 0 and W those of the regular tet.
-    const W_INV: [[f64; 3]; 3] = [
-        [1.0, -0.577_350_269_189_625_8, -0.408_248_290_463_863],
-        [0.0, 1.154_700_538_379_251_7, -0.408_248_290_463_863],
-        [0.0, 0.0, 1.224_744_871_391_589],
-    ];
-    let e = [sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0])];
-    // j[r][c] = sum_k e[k][r] * W_INV[k][c]
-    let mut j = [[0.0; 3]; 3];
-    for r in 0..3 {
-        for c in 0..3 {
-            j[r][c] = (0..3).map(|k| e[k][r] * W_INV[k][c]).sum();
-        }
-    }
-    let det = crate::grid::det3(&j);
-    let fro2: f64 = j.iter().flatten().map(|x| x * x).sum();
-    // ||J||_F ||J⁻¹||_F = ||J||_F ||adj J||_F / |det J|; adj J has the cofactors.
-    let cof = |r: usize, c: usize| {
-        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
-        let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
-        j[r1][c1] * j[r2][c2] - j[r1][c2] * j[r2][c1]
-    };
-    let adj2: f64 = (0..9).map(|i| cof(i / 3, i % 3).powi(2)).sum();
+    // holds the edge vectors from corner 0 (columns) and W those of the regular tet.
+    let w_inv = Matrix3::new(
+        1.0,
+        -0.577_350_269_189_625_8,
+        -0.408_248_290_463_863,
+        0.0,
+        1.154_700_538_379_251_7,
+        -0.408_248_290_463_863,
+        0.0,
+        0.0,
+        1.224_744_871_391_589,
+    );
+    let e = Matrix3::from_columns(&[1, 2, 3].map(|k| Point3::from(p[k]) - Point3::from(p[0])));
+    let j = e * w_inv;
+    let det = j.determinant();
+    // ||J||_F ||J⁻¹||_F = ||J||_F ||adj J||_F / |det J|: the adjugate's entries are J's 2×2
+    // minors (squared, their signs do not matter). Both sums run over the entries row by row.
+    let fro2: f64 = j.transpose().iter().map(|x| x * x).sum();
+    let minor = |r: usize, c: usize| j.remove_row(r).remove_column(c).determinant();
+    let adj2: f64 = (0..9).map(|i| minor(i / 3, i % 3).powi(2)).sum();
     if det == 0.0 || adj2 == 0.0 {
         return 0.0;
     }
@@ -345,6 +343,50 @@ pub fn summarize(mesh: &TetMesh) -> QualitySummary {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// SICN as it was written out by hand: `nalgebra` gives the same bits.
+    fn sicn_by_hand(p: [[f64; 3]; 4]) -> f64 {
+        const W_INV: [[f64; 3]; 3] = [
+            [1.0, -0.577_350_269_189_625_8, -0.408_248_290_463_863],
+            [0.0, 1.154_700_538_379_251_7, -0.408_248_290_463_863],
+            [0.0, 0.0, 1.224_744_871_391_589],
+        ];
+        let e = [sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0])];
+        let j: [[f64; 3]; 3] = std::array::from_fn(|r| {
+            std::array::from_fn(|c| (0..3).map(|k| e[k][r] * W_INV[k][c]).sum())
+        });
+        let det = j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
+            - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
+            + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0]);
+        let fro2: f64 = j.iter().flatten().map(|x| x * x).sum();
+        let cof = |r: usize, c: usize| {
+            let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+            let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+            j[r1][c1] * j[r2][c2] - j[r1][c2] * j[r2][c1]
+        };
+        let adj2: f64 = (0..9).map(|i| cof(i / 3, i % 3).powi(2)).sum();
+        if det == 0.0 || adj2 == 0.0 {
+            return 0.0;
+        }
+        3.0 * det / (fro2 * adj2).sqrt()
+    }
+
+    #[test]
+    fn sicn_keeps_the_bits_of_the_cofactor_formula() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for _ in 0..2000 {
+            let p: [[f64; 3]; 4] = std::array::from_fn(|_| [next(), next(), next()]);
+            assert_eq!(sicn(p).to_bits(), sicn_by_hand(p).to_bits());
+        }
+        let flat = [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+        assert_eq!(sicn(flat), 0.0);
+    }
 
     fn regular() -> [[f64; 3]; 4] {
         [

@@ -3,6 +3,8 @@
 //! Corner and face numbering are those of [`crate::grid`]. Coordinates are cell-local,
 //! in `[0, 1]^3`.
 
+use nalgebra::{Matrix3, Vector3};
+
 use crate::grid::face_corners;
 
 /// Trilinear interpolation of the corner values `v` at cell-local point `p`.
@@ -117,6 +119,15 @@ pub fn coefficients(v: &[f64; 8]) -> [f64; 8] {
     ]
 }
 
+/// Hessian of `F` (coefficients `k`, see [`coefficients`]) at cell-local point `p`: zero
+/// diagonal, `F_xy = e + h z`, `F_yz = f + h x`, `F_xz = g + h y` off it.
+#[inline]
+pub fn hessian(k: &[f64; 8], p: [f64; 3]) -> Matrix3<f64> {
+    let [_, _, _, _, e, f, g, h] = *k;
+    let (fxy, fyz, fxz) = (e + h * p[2], f + h * p[0], g + h * p[1]);
+    Matrix3::new(0.0, fxy, fxz, fxy, 0.0, fyz, fxz, fyz, 0.0)
+}
+
 /// The body saddles (0, 1 or 2) inside the cell (by at least [`INSIDE_EPS`]), sorted by increasing value.
 ///
 /// The gradient of a trilinear function vanishes where (with `h != 0` and the shift
@@ -156,19 +167,17 @@ pub fn body_saddles(v: &[f64; 8]) -> ([BodySaddle; 2], usize) {
             }
         }
     } else {
-        // [0 e g; e 0 f; g f 0] (x y z)^T = -(b c d)^T
+        // [0 e g; e 0 f; g f 0] (x y z)^T = -(b c d)^T, the (constant) Hessian system, by
+        // Cramer's rule with the closed-form determinant `2efg`
         let det = 2.0 * e * f * g;
         if det != 0.0 {
-            let m = [[0.0, e, g], [e, 0.0, f], [g, f, 0.0]];
-            let rhs = [-b, -c, -d];
-            let mut sol = [0.0; 3];
-            for (col, s) in sol.iter_mut().enumerate() {
+            let m = hessian(&[0.0, b, c, d, e, f, g, 0.0], [0.0; 3]);
+            let rhs = Vector3::new(-b, -c, -d);
+            let sol = std::array::from_fn(|col| {
                 let mut mm = m;
-                for row in 0..3 {
-                    mm[row][col] = rhs[row];
-                }
-                *s = crate::grid::det3(&mm) / det;
-            }
+                mm.set_column(col, &rhs);
+                mm.determinant() / det
+            });
             push(sol);
         }
     }

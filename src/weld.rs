@@ -10,6 +10,7 @@
 //! the keys and the slab order, so the output is identical for every thread count and every
 //! number of slabs in flight.
 
+use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
@@ -166,8 +167,8 @@ pub(crate) struct Welder {
     next_point: u64,
     next_tet: u64,
     next_slab: usize,
-    lin: [[f64; 3]; 3],
-    origin: [f64; 3],
+    lin: Matrix3<f64>,
+    origin: Vector3<f64>,
     /// The frame is left-handed: elements are flipped to keep their orientation.
     flip: bool,
 }
@@ -182,8 +183,8 @@ impl Welder {
             next_point: 0,
             next_tet: 0,
             next_slab: 0,
-            lin: grid.linear_map(),
-            origin: grid.origin,
+            lin: grid.linear_matrix(),
+            origin: Vector3::from(grid.origin),
             flip: grid.affine_determinant() < 0.0,
         }
     }
@@ -264,12 +265,14 @@ impl Welder {
     }
 
     /// Index-space `p` in physical coordinates, summed as the mesher always has
-    /// (`origin + a·x + b·y + c·z`, left to right), which is not the association of
-    /// [`ScalarGrid::to_physical`]: keeping it keeps every output byte.
+    /// (`origin + a·x + b·y + c·z`, left to right, `a`, `b`, `c` the columns of the linear
+    /// map), which is not the association of [`ScalarGrid::to_physical`]
+    /// (`origin + (a·x + b·y + c·z)`): keeping it keeps every output byte.
     #[inline]
     fn physical(&self, p: [f64; 3]) -> [f64; 3] {
-        let (lin, o) = (&self.lin, self.origin);
-        [0, 1, 2].map(|r| o[r] + lin[r][0] * p[0] + lin[r][1] * p[1] + lin[r][2] * p[2])
+        let l = &self.lin;
+        let x = self.origin + l.column(0) * p[0] + l.column(1) * p[1] + l.column(2) * p[2];
+        x.into()
     }
 
     /// Slab `s` in global numbers `n`, physical coordinates.

@@ -14,6 +14,7 @@
 
 use rayon::prelude::*;
 use sprs::{CsMat, TriMat};
+use tptd::nalgebra::{Matrix3, Point3};
 use tptd::TetMesh;
 
 use crate::SolveError;
@@ -52,33 +53,29 @@ pub struct TetGeometry {
     pub grad: [[f64; 3]; 4],
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
 /// Dot product of two 3-vectors.
 pub fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// The geometry of the tet with corners `p`, or `None` when it is degenerate.
+///
+/// With the edge vectors `e_k = p_k − p_0` as the rows of `E`, `e_j · grad(phi_k) = δ_jk`:
+/// the gradients `grad(phi_1..3)` are the columns of `E⁻¹`, `grad(phi_0)` is minus their sum
+/// and the volume is `|det E| / 6`. (`E⁻¹`'s cofactors are the cross products `e_2 × e_3`,
+/// `e_3 × e_1`, `e_1 × e_2` over `det E`, bit for bit.)
 pub fn tet_geometry(p: [[f64; 3]; 4]) -> Option<TetGeometry> {
-    let (e1, e2, e3) = (sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0]));
-    let det = dot3(e1, cross(e2, e3));
+    let edge = |k: usize| (Point3::from(p[k]) - Point3::from(p[0])).transpose();
+    let e = Matrix3::from_rows(&[edge(1), edge(2), edge(3)]);
+    let det = e.determinant();
     if det == 0.0 || !det.is_finite() {
         return None;
     }
-    let g1 = cross(e2, e3).map(|x| x / det);
-    let g2 = cross(e3, e1).map(|x| x / det);
-    let g3 = cross(e1, e2).map(|x| x / det);
+    let inv = e.try_inverse()?;
+    let [g1, g2, g3] = [0, 1, 2].map(|k| {
+        let c = inv.column(k);
+        [c[0], c[1], c[2]]
+    });
     let g0 = [0, 1, 2].map(|k| -(g1[k] + g2[k] + g3[k]));
     Some(TetGeometry {
         volume: det.abs() / 6.0,
@@ -356,4 +353,42 @@ pub fn assemble(pb: &Problem) -> Result<System, SolveError> {
     }
     let a = CsMat::new((n, n), indptr, cols, vals);
     Ok(System { a, b, dof })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    }
+
+    /// The gradients are the cross-product formulas of the element, to the last bit.
+    #[test]
+    fn gradients_are_the_scaled_cross_products() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for _ in 0..1000 {
+            let p: [[f64; 3]; 4] = std::array::from_fn(|_| [next(), next(), next()]);
+            let e = [1, 2, 3].map(|k| [0, 1, 2].map(|a| p[k][a] - p[0][a]));
+            let det = dot3(e[0], cross(e[1], e[2]));
+            let g = tet_geometry(p).unwrap();
+            assert_eq!(g.volume, det.abs() / 6.0);
+            for (k, (a, b)) in [(1, 2), (2, 0), (0, 1)].into_iter().enumerate() {
+                assert_eq!(g.grad[k + 1], cross(e[a], e[b]).map(|x| x / det));
+            }
+        }
+        assert!(
+            tet_geometry([[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]]).is_none()
+        );
+    }
 }

@@ -4,22 +4,23 @@
 //! lower link is a ring, the upper link two pieces), with `det H < 0` one is (index 1).
 
 use super::vertex::LinkClass;
-use crate::trilinear::{body_saddles, coefficients, BodySaddle};
+use crate::trilinear::{body_saddles, coefficients, hessian, BodySaddle};
 
 /// The body saddles of a cell with corner values `v`, with their link classes. A saddle with
 /// a singular Hessian (degenerate) gets `None` as class.
 pub fn classify_body_saddles(v: &[f64; 8]) -> Vec<(BodySaddle, Option<LinkClass>)> {
     let (bs, n) = body_saddles(v);
-    let [_, _, _, _, e, f, g, h] = coefficients(v);
+    let k = coefficients(v);
     bs[..n]
         .iter()
         .map(|s| {
-            let [x, y, z] = s.pos;
-            let (fxy, fyz, fxz) = (e + h * z, f + h * x, g + h * y);
-            let det = fxy * fyz * fxz;
-            // zero up to rounding: a curve of critical points (degenerate)
-            let scale = (fxy.abs() + fyz.abs() + fxz.abs()).powi(3);
-            let class = if det.abs() <= 1e-12 * scale {
+            let hess = hessian(&k, s.pos);
+            let det = hess.determinant();
+            // zero up to rounding: a curve of critical points (degenerate); the sum of the
+            // absolute entries is twice `|f_xy| + |f_yz| + |f_xz|`, and `det H` twice their
+            // product
+            let scale = (hess.abs().sum() / 2.0).powi(3);
+            let class = if det.abs() <= 2e-12 * scale {
                 None
             } else if det > 0.0 {
                 Some(LinkClass {

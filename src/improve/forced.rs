@@ -36,6 +36,7 @@ use serde::Serialize;
 
 use super::outcome::PointMap;
 use super::QualityOptions;
+use crate::algebra::{array3, vector3};
 use crate::critical::find::vertex_class;
 use crate::field::Field;
 use crate::field::GUARD_DISTANCE;
@@ -44,7 +45,7 @@ use crate::grid::{corner_offset, ScalarGrid};
 use crate::levels::Levels;
 use crate::mesh::{BoundaryLabel, TetMesh};
 use crate::quality::{cosine_extremes, tet_dihedral_range};
-use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle};
+use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle, hessian};
 
 /// Why an element stays below the floor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
@@ -281,10 +282,11 @@ fn tet_points(mesh: &TetMesh, t: usize) -> [[f64; 3]; 4] {
 }
 
 /// Magnitude `sqrt(Fxy² + Fyz² + Fxz²)` of the Hessian (zero diagonal) of the trilinear
-/// function with coefficients `k` at cell-local point `p`: `sqrt(Σλ² / 2)`.
+/// function with coefficients `k` at cell-local point `p`: `sqrt(Σλ² / 2)`, the Frobenius norm
+/// over `√2` (summed over the upper triangle, in this order).
 fn hessian_magnitude(k: &[f64; 8], p: [f64; 3]) -> f64 {
-    let [_, _, _, _, e, f, g, h] = *k;
-    let (fxy, fyz, fxz) = (e + h * p[2], f + h * p[0], g + h * p[1]);
+    let h = hessian(k, p);
+    let (fxy, fyz, fxz) = (h[(0, 1)], h[(1, 2)], h[(0, 2)]);
     (fxy * fxy + fyz * fyz + fxz * fxz).sqrt()
 }
 
@@ -639,12 +641,12 @@ impl Classifier<'_> {
     /// (its high side if `high`).
     fn wedge(&self, u: [f64; 3], beta: bool, axis: usize, high: bool) -> Option<f64> {
         let (_, g) = self.field.value_gradient(u);
-        let inv = self.field.inverse();
+        let inv = self.field.inverse_matrix();
         // physical gradient = inverse^T · index gradient; row `axis` of inverse is the box
         // plane's normal
-        let gx = [0, 1, 2].map(|j| (0..3).map(|i| g[i] * inv[i][j]).sum::<f64>());
+        let gx = array3(&(inv.transpose() * vector3(g)));
         let nl = gx.map(|x| if beta { -x } else { x });
-        let nb = inv[axis].map(|x| if high { -x } else { x });
+        let nb = array3(&inv.row(axis).transpose()).map(|x| if high { -x } else { x });
         let norm = (dot(nl, nl) * dot(nb, nb)).sqrt();
         if norm == 0.0 || !norm.is_finite() {
             return None;

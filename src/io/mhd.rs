@@ -15,6 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use flate2::read::ZlibDecoder;
+use nalgebra::Matrix3;
 
 use super::header::{self, Fields};
 use super::read_common::{
@@ -22,6 +23,7 @@ use super::read_common::{
     read_data_file, read_raw_into, take_exact, Endian, Geometry, ReadError, SampleBuf, SampleType,
     Skip,
 };
+use crate::algebra::rows;
 use crate::grid::{Samples, ScalarGrid, IDENTITY};
 
 /// Reads a MetaImage volume (`.mhd` + data file, or `.mha`).
@@ -352,13 +354,7 @@ fn geometry(path: &Path, fields: &Fields) -> Result<Geometry, ReadError> {
     let direction = match fields.get_any(&["TransformMatrix", "Rotation", "Orientation"]) {
         Some((k, v)) => {
             let m = header::numbers::<9>(path, k, v)?;
-            let mut d = [[0.0; 3]; 3];
-            for (r, row) in d.iter_mut().enumerate() {
-                for (c, x) in row.iter_mut().enumerate() {
-                    *x = m[c * 3 + r]; // column-major
-                }
-            }
-            d
+            rows(&Matrix3::from_column_slice(&m))
         }
         None => IDENTITY,
     };

@@ -17,11 +17,13 @@ use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
 use flate2::read::MultiGzDecoder;
+use nalgebra::Matrix3;
 
 use super::read_common::{
     build_grid, data_size, decompress_into, split_linear, to_dim, Endian, Geometry, ReadError,
     SampleBuf, SampleType,
 };
+use crate::algebra::rows;
 use crate::grid::{Samples, ScalarGrid, IDENTITY};
 
 const NIFTI1_HDR: usize = 348;
@@ -442,17 +444,14 @@ fn geometry(path: &Path, layout: &Layout, f: &Fields) -> Result<Geometry, ReadEr
 
 /// Geometry from the sform rows `srow_x`, `srow_y`, `srow_z`.
 fn sform_geometry(path: &Path, layout: &Layout, f: &Fields) -> Result<Geometry, ReadError> {
-    let mut m = [[0.0; 3]; 3];
-    let mut t = [0.0; 3];
-    for (r, row) in m.iter_mut().enumerate() {
-        let base = layout.srow_x + r * 4 * if layout.version == 1 { 4 } else { 8 };
-        for (c, x) in row.iter_mut().enumerate() {
-            *x = layout.float_at(f, base, c);
-        }
-        t[r] = layout.float_at(f, base, 3);
-    }
-    let (s, d) = split_linear(m).ok_or_else(|| {
-        ReadError::invalid(path, format!("sform {m:?} has a zero or non-finite column"))
+    let row = |r: usize| layout.srow_x + r * 4 * if layout.version == 1 { 4 } else { 8 };
+    let m = Matrix3::from_fn(|r, c| layout.float_at(f, row(r), c));
+    let t = [0, 1, 2].map(|r| layout.float_at(f, row(r), 3));
+    let (s, d) = split_linear(&m).ok_or_else(|| {
+        ReadError::invalid(
+            path,
+            format!("sform {:?} has a zero or non-finite column", rows(&m)),
+        )
     })?;
     Ok((s, t, d))
 }

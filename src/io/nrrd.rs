@@ -9,6 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use flate2::read::MultiGzDecoder;
+use nalgebra::{Matrix3, Vector3};
 
 use super::header::{self, Fields};
 use super::read_common::{
@@ -507,14 +508,11 @@ fn space_directions(path: &Path, sd: &str) -> Result<([f64; 3], [[f64; 3]; 3]), 
             "'space directions' with a non-spatial ('none') axis",
         ));
     }
-    let mut m = [[0.0; 3]; 3];
-    for (c, v) in vecs.iter().enumerate() {
-        let col = vector(path, "space directions", v)?;
-        for r in 0..3 {
-            m[r][c] = col[r];
-        }
+    let mut cols = [Vector3::zeros(); 3];
+    for (col, v) in cols.iter_mut().zip(&vecs) {
+        *col = Vector3::from(vector(path, "space directions", v)?);
     }
-    split_linear(m).ok_or_else(|| {
+    split_linear(&Matrix3::from_columns(&cols)).ok_or_else(|| {
         ReadError::invalid(
             path,
             format!(

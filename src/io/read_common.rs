@@ -11,7 +11,10 @@ use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
+use nalgebra::Matrix3;
+
 use super::formats::supported_extensions;
+use crate::algebra::rows;
 use crate::grid::{GridError, SampleStorage, Samples, ScalarGrid};
 
 /// Why a volume file could not be read.
@@ -602,22 +605,21 @@ fn read_full(mut reader: impl Read, out: &mut [u8]) -> std::io::Result<usize> {
 /// Spacing, origin and direction of a grid, in the order [`build_grid`] takes them.
 pub(crate) type Geometry = ([f64; 3], [f64; 3], [[f64; 3]; 3]);
 
-/// Splits a 3×3 linear map (row-major, columns = index-axis vectors) into spacing (column
-/// norms) and direction (normalised columns). `None` if a column is zero or not finite.
-pub(crate) fn split_linear(m: [[f64; 3]; 3]) -> Option<([f64; 3], [[f64; 3]; 3])> {
+/// Splits a 3×3 linear map (columns = index-axis vectors) into spacing (column norms) and
+/// direction (normalised columns, as row-major arrays). `None` if a column is zero or not
+/// finite.
+pub(crate) fn split_linear(m: &Matrix3<f64>) -> Option<([f64; 3], [[f64; 3]; 3])> {
+    let mut dir = *m;
     let mut spacing = [0.0; 3];
-    let mut dir = [[0.0; 3]; 3];
-    for c in 0..3 {
-        let n = (m[0][c] * m[0][c] + m[1][c] * m[1][c] + m[2][c] * m[2][c]).sqrt();
+    for (c, s) in spacing.iter_mut().enumerate() {
+        let n = m.column(c).norm();
         if !n.is_finite() || n == 0.0 {
             return None;
         }
-        spacing[c] = n;
-        for r in 0..3 {
-            dir[r][c] = m[r][c] / n;
-        }
+        *s = n;
+        dir.column_mut(c).unscale_mut(n);
     }
-    Some((spacing, dir))
+    Some((spacing, rows(&dir)))
 }
 
 /// Builds the grid, attaching `path` to any validation error.
@@ -646,6 +648,7 @@ pub(crate) fn to_dim(path: &Path, v: i64, what: &str) -> Result<usize, ReadError
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::algebra::matrix3;
 
     #[test]
     fn decodes_all_types_both_endians() {
@@ -694,10 +697,36 @@ mod tests {
 
     #[test]
     fn split_linear_rejects_zero_column() {
-        assert!(split_linear([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 2.0]]).is_none());
-        let (s, d) = split_linear([[0.0, -2.0, 0.0], [3.0, 0.0, 0.0], [0.0, 0.0, 4.0]]).unwrap();
+        let m = [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 2.0]];
+        assert!(split_linear(&matrix3(&m)).is_none());
+        let m = [[0.0, -2.0, 0.0], [3.0, 0.0, 0.0], [0.0, 0.0, 4.0]];
+        let (s, d) = split_linear(&matrix3(&m)).unwrap();
         assert_eq!(s, [3.0, 2.0, 4.0]);
         assert_eq!(d, [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
+    }
+
+    /// Column norms and quotients as the readers always computed them: every coordinate of
+    /// every output depends on them.
+    #[test]
+    fn split_linear_keeps_the_bits_of_the_plain_formulas() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 10.0 - 5.0
+        };
+        for _ in 0..1000 {
+            let m: [[f64; 3]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| next()));
+            let (s, d) = split_linear(&matrix3(&m)).unwrap();
+            for c in 0..3 {
+                let n = (m[0][c] * m[0][c] + m[1][c] * m[1][c] + m[2][c] * m[2][c]).sqrt();
+                assert_eq!(s[c].to_bits(), n.to_bits());
+                for r in 0..3 {
+                    assert_eq!(d[r][c].to_bits(), (m[r][c] / n).to_bits());
+                }
+            }
+        }
     }
 
     #[test]
