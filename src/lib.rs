@@ -31,6 +31,7 @@ pub mod io;
 pub(crate) mod keys;
 pub mod memory;
 pub mod mesh;
+pub mod pass_report;
 pub mod pipeline;
 pub mod quality;
 pub mod report;
