@@ -14,6 +14,7 @@
 // Index loops over small fixed arrays (corners, faces, axes) read better than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
+pub mod allocator;
 pub mod check;
 pub(crate) mod clip;
 pub mod critical;
@@ -37,6 +38,7 @@ pub mod quality;
 pub mod report;
 pub mod samples;
 pub mod surface;
+pub mod text;
 pub mod topology;
 pub(crate) mod trilinear;
 pub mod union_find;
