@@ -15,6 +15,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod algebra;
+pub mod allocator;
 pub mod check;
 pub(crate) mod clip;
 pub mod critical;
@@ -33,11 +34,13 @@ pub(crate) mod keys;
 pub mod levels;
 pub mod memory;
 pub mod mesh;
+pub mod pass_report;
 pub mod pipeline;
 pub mod quality;
 pub mod report;
 pub mod samples;
 pub mod surface;
+pub mod text;
 pub mod topology;
 pub(crate) mod trilinear;
 pub mod union_find;

@@ -10,10 +10,8 @@ use serde::{Serialize, Serializer};
 use crate::decompose::CellCase;
 use crate::extract::{MeshStats, Method};
 use crate::facts::MeshFacts;
-use crate::improve::forced::ForcedReport;
-use crate::improve::outcome::TargetCounts;
-use crate::improve::ImproveReport;
 use crate::mesh::BoundaryLabel;
+use crate::pass_report::{ForcedReport, ImproveReport, TargetCounts};
 use crate::quality::QualitySummary;
 
 /// A bound of the interval: finite values serialize as JSON numbers, infinities as the strings

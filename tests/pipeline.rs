@@ -140,7 +140,7 @@ fn warnings_reach_the_progress_as_they_occur_and_the_report() {
     assert!(!given.is_empty());
     assert_eq!(run.warnings(), given.as_slice());
     let name = input.display().to_string();
-    assert!(given[0].starts_with(&format!("{name}: --alpha 2 equals the value of")));
+    assert!(given[0].starts_with(&format!("{name}: alpha 2 equals the value of")));
 }
 
 /// Runs `req` and expects an error; no file of `dir` but `keep` is left.
@@ -169,7 +169,7 @@ fn errors_are_one_line_with_their_kind_and_leave_no_output() {
     let e = fails(&empty, dir.path(), &[]);
     assert_eq!(
         e.to_string(),
-        "demo: empty interval: --alpha (2) must be less than --beta (1)"
+        "demo: empty interval: alpha (2) must be less than beta (1)"
     );
     assert!(!e.is_usage());
 

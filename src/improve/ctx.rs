@@ -1,5 +1,5 @@
 //! The problem an operation works on ([`Ctx`]): the trilinear field, the levels, the target
-//! quality, and the flags of the round it runs in.
+//! quality; and apart from it the state of the round it runs in ([`RoundFlags`]).
 
 use std::time::Instant;
 
@@ -9,7 +9,8 @@ use crate::grid::ScalarGrid;
 use crate::levels::Levels;
 use crate::quality::biased_min_sine;
 
-/// Everything an operation needs besides the local mesh.
+/// Everything an operation needs besides the local mesh: the problem (field, levels,
+/// targets, time budget) and the state of the round ([`Ctx::round`]).
 pub struct Ctx<'a> {
     /// The trilinear field.
     pub field: Field<'a>,
@@ -25,6 +26,14 @@ pub struct Ctx<'a> {
     pub boundary_collapse_ratio: f64,
     /// When the time budget runs out.
     pub deadline: Option<Instant>,
+    /// The state of the round the operation runs in.
+    pub round: RoundFlags<'a>,
+}
+
+/// The state of one round of the pass: where its slabs start, how its regions are smoothed,
+/// retried and polished, and on a copy what is pinned. All off in a pass's first rounds.
+#[derive(Clone, Copy, Default)]
+pub struct RoundFlags<'a> {
     /// Where the slabs that split the work into regions start along the grid's longest axis
     /// (index units; [`region::SLAB`](super::region::SLAB)).
     pub slab_offset: f64,
@@ -39,7 +48,7 @@ pub struct Ctx<'a> {
     /// ([`thin::rim_marks`](super::thin::rim_marks); the rim's faces and tets outside the copy are missing from it).
     pub rim_marks: Option<&'a [u8]>,
     /// A region that ends with a few tets below the target is improved again from its start
-    /// with other smoothing ([`Ctx::steepest`], [`Ctx::centroid`]), and the best end is kept
+    /// with other smoothing ([`RoundFlags::steepest`], [`RoundFlags::centroid`]), and the best end is kept
     /// ([`schedule::improve_local`](super::schedule::improve_local)). Set for the last round of a single pass and of the
     /// first stage of a ladder ([`stages`](super::stages)).
     pub retry_stuck: bool,
@@ -70,7 +79,7 @@ impl Ctx<'_> {
 }
 
 /// The context of a pass over `grid`'s field at `opts`' targets and tolerance, its time
-/// budget counted from `start`; the flags of the rounds are off.
+/// budget counted from `start`; the round's state is off ([`RoundFlags::default`]).
 pub(super) fn context<'a>(
     grid: &'a ScalarGrid,
     levels: &Levels,
@@ -90,12 +99,6 @@ pub(super) fn context<'a>(
         target: lo_s.min(obtuse_weight * hi_s),
         boundary_collapse_ratio: opts.boundary_collapse_ratio,
         deadline: opts.time_budget.map(|b| start + b),
-        slab_offset: 0.0,
-        steepest: false,
-        centroid: false,
-        retry_stuck: false,
-        polish: false,
-        pinned: None,
-        rim_marks: None,
+        round: RoundFlags::default(),
     }
 }

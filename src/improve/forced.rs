@@ -32,7 +32,8 @@
 //! * `unexplained`: none of these; the pass failed there.
 
 use rayon::prelude::*;
-use serde::Serialize;
+
+pub use crate::pass_report::{ForcedCounts, ForcedElement, ForcedReason, ForcedReport};
 
 use super::outcome::PointMap;
 use super::QualityOptions;
@@ -46,90 +47,6 @@ use crate::levels::Levels;
 use crate::mesh::{BoundaryLabel, TetMesh};
 use crate::quality::{cosine_extremes, tet_dihedral_range};
 use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle, hessian};
-
-/// Why an element stays below the floor.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ForcedReason {
-    /// A critical value of the field near a bound pinches the domain in a cell it touches.
-    NearCritical,
-    /// The layer between the alpha and beta level sets is thinner than the element can span
-    /// above the floor.
-    ThinLayer,
-    /// A level set meets the grid box at an angle below the floor at the element.
-    BoxAngle,
-    /// A curvilinear grid's geometry map flattens the element, which is above the floor in
-    /// the grid's parameter space (where the pass works).
-    GridMapping,
-    /// No domain reason found: the pass failed there.
-    Unexplained,
-}
-
-/// One element below the floor.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ForcedElement {
-    /// Tet index (in the mesh after the pass).
-    pub tet: usize,
-    /// Smallest dihedral angle (degrees).
-    pub min_dihedral: f64,
-    /// Largest dihedral angle (degrees).
-    pub max_dihedral: f64,
-    /// Why.
-    pub reason: ForcedReason,
-    /// Centroid, physical coordinates.
-    pub point: [f64; 3],
-    /// Smallest `|critical value − bound|` over the cells the tet touches, relative to the
-    /// data range (`None`: no critical point there).
-    pub critical_distance: Option<f64>,
-    /// Narrowest neck or gap (voxels) the nearer level leaves at those critical points,
-    /// measured across them (see the module documentation).
-    pub neck_width: Option<f64>,
-    /// Thickness (voxels) of the layer between the alpha and beta level sets at the tet (see
-    /// [`ForcedReason::ThinLayer`]; `None` for a one-sided interval).
-    pub layer_thickness: Option<f64>,
-    /// Smallest interior dihedral angle (degrees) between a box plane and a level set at the
-    /// tet, when it has an edge on each.
-    pub box_angle: Option<f64>,
-}
-
-/// Elements below the floor, per reason.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct ForcedCounts {
-    /// [`ForcedReason::NearCritical`].
-    pub near_critical: usize,
-    /// [`ForcedReason::ThinLayer`].
-    pub thin_layer: usize,
-    /// [`ForcedReason::BoxAngle`].
-    pub box_angle: usize,
-    /// [`ForcedReason::GridMapping`].
-    pub grid_mapping: usize,
-    /// [`ForcedReason::Unexplained`].
-    pub unexplained: usize,
-}
-
-/// The elements below the floor after the pass, with their reasons.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ForcedReport {
-    /// The floor (degrees), [`QualityOptions::forced_floor`].
-    pub floor_degrees: f64,
-    /// [`QualityOptions::forced_critical_tol`] (relative to the data range).
-    pub critical_tolerance: f64,
-    /// Counts per reason (of all elements below the floor).
-    pub counts: ForcedCounts,
-    /// The elements, worst first, at most [`QualityOptions::forced_list_cap`].
-    pub elements: Vec<ForcedElement>,
-}
-
-impl ForcedReport {
-    /// Elements below the floor in all.
-    pub fn total(&self) -> usize {
-        self.counts.near_critical
-            + self.counts.thin_layer
-            + self.counts.box_angle
-            + self.counts.grid_mapping
-            + self.counts.unexplained
-    }
-}
 
 /// How far (voxels) [`Classifier::measured_width`] looks on either side of a critical point.
 const WIDTH_REACH: f64 = 2.0;

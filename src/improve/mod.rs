@@ -46,7 +46,7 @@ mod thin;
 mod verify;
 pub(crate) mod warped;
 
-pub use ctx::Ctx;
+pub use ctx::{Ctx, RoundFlags};
 pub use options::{QualityOptions, DEFAULT_SPLIT_SAG};
 pub use report::{ImproveReport, StageSeconds};
 

@@ -5,7 +5,8 @@
 use std::time::Instant;
 
 use rayon::prelude::*;
-use serde::Serialize;
+
+pub use crate::pass_report::{KeptBetter, TargetCounts};
 
 use super::pass::{improve_keeping_volume, runs_again_for_volume};
 use super::{ImproveReport, QualityOptions, StageSeconds};
@@ -20,44 +21,7 @@ use crate::warp::Snapped;
 /// geometry map: the pass works in the grid's parameter space, the mesh is written mapped).
 pub type PointMap<'a> = &'a (dyn Fn([f64; 3]) -> [f64; 3] + Sync);
 
-/// How many tets of a mesh miss the pass's targets, and its extreme dihedral angles.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct TargetCounts {
-    /// Tets.
-    pub tets: usize,
-    /// Tets whose smallest dihedral angle is below the floor ([`QualityOptions::forced_floor`]).
-    pub below_floor: usize,
-    /// Tets whose smallest dihedral angle is below the target ([`QualityOptions::min_angle`]).
-    pub below_min: usize,
-    /// Tets whose largest dihedral angle is above the target ([`QualityOptions::max_angle`]).
-    pub above_max: usize,
-    /// Tets below the smallest or above the largest target angle (either or both).
-    pub off_target: usize,
-    /// Smallest dihedral angle (degrees; 180 for no tet).
-    pub min_dihedral: f64,
-    /// Largest dihedral angle (degrees; 0 for no tet).
-    pub max_dihedral: f64,
-}
-
 impl TargetCounts {
-    /// Whether the targets are missed: some tet is below or above them.
-    pub fn missed(&self) -> bool {
-        self.off_target > 0
-    }
-
-    /// Whether these are better than `other`'s: fewer tets below the floor, then fewer off
-    /// target, then a larger smallest angle, then a smaller largest angle.
-    pub fn better_than(&self, other: &TargetCounts) -> bool {
-        let key = |c: &TargetCounts| (c.below_floor, c.off_target);
-        match key(self).cmp(&key(other)) {
-            std::cmp::Ordering::Less => true,
-            std::cmp::Ordering::Greater => false,
-            std::cmp::Ordering::Equal => {
-                (self.min_dihedral, -self.max_dihedral) > (other.min_dihedral, -other.max_dihedral)
-            }
-        }
-    }
-
     fn empty() -> Self {
         TargetCounts {
             min_dihedral: 180.0,
@@ -104,18 +68,6 @@ pub fn target_counts(mesh: &TetMesh, opts: &QualityOptions, map: Option<PointMap
             c.add(tet_dihedral_range(p), opts)
         })
         .reduce(TargetCounts::empty, TargetCounts::merge)
-}
-
-/// What the last step of a pass stopped by its time budget found ([`keep_better`]).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct KeptBetter {
-    /// The mesh before the pass.
-    pub before: TargetCounts,
-    /// The mesh the pass stopped at.
-    pub after: TargetCounts,
-    /// The mesh before the pass was kept: the pass had left it worse
-    /// ([`TargetCounts::better_than`]).
-    pub kept_before: bool,
 }
 
 /// Keeps the better of `mesh` (where a pass stopped) and `before` (the mesh before it), by

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::ctx::Ctx;
+use super::ctx::{Ctx, RoundFlags};
 use super::mark::{grow, needs_work};
 use super::pass::PassState;
 use super::quality_cache::refresh_quality;
@@ -55,9 +55,12 @@ pub(super) fn run_rounds(
     }
     // Only the last round retries and polishes its stuck regions (its regions are small).
     let shifted = Ctx {
-        slab_offset: 0.5 * region::SLAB,
-        retry_stuck: retry_last,
-        polish: true,
+        round: RoundFlags {
+            slab_offset: 0.5 * region::SLAB,
+            retry_stuck: retry_last,
+            polish: true,
+            ..ctx.round
+        },
         ..*ctx
     };
     let mut sub = None;
@@ -77,7 +80,10 @@ pub(super) fn run_rounds(
     }
     if polish_twice && rounds > 1 && !ctx.out_of_time() {
         let unshifted = Ctx {
-            slab_offset: 0.0,
+            round: RoundFlags {
+                slab_offset: 0.0,
+                ..shifted.round
+            },
             ..shifted
         };
         run_round_on(mesh, (&mut sub, rings), &unshifted, rounds, state, report);
@@ -138,7 +144,7 @@ fn run_round_on(
             if phase == 0 && !work.iter().any(|&w| w) {
                 return false;
             }
-            if ctx.polish {
+            if ctx.round.polish {
                 // The copy holds the work as `run_round` marks it: with one ring, a copy cut
                 // around the ungrown work has the grown work on its rim at once, and cutting
                 // it again around the same work never ended.
@@ -160,8 +166,11 @@ fn run_round_on(
             return false;
         };
         let pinned = Ctx {
-            pinned: Some(&s.rim),
-            rim_marks: Some(&s.rim_marks),
+            round: RoundFlags {
+                pinned: Some(&s.rim),
+                rim_marks: Some(&s.rim_marks),
+                ..ctx.round
+            },
             ..*ctx
         };
         let progress = Progress {
@@ -246,13 +255,14 @@ fn run_round(
     for phase in first_phase..2 {
         clock = Instant::now();
         let (mut work, off) = needs_work(mesh, ctx, p.quality, round > 0);
-        if ctx.polish {
+        if ctx.round.polish {
             // The polishing round frees the neighbours of the work too, so that its
             // composite collapses may merge into them.
             grow(mesh, &mut work);
         }
         lap(&mut p.report.stage_seconds.mark, &mut clock);
         if ctx
+            .round
             .pinned
             .is_some_and(|rim| submesh::reaches_rim(&work, rim))
         {

@@ -9,7 +9,7 @@ use super::project::{absorb_and_project, merge_and_untangle, project_levels, unt
 use super::region::{LocalMesh, TetOp};
 use super::search::search_vertex;
 use super::smooth::smooth_vertex;
-use super::{Ctx, ImproveReport};
+use super::{Ctx, ImproveReport, RoundFlags};
 
 /// Passes over the region at most.
 const SWEEPS: usize = 6;
@@ -25,12 +25,12 @@ const SWEEPS_AFTER_UNTANGLING: usize = 2;
 /// search over their corners ([`polish`]; its cost is proportional to those tets).
 pub fn improve_local(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
     let mut done = ImproveReport::default();
-    if ctx.retry_stuck {
+    if ctx.round.retry_stuck {
         retry(lm, ctx, &mut done);
     } else {
         improve_once(lm, ctx, &mut done);
     }
-    if ctx.polish && worst(lm, ctx.target).0 < ctx.target {
+    if ctx.round.polish && worst(lm, ctx.target).0 < ctx.target {
         polish(lm, ctx, &mut done);
     }
     report.add(&done);
@@ -49,8 +49,11 @@ fn retry(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
         let mut other = start.clone();
         let mut r = ImproveReport::default();
         let variant = Ctx {
-            steepest,
-            centroid,
+            round: RoundFlags {
+                steepest,
+                centroid,
+                ..ctx.round
+            },
             ..*ctx
         };
         improve_once(&mut other, &variant, &mut r);

@@ -83,7 +83,7 @@ fn centroid_step(
     star: &StarCorners,
     qs: &mut StarVec<f64>,
 ) -> Option<([f64; 3], f64)> {
-    if !ctx.centroid {
+    if !ctx.round.centroid {
         return None;
     }
     let c = lm.con[v as usize];
@@ -222,7 +222,7 @@ fn ascent_directions(
                 sum[a] += g[a] / n;
             }
         }
-        if ctx.steepest {
+        if ctx.round.steepest {
             grads.push(g);
         }
     }
@@ -231,7 +231,7 @@ fn ascent_directions(
     }
     let n = norm(sum);
     let mean = (n > 0.0 && n.is_finite()).then(|| sum.map(|x| x / n));
-    if !ctx.steepest {
+    if !ctx.round.steepest {
         return [mean, None];
     }
     if level {

@@ -22,26 +22,12 @@
 //! the retries in the first stage a ladder could end below the default pass (the 24³ shell:
 //! 14.84° at 20°, 15.00° by default); with them, no run of 96 (the default added) does.
 
-use serde::Serialize;
+pub use crate::pass_report::Stage;
 
 use super::pass::PassState;
 use super::rounds::{run_rounds, Rounds};
 use super::{Ctx, ImproveReport, QualityOptions};
 use crate::mesh::TetMesh;
-
-/// One stage of a pass towards targets above the default ([`super::improve`]).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Stage {
-    /// Its target dihedral angles (degrees).
-    pub target_degrees: [f64; 2],
-    /// The worst tet quality in this stage's measure before it (`None` for the first stage,
-    /// which is kept whatever it does).
-    pub worst_before: Option<f64>,
-    /// The worst tet quality in this stage's measure after it.
-    pub worst_after: f64,
-    /// Whether its result was kept (it did not lower the worst quality).
-    pub kept: bool,
-}
 
 /// Largest raise of the target angles from one stage of [`super::improve`] to the next
 /// (degrees).

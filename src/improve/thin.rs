@@ -41,13 +41,13 @@ pub(crate) fn rim_marks(mesh: &TetMesh, ctx: &Ctx) -> Vec<u8> {
 /// ([`Ctx::rim_marks`]) added.
 pub(crate) fn marks(mesh: &TetMesh, ctx: &Ctx) -> (Vec<u8>, Vec<bool>) {
     let mut labels = mesh.vertex_label_bits();
-    if let Some(rim) = ctx.rim_marks {
+    if let Some(rim) = ctx.round.rim_marks {
         for (l, &r) in labels.iter_mut().zip(rim) {
             *l |= r & !THIN;
         }
     }
     let mut thin = thin_layer_points(mesh, ctx, &labels);
-    if let Some(rim) = ctx.rim_marks {
+    if let Some(rim) = ctx.round.rim_marks {
         for (t, &r) in thin.iter_mut().zip(rim) {
             *t |= r & THIN != 0;
         }

@@ -9,7 +9,7 @@ use super::{
     QUALITY_THRESHOLDS,
 };
 use crate::check::Problem;
-use crate::pipeline::text::fmt_interval;
+use crate::text::fmt_interval;
 
 /// A number with six significant digits (scientific when very large or small).
 fn num(v: f64) -> String {

@@ -1,8 +1,13 @@
-//! The volume input formats by extension: one table names each extension once, and the
-//! dispatcher ([`super::read_volume`], [`super::read_curvilinear`]), [`super::input_files`]
-//! and the unknown-format message all read it.
+//! Every file format by extension, each extension named once: the volume readers
+//! ([`VolumeFormat`]; the dispatchers [`super::read_volume`] and [`super::read_curvilinear`],
+//! [`super::input_files`] and the unknown-format message read its table), the mesh readers
+//! ([`MeshReader`], for [`super::read_mesh`]), the mesh writers ([`MeshFormat`], for
+//! [`super::write_mesh`]), the surface writers ([`SurfaceFormat`], for
+//! [`super::write_surface`]) and the transfer-function writers ([`TransferFormat`]).
 
 use std::path::Path;
+
+use super::atomic::WriteError;
 
 /// A volume input format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,6 +79,132 @@ pub(crate) fn supported_extensions() -> String {
         exts.map(|(ext, _)| *ext).collect::<Vec<_>>().join(", ")
     };
     format!("{} (curvilinear: {})", list(false), list(true))
+}
+
+/// The extension of `path` (what follows its file name's last dot), lower case.
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+}
+
+/// The format of `table` for the extension of `path`.
+fn by_extension<F: Copy>(table: &[(&str, F)], path: &Path) -> Option<F> {
+    let ext = extension(path)?;
+    table.iter().find(|(e, _)| *e == ext).map(|&(_, f)| f)
+}
+
+/// A mesh input format ([`super::read_mesh`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum MeshReader {
+    /// Gmsh `.msh`, ASCII 4.1 and 2.2 or binary 4.1.
+    Msh,
+    /// Abaqus / CalculiX `.inp`.
+    Inp,
+    /// VTK XML UnstructuredGrid `.vtu`.
+    Vtu,
+    /// Legacy VTK `.vtk`.
+    Vtk,
+    /// Medit `.mesh`.
+    Medit,
+    /// TetGen `.node` / `.ele` (with `.face`).
+    TetGen,
+}
+
+/// The mesh readers' extensions (lower case, without the dot).
+const MESH_READERS: [(&str, MeshReader); 7] = [
+    ("msh", MeshReader::Msh),
+    ("inp", MeshReader::Inp),
+    ("vtu", MeshReader::Vtu),
+    ("vtk", MeshReader::Vtk),
+    ("mesh", MeshReader::Medit),
+    ("node", MeshReader::TetGen),
+    ("ele", MeshReader::TetGen),
+];
+
+impl MeshReader {
+    /// The reader of the extension of `path` (any case); `None` for any other.
+    pub(crate) fn of(path: &Path) -> Option<MeshReader> {
+        by_extension(&MESH_READERS, path)
+    }
+}
+
+/// An output mesh format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshFormat {
+    /// Gmsh `.msh`, ASCII 4.1 / 2.2 or binary 4.1 ([`super::msh`]).
+    Msh,
+    /// Abaqus / CalculiX `.inp` ([`super::inp`]).
+    Inp,
+    /// VTK XML UnstructuredGrid `.vtu` ([`super::vtu`]).
+    Vtu,
+}
+
+/// The mesh writers' extensions (lower case, without the dot).
+const MESH_WRITERS: [(&str, MeshFormat); 3] = [
+    ("msh", MeshFormat::Msh),
+    ("inp", MeshFormat::Inp),
+    ("vtu", MeshFormat::Vtu),
+];
+
+impl MeshFormat {
+    /// The format named by the extension of `path` (case-insensitive): `.msh`, `.inp` or
+    /// `.vtu`.
+    ///
+    /// # Errors
+    /// [`WriteError::UnknownFormat`] for any other extension or none.
+    pub fn from_path(path: &Path) -> Result<Self, WriteError> {
+        by_extension(&MESH_WRITERS, path).ok_or_else(|| WriteError::UnknownFormat {
+            path: path.to_path_buf(),
+        })
+    }
+}
+
+/// An output surface format (isosurfaces).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SurfaceFormat {
+    /// Wavefront `.obj` ([`super::obj`]).
+    Obj,
+    /// Stanford `.ply` ([`super::ply`]).
+    Ply,
+    /// `.stl` ([`super::stl`]).
+    Stl,
+}
+
+/// The surface writers' extensions (lower case, without the dot).
+const SURFACE_WRITERS: [(&str, SurfaceFormat); 3] = [
+    ("obj", SurfaceFormat::Obj),
+    ("ply", SurfaceFormat::Ply),
+    ("stl", SurfaceFormat::Stl),
+];
+
+impl SurfaceFormat {
+    /// The surface format named by the extension of `path` (case-insensitive): `.obj`, `.ply`
+    /// or `.stl`; `None` for any other.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        by_extension(&SURFACE_WRITERS, path)
+    }
+}
+
+/// An output format for a transfer function.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransferFormat {
+    /// ParaView colour-map preset (JSON).
+    ParaView,
+    /// Comma-separated `value,r,g,b,opacity`.
+    Csv,
+}
+
+/// The transfer-function writers' extensions (lower case, without the dot).
+const TRANSFER_WRITERS: [(&str, TransferFormat); 2] = [
+    ("json", TransferFormat::ParaView),
+    ("csv", TransferFormat::Csv),
+];
+
+impl TransferFormat {
+    /// The format named by the extension of `path` (`.json`, `.csv`, any case).
+    pub fn from_path(path: &Path) -> Option<Self> {
+        by_extension(&TRANSFER_WRITERS, path)
+    }
 }
 
 #[cfg(test)]

@@ -6,41 +6,14 @@
 
 use std::path::Path;
 
+use super::formats::MeshReader;
 use super::mesh_read_common::{parse_bytes, parse_file, MeshFile, MeshReadError};
-
-/// The readers, by lower-case extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Format {
-    Msh,
-    Inp,
-    Vtu,
-    Vtk,
-    Medit,
-    TetGen,
-}
-
-impl Format {
-    fn of(path: &Path) -> Option<Format> {
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        Some(match ext.as_deref()? {
-            "msh" => Format::Msh,
-            "inp" => Format::Inp,
-            "vtu" => Format::Vtu,
-            "vtk" => Format::Vtk,
-            "mesh" => Format::Medit,
-            "node" | "ele" => Format::TetGen,
-            _ => return None,
-        })
-    }
-}
 
 /// The files [`read_mesh`] reads for `path`: `path` itself, or for TetGen the `.node`, the
 /// `.ele` and (when it exists) the `.face` of the same name. Nothing is opened.
 pub fn mesh_files(path: &Path) -> Vec<std::path::PathBuf> {
-    match Format::of(path) {
-        Some(Format::TetGen) => super::tetgen_read::tetgen_files(path),
+    match MeshReader::of(path) {
+        Some(MeshReader::TetGen) => super::tetgen_read::tetgen_files(path),
         _ => vec![path.to_path_buf()],
     }
 }
@@ -57,8 +30,8 @@ pub fn mesh_files(path: &Path) -> Vec<std::path::PathBuf> {
 /// naming the file (for TetGen, the file of the pair where the problem is).
 pub fn read_mesh(path: &Path) -> Result<MeshFile, MeshReadError> {
     let file = path.display().to_string();
-    let reader = match Format::of(path) {
-        Some(Format::Msh) => {
+    let reader = match MeshReader::of(path) {
+        Some(MeshReader::Msh) => {
             return parse_bytes(path, |b| {
                 if super::msh_read_binary::is_binary_msh(b) {
                     super::msh_read_binary::parse_msh_binary(b)
@@ -67,11 +40,11 @@ pub fn read_mesh(path: &Path) -> Result<MeshFile, MeshReadError> {
                 }
             })
         }
-        Some(Format::Inp) => super::inp_read::parse_inp,
-        Some(Format::Medit) => super::medit_read::parse_medit,
-        Some(Format::Vtu) => return super::vtu_read::read_vtu(path),
-        Some(Format::Vtk) => return parse_bytes(path, super::vtk_read::parse_vtk),
-        Some(Format::TetGen) => return super::tetgen_read::read_tetgen(path),
+        Some(MeshReader::Inp) => super::inp_read::parse_inp,
+        Some(MeshReader::Medit) => super::medit_read::parse_medit,
+        Some(MeshReader::Vtu) => return super::vtu_read::read_vtu(path),
+        Some(MeshReader::Vtk) => return parse_bytes(path, super::vtk_read::parse_vtk),
+        Some(MeshReader::TetGen) => return super::tetgen_read::read_tetgen(path),
         None => return Err(MeshReadError::UnknownFormat { file }),
     };
     parse_file(path, reader)

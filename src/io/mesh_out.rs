@@ -17,37 +17,9 @@ use super::stl::write_stl;
 use super::vtu::{write_vtu_source, write_vtu_with, VtuEncoding};
 use crate::mesh::{TetMesh, TriSurface};
 
-/// An output mesh format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum MeshFormat {
-    /// Gmsh `.msh`, ASCII 4.1 / 2.2 or binary 4.1 ([`write_msh`]).
-    Msh,
-    /// Abaqus / CalculiX `.inp` ([`write_inp`]).
-    Inp,
-    /// VTK XML UnstructuredGrid `.vtu` ([`super::vtu::write_vtu_with`]).
-    Vtu,
-}
+pub use super::formats::{MeshFormat, SurfaceFormat};
 
 impl MeshFormat {
-    /// The format named by the extension of `path` (case-insensitive): `.msh`, `.inp` or
-    /// `.vtu`.
-    ///
-    /// # Errors
-    /// [`WriteError::UnknownFormat`] for any other extension or none.
-    pub fn from_path(path: &Path) -> Result<Self, WriteError> {
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        match ext.as_deref() {
-            Some("msh") => Ok(MeshFormat::Msh),
-            Some("inp") => Ok(MeshFormat::Inp),
-            Some("vtu") => Ok(MeshFormat::Vtu),
-            _ => Err(WriteError::UnknownFormat {
-                path: path.to_path_buf(),
-            }),
-        }
-    }
-
     /// Writes `mesh` in this format to `w` (not atomically; see [`write_mesh`]).
     ///
     /// # Errors
@@ -118,32 +90,7 @@ impl WriteOptions {
     }
 }
 
-/// An output surface format (isosurfaces).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum SurfaceFormat {
-    /// Wavefront `.obj` ([`write_obj`]).
-    Obj,
-    /// Stanford `.ply` ([`write_ply`]).
-    Ply,
-    /// `.stl` ([`write_stl`]).
-    Stl,
-}
-
 impl SurfaceFormat {
-    /// The surface format named by the extension of `path` (case-insensitive): `.obj`, `.ply`
-    /// or `.stl`; `None` for any other.
-    pub fn from_path(path: &Path) -> Option<Self> {
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        match ext.as_deref() {
-            Some("obj") => Some(SurfaceFormat::Obj),
-            Some("ply") => Some(SurfaceFormat::Ply),
-            Some("stl") => Some(SurfaceFormat::Stl),
-            _ => None,
-        }
-    }
-
     /// Writes `s` in this format to `w` (not atomically; see [`write_surface`]).
     ///
     /// # Errors

@@ -17,26 +17,7 @@ use std::path::Path;
 
 use super::atomic::{write_atomically, WriteError};
 
-/// An output format for a transfer function.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TransferFormat {
-    /// ParaView colour-map preset (JSON).
-    ParaView,
-    /// Comma-separated `value,r,g,b,opacity`.
-    Csv,
-}
-
-impl TransferFormat {
-    /// The format named by the extension of `path` (`.json`, `.csv`, any case).
-    pub fn from_path(path: &Path) -> Option<Self> {
-        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-        match ext.as_str() {
-            "json" => Some(TransferFormat::ParaView),
-            "csv" => Some(TransferFormat::Csv),
-            _ => None,
-        }
-    }
-}
+pub use super::formats::TransferFormat;
 
 /// A transfer function to write: control points sorted by strictly increasing value, both
 /// functions over the same range.

@@ -10,6 +10,7 @@ use crate::{Samples, ScalarGrid};
 use super::progress::Reporter;
 use super::request::Job;
 use super::text::fmt_bound;
+use super::Param;
 
 /// The warnings about the bounds and the geometry of the input, in order: bounds equal to
 /// grid values, a nearly singular direction matrix (not for a `curvilinear` grid's values),
@@ -22,7 +23,11 @@ pub(crate) fn warn_input(grid: &ScalarGrid, job: &Job, curvilinear: bool, report
     if job.req.critical_check {
         let (a, b) = (job.opts.alpha, job.opts.beta);
         let tol = job.req.critical_tol;
-        warn_critical_bounds(grid, (&job.input_name, reporter), a, b, tol);
+        let names = (
+            job.req.names.of(Param::Alpha),
+            job.req.names.of(Param::Beta),
+        );
+        warn_critical_bounds(grid, (&job.input_name, reporter), (a, b), names, tol);
     }
 }
 
@@ -43,7 +48,11 @@ fn warn_near_singular(grid: &ScalarGrid, job: &Job, reporter: &Reporter) {
 /// Warns about each bound that equals grid values exactly.
 fn warn_exact_bounds(grid: &ScalarGrid, job: &Job, reporter: &Reporter) {
     let (alpha, beta) = (job.opts.alpha, job.opts.beta);
-    for (name, bound, lower) in [("alpha", alpha, true), ("beta", beta, false)] {
+    let n = job.req.names;
+    for (name, bound, lower) in [
+        (n.of(Param::Alpha), alpha, true),
+        (n.of(Param::Beta), beta, false),
+    ] {
         if let Some(w) = bound_warning(&grid.values, name, bound, lower) {
             reporter.warn(format_args!("{}: {w}", job.input_name));
         }
@@ -60,11 +69,11 @@ fn bound_warning(values: &Samples, name: &str, bound: f64, lower: bool) -> Optio
         return None;
     }
     let suggestion = match inside_value(values, bound, lower) {
-        Some(v) => format!(" (e.g. --{name} {} includes them)", fmt_bound(v)),
+        Some(v) => format!(" (e.g. {name} {} includes them)", fmt_bound(v)),
         None => String::new(),
     };
     Some(format!(
-        "--{name} {} equals the value of {hits} grid vertices; values equal to a bound count \
+        "{name} {} equals the value of {hits} grid vertices; values equal to a bound count \
          as outside the interval, which can leave hairline gaps or pinch points; use a value \
          between data values to avoid them{suggestion}",
         fmt_bound(bound)
@@ -90,8 +99,8 @@ fn inside_value(values: &Samples, bound: f64, lower: bool) -> Option<f64> {
 fn warn_critical_bounds(
     grid: &ScalarGrid,
     (input, reporter): (&str, &Reporter),
-    alpha: f64,
-    beta: f64,
+    (alpha, beta): (f64, f64),
+    (alpha_name, beta_name): (&str, &str),
     tol: Option<f64>,
 ) {
     let (lo, hi) = grid.value_range();
@@ -107,7 +116,7 @@ fn warn_critical_bounds(
         return;
     }
     let points = critical_in_windows(grid, &windows);
-    for (name, bound, lower) in [("alpha", alpha, true), ("beta", beta, false)] {
+    for (name, bound, lower) in [(alpha_name, alpha, true), (beta_name, beta, false)] {
         if !bound.is_finite() {
             continue;
         }
@@ -132,7 +141,7 @@ fn warn_critical_bounds(
     }
 }
 
-/// A bound being checked: `--{name} {value}` of `input`, with the warning tolerance `tol`.
+/// A bound being checked: `{name} {value}` of `input` (`name` as the request names it), with the warning tolerance `tol`.
 struct Bound<'a> {
     input: &'a str,
     name: &'a str,
@@ -146,7 +155,7 @@ fn warn_face_saddles(grid: &ScalarGrid, b: &Bound, reporter: &Reporter) {
     let flat = face_saddles_in(grid, bound - tol, bound + tol);
     if let Some((v, p)) = flat.first() {
         reporter.warn(format_args!(
-            "{}: --{} {} is within {tol:.4} of {} face saddle(s) of \
+            "{}: {} {} is within {tol:.4} of {} face saddle(s) of \
              the bilinear interpolant (e.g. {} at ({:.3}, {:.3}, {:.3}); a checkerboard face \
              with corners k, k+1 has its saddle at k+0.5): they are vertices of the \
              decomposition, so elements there get a vertex on the bound",
@@ -184,7 +193,7 @@ fn warn_near_critical(
             })
     };
     reporter.warn(format_args!(
-        "{}: --{} {} is within {tol:.4} of {} critical value(s) of \
+        "{}: {} {} is within {tol:.4} of {} critical value(s) of \
          the trilinear field (e.g. {} {} at ({:.3}, {:.3}, {:.3})): the domain pinches there \
          and its elements degenerate; nearest safer values: {} below, {} above",
         b.input,

@@ -21,7 +21,7 @@ use crate::io::{
 use crate::ScalarGrid;
 
 use super::progress::{Progress, Reporter, StageKind};
-use super::{check_threads, read_grid, PipelineError};
+use super::{check_threads, read_grid, Param, ParamNames, PipelineError};
 
 /// One run of the critical points: the input, the filters of the points, the outputs and the
 /// design of the transfer function. Plain data; [`CriticalRequest::default`] lists the
@@ -58,6 +58,8 @@ pub struct CriticalRequest {
     /// The memory limit of the estimates ([`crate::memory::set_limit`]; `None`: the
     /// available memory).
     pub memory_limit: Option<u64>,
+    /// How messages name the parameters.
+    pub names: ParamNames,
 }
 
 impl Default for CriticalRequest {
@@ -77,6 +79,7 @@ impl Default for CriticalRequest {
             transfer_width: None,
             threads: None,
             memory_limit: None,
+            names: ParamNames::NEUTRAL,
         }
     }
 }
@@ -130,7 +133,7 @@ pub fn critical_file(
     crate::memory::set_limit(req.memory_limit);
     let reporter = Reporter::new(progress);
     let input = req.input_name();
-    check_threads(req.threads)?;
+    check_threads(req.threads, req.names)?;
     for out in [&req.json, &req.spectrum, &req.transfer]
         .into_iter()
         .flatten()
@@ -140,10 +143,15 @@ pub fn critical_file(
     let transfer_format = req.transfer.as_deref().map(transfer_format).transpose()?;
     check_files(req)?;
     let stage = reporter.stage(&format!("reading {input}"), StageKind::Step);
-    let grid = read_grid(req.input.as_deref(), req.spacing)?;
+    let grid = read_grid(req.input.as_deref(), req.spacing, req.names)?;
     stage.finish();
     let opts = req.options();
-    check_memory(&grid, &input, opts.persistence, req.spectrum.is_some())?;
+    check_memory(
+        &grid,
+        (&input, req.names),
+        opts.persistence,
+        req.spectrum.is_some(),
+    )?;
     let stage = reporter.stage("finding the critical points", StageKind::Step);
     let points =
         find_critical_with_options(&grid, &opts).map_err(|e| PipelineError::file(&input, e))?;
@@ -174,17 +182,18 @@ pub fn critical_file(
     })
 }
 
-/// Refuses, before any sample is read, an output (`--json`, `--spectrum`, `--transfer`) that
+/// Refuses, before any sample is read, an output (the JSON, the spectrum, the transfer function) that
 /// is the same file as a file of the input or as another output. A clash is a usage error.
 fn check_files(req: &CriticalRequest) -> Result<(), PipelineError> {
     let inputs = match &req.input {
         Some(input) => input_run_files(input, None).map_err(PipelineError::other)?,
         None => Vec::new(),
     };
+    let n = req.names;
     let outputs = output_run_files(&[
-        ("--json", req.json.as_deref()),
-        ("--spectrum", req.spectrum.as_deref()),
-        ("--transfer", req.transfer.as_deref()),
+        (n.of(Param::Json), req.json.as_deref()),
+        (n.of(Param::Spectrum), req.spectrum.as_deref()),
+        (n.of(Param::Transfer), req.transfer.as_deref()),
     ]);
     check_clashes(&inputs, &outputs)?;
     Ok(())
@@ -194,7 +203,7 @@ fn check_files(req: &CriticalRequest) -> Result<(), PipelineError> {
 /// spectrum when asked for) before the work (see [`crate::memory::critical_bytes`]).
 fn check_memory(
     grid: &ScalarGrid,
-    input: &str,
+    (input, names): (&str, ParamNames),
     persistence: bool,
     spectrum: bool,
 ) -> Result<(), PipelineError> {
@@ -215,8 +224,10 @@ fn check_memory(
         PipelineError::file(
             input,
             format_args!(
-                "{e}; crop the volume, leave out --spectrum and --persistence or raise \
-                 --memory-limit"
+                "{e}; crop the volume, leave out {} and {} or raise {}",
+                names.of(Param::Spectrum),
+                names.of(Param::Persistence),
+                names.of(Param::MemoryLimit)
             ),
         )
     })

@@ -7,7 +7,7 @@ use crate::ScalarGrid;
 
 use super::request::Job;
 use super::text::fmt_interval;
-use super::PipelineError;
+use super::{Param, PipelineError};
 
 /// Whether the mesh goes straight to disk slab by slab: a volume mesh output without the
 /// quality pass (which needs the whole mesh), a curvilinear mapping or the check (which reads
@@ -56,7 +56,10 @@ pub(crate) fn check_memory(
     crate::memory::check(need, what).map_err(|e| {
         PipelineError::file(
             &job.input_name,
-            format_args!("{e}; narrow the interval, crop the volume or raise --memory-limit"),
+            format_args!(
+                "{e}; narrow the interval, crop the volume or raise {}",
+                job.req.names.of(Param::MemoryLimit)
+            ),
         )
     })
 }

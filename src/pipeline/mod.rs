@@ -24,10 +24,13 @@
 //! (`critical.rs`): [`critical_file`] takes a [`CriticalRequest`] and gives a
 //! [`CriticalRun`], whose table is [`critical_table`].
 
+mod applies;
 mod bounds;
 mod critical;
 mod error;
+mod inspect;
 mod memory;
+mod param;
 mod progress;
 mod quality;
 mod read;
@@ -36,14 +39,18 @@ mod request;
 mod run;
 mod summary;
 pub mod text;
+pub mod values;
 
 use std::time::Instant;
 
 use crate::report::{QualityTimings, Report, Timings};
 use crate::{MeshOutput, Method, ScalarGrid};
 
+pub use applies::{check_applies, Given, Inapplicable, Mode};
 pub use critical::{critical_file, critical_table, transfer_line, CriticalRequest, CriticalRun};
 pub use error::PipelineError;
+pub use inspect::{inspect_files, InspectRequest, InspectRun};
+pub use param::{Param, ParamNames};
 pub use progress::{NoProgress, Progress, StageKind};
 pub use read::read_grid;
 pub use request::{check_threads, MeshRequest, QualityRequest, DEMO_OUTPUT};

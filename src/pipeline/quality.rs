@@ -47,10 +47,10 @@ pub(crate) fn improve_mesh(
         outcome: done.outcome,
         target_missed: done.outcome.missed(),
     };
-    if let Some(line) = budget_line(&section, request.budget_seconds()) {
+    if let Some(line) = budget_line(&section, request.budget_seconds(), job.req.names) {
         reporter.warn(format_args!("{}: {line}", job.input_name));
     }
-    if let Some(line) = target_line(&section) {
+    if let Some(line) = target_line(&section, job.req.names) {
         reporter.warn(format_args!("{}: {line}", job.input_name));
     }
     let seconds = QualityTimings {

@@ -9,7 +9,7 @@ use crate::{CurvilinearGrid, ScalarGrid};
 
 use super::progress::{Reporter, StageKind};
 use super::request::Job;
-use super::PipelineError;
+use super::{Param, ParamNames, PipelineError};
 
 /// Reads the input volume (a curvilinear grid's values in parameter space, with the grid).
 pub(crate) fn read_input(
@@ -20,7 +20,7 @@ pub(crate) fn read_input(
     let curvilinear = read_curvilinear_input(job)?;
     let grid = match &curvilinear {
         Some(c) => c.values.clone(),
-        None => read_grid(job.req.input.as_deref(), job.req.spacing)?,
+        None => read_grid(job.req.input.as_deref(), job.req.spacing, job.req.names)?,
     };
     stage.finish();
     Ok((grid, curvilinear))
@@ -40,10 +40,12 @@ fn read_curvilinear_input(job: &Job) -> Result<Option<CurvilinearGrid>, Pipeline
 /// Reads the volume `input` (the demo volume for `None`) and gives it `spacing`.
 ///
 /// # Errors
-/// The reader's error, or `{input}: --spacing: …` for a spacing the grid refuses.
+/// The reader's error, or `{input}: {spacing}: …` for a spacing the grid refuses (the
+/// parameter named by `names`).
 pub fn read_grid(
     input: Option<&Path>,
     spacing: Option<[f64; 3]>,
+    names: ParamNames,
 ) -> Result<ScalarGrid, PipelineError> {
     let mut grid = match input {
         Some(p) => read_volume(p).map_err(PipelineError::other)?,
@@ -52,7 +54,12 @@ pub fn read_grid(
     if let Some(s) = spacing {
         let input_name = input.map_or("demo".to_string(), |p| p.display().to_string());
         grid = ScalarGrid::with_geometry(grid.dims, s, grid.origin, grid.direction, grid.values)
-            .map_err(|e| PipelineError::file(input_name, format_args!("--spacing: {e}")))?;
+            .map_err(|e| {
+                PipelineError::file(
+                    input_name,
+                    format_args!("{}: {e}", names.of(Param::Spacing)),
+                )
+            })?;
     }
     Ok(grid)
 }

@@ -14,7 +14,7 @@ use crate::io::{
 use crate::{MeshOptions, Method};
 
 use super::text::fmt_bound;
-use super::PipelineError;
+use super::{Param, ParamNames, PipelineError};
 
 /// Output written for the demo volume when no output is given.
 pub const DEMO_OUTPUT: &str = "tptd-demo.vtu";
@@ -64,6 +64,8 @@ pub struct MeshRequest {
     /// The memory limit of the estimates ([`crate::memory::set_limit`]; `None`: the
     /// available memory).
     pub memory_limit: Option<u64>,
+    /// How messages name the parameters.
+    pub names: ParamNames,
 }
 
 impl Default for MeshRequest {
@@ -87,6 +89,7 @@ impl Default for MeshRequest {
             critical_check: true,
             critical_tol: None,
             memory_limit: None,
+            names: ParamNames::NEUTRAL,
         }
     }
 }
@@ -154,7 +157,7 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
         (None, false) => return Err(PipelineError::file(&input_name, "no output given")),
     };
     let (alpha, beta) = interval(req, &input_name)?;
-    check_threads(req.threads)?;
+    check_threads(req.threads, req.names)?;
     check_outputs(req, &output)?;
     let opts = MeshOptions {
         alpha,
@@ -179,12 +182,17 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
 /// The interval `(alpha, beta)` of the request (the demo's without both bounds), which must
 /// not be empty.
 fn interval(req: &MeshRequest, input_name: &str) -> Result<(f64, f64), PipelineError> {
+    let n = req.names;
     let (alpha, beta) = match (req.alpha, req.beta) {
         (None, None) if req.input.is_none() => (DEMO_ALPHA, DEMO_BETA),
         (None, None) => {
             return Err(PipelineError::file(
                 input_name,
-                "no interval given: use --alpha A and/or --beta B (meshes alpha <= f <= beta)",
+                format_args!(
+                    "no interval given: use {} A and/or {} B (meshes alpha <= f <= beta)",
+                    n.of(Param::Alpha),
+                    n.of(Param::Beta)
+                ),
             ))
         }
         (a, b) => (a.unwrap_or(f64::NEG_INFINITY), b.unwrap_or(f64::INFINITY)),
@@ -193,8 +201,10 @@ fn interval(req: &MeshRequest, input_name: &str) -> Result<(f64, f64), PipelineE
         return Err(PipelineError::file(
             input_name,
             format_args!(
-                "empty interval: --alpha ({}) must be less than --beta ({})",
+                "empty interval: {} ({}) must be less than {} ({})",
+                n.of(Param::Alpha),
                 fmt_bound(alpha),
+                n.of(Param::Beta),
                 fmt_bound(beta)
             ),
         ));
@@ -209,18 +219,23 @@ const MAX_THREADS_PER_CORE: usize = 16;
 /// to fail).
 ///
 /// # Errors
-/// `-j {n}: too many worker threads: …`.
-pub fn check_threads(threads: Option<usize>) -> Result<(), PipelineError> {
-    let Some(n) = threads else { return Ok(()) };
+/// `{threads} {n}: too many worker threads: …`, the parameter named by `names`.
+pub fn check_threads(threads: Option<usize>, names: ParamNames) -> Result<(), PipelineError> {
+    match threads.and_then(too_many_threads) {
+        Some((n, max, cores)) => Err(PipelineError::file(
+            format_args!("{} {n}", names.of(Param::Threads)),
+            format_args!("too many worker threads: at most {max} on this machine ({cores} cores)"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// `(n, max, cores)` when `n` worker threads are more than the machine takes (`max`, for its
+/// `cores`).
+pub(super) fn too_many_threads(n: usize) -> Option<(usize, usize, usize)> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let max = (cores * MAX_THREADS_PER_CORE).max(MAX_THREADS_PER_CORE);
-    if n > max {
-        return Err(PipelineError::file(
-            format_args!("-j {n}"),
-            format_args!("too many worker threads: at most {max} on this machine ({cores} cores)"),
-        ));
-    }
-    Ok(())
+    (n > max).then_some((n, max, cores))
 }
 
 /// Checks the output (a known mesh or surface format, writable) and the report output
@@ -247,7 +262,11 @@ fn check_files(req: &MeshRequest, output: &Path) -> Result<(), PipelineError> {
         }
         None => Vec::new(),
     };
-    let outputs = output_run_files(&[("-o", Some(output)), ("--report", req.report.as_deref())]);
+    let n = req.names;
+    let outputs = output_run_files(&[
+        (n.of(Param::Output), Some(output)),
+        (n.of(Param::Report), req.report.as_deref()),
+    ]);
     check_clashes(&inputs, &outputs)?;
     Ok(())
 }

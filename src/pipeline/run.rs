@@ -24,7 +24,7 @@ use super::progress::{Reporter, StageKind};
 use super::quality::improve_mesh;
 use super::request::Job;
 use super::text::fmt_interval;
-use super::{DemoComparison, PipelineError};
+use super::{DemoComparison, Param, PipelineError};
 
 /// What meshing, analysing and writing produced (the output file still pending).
 pub(crate) struct Written {
@@ -206,7 +206,8 @@ fn check_output(
         return Err(PipelineError::file(
             job.output.display(),
             format_args!(
-                "the mesh fails --check ({}{how_far}); nothing written",
+                "the mesh fails {} ({}{how_far}); nothing written",
+                job.req.names.of(Param::Check),
                 report.summary_line()
             ),
         ));

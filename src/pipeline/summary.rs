@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::text::{fmt_angle, fmt_bound, reasons, target_line};
-use super::DemoComparison;
+use super::{DemoComparison, Param, ParamNames};
 use crate::improve::ImproveReport;
 use crate::quality::BELOW_ANGLES;
 use crate::report::Report;
@@ -30,13 +30,19 @@ fn check_line(c: &crate::check::CheckReport) -> String {
 }
 
 /// The human-readable summary of a run's report `r` (with the demo's comparison `cmp`, and
-/// the report file's path when one was written), one line per fact, each ending in a newline.
-pub fn summary(r: &Report, cmp: Option<&DemoComparison>, report_path: Option<&Path>) -> String {
+/// the report file's path when one was written), one line per fact, each ending in a newline;
+/// parameters are named by `names`.
+pub fn summary(
+    r: &Report,
+    cmp: Option<&DemoComparison>,
+    report_path: Option<&Path>,
+    names: ParamNames,
+) -> String {
     let mut s = String::new();
     input_lines(&mut s, r);
     mesh_lines(&mut s, r);
-    analysis_lines(&mut s, r);
-    quality_lines(&mut s, r);
+    analysis_lines(&mut s, r, names);
+    quality_lines(&mut s, r, names);
     cells_line(&mut s, r);
     output_lines(&mut s, r, report_path);
     if let (Some(c), Some([b0, ..])) = (cmp, r.betti) {
@@ -89,13 +95,13 @@ fn mesh_lines(s: &mut String, r: &Report) {
 }
 
 /// Betti numbers and dihedral angles (or that they were skipped).
-fn analysis_lines(s: &mut String, r: &Report) {
+fn analysis_lines(s: &mut String, r: &Report, names: ParamNames) {
     match r.betti {
         Some([b0, b1, b2]) => {
             let _ = writeln!(s, "  topology  b0 = {b0}, b1 = {b1}, b2 = {b2}");
         }
         None => {
-            let _ = writeln!(s, "  topology  (skipped: --no-analysis)");
+            let _ = writeln!(s, "  topology  (skipped: {})", names.of(Param::NoAnalysis));
         }
     }
     if let Some(d) = r.dihedral_degrees {
@@ -109,7 +115,7 @@ fn analysis_lines(s: &mut String, r: &Report) {
 }
 
 /// The quality pass: what it did and the angles before and after.
-fn quality_lines(s: &mut String, r: &Report) {
+fn quality_lines(s: &mut String, r: &Report, names: ParamNames) {
     let Some(q) = &r.quality else {
         return;
     };
@@ -130,7 +136,7 @@ fn quality_lines(s: &mut String, r: &Report) {
         p.projected,
         p.unprojected,
         p.rounds,
-        stopped(p)
+        stopped(p, names)
     );
     if !p.stages.is_empty() {
         let stages: Vec<String> = p
@@ -177,21 +183,24 @@ fn quality_lines(s: &mut String, r: &Report) {
             reasons(&f.counts)
         );
     }
-    if let Some(line) = target_line(q) {
+    if let Some(line) = target_line(q, names) {
         let _ = writeln!(s, "  warning   {line}");
     }
 }
 
 /// How the pass ended, when its time budget stopped it (empty otherwise).
-fn stopped(p: &ImproveReport) -> String {
+fn stopped(p: &ImproveReport, names: ParamNames) -> String {
     if !p.out_of_time {
         return String::new();
     }
     match &p.budget {
         Some(k) if k.kept_before => {
-            " (stopped by --quality-time; the mesh from before the pass kept, it was better)".into()
+            format!(
+                " (stopped by {}; the mesh from before the pass kept, it was better)",
+                names.of(Param::QualityTime)
+            )
         }
-        _ => " (stopped by --quality-time)".into(),
+        _ => format!(" (stopped by {})", names.of(Param::QualityTime)),
     }
 }
 

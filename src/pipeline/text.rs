@@ -1,35 +1,12 @@
-//! The number formats of messages, and the lines that say what the quality pass left: shared
-//! by the warnings of a run and by a front end's summary.
+//! The number formats of messages ([`crate::text`], re-exported), and the lines that say what
+//! the quality pass left: shared by the warnings of a run and by a front end's summary.
 
 use crate::improve::forced::ForcedCounts;
 use crate::report::QualitySection;
 
-/// Formats a bound for messages (`inf`, `-inf` or the shortest round-trip form).
-pub fn fmt_bound(v: f64) -> String {
-    if v == f64::INFINITY {
-        "inf".into()
-    } else if v == f64::NEG_INFINITY {
-        "-inf".into()
-    } else {
-        format!("{v}")
-    }
-}
+use super::{Param, ParamNames};
 
-/// `[a, b]` for messages, with an open bracket at an infinite end: `(-inf, b]`, `[a, inf)`.
-pub fn fmt_interval(alpha: f64, beta: f64) -> String {
-    let open = if alpha.is_infinite() { '(' } else { '[' };
-    let close = if beta.is_infinite() { ')' } else { ']' };
-    format!("{open}{}, {}{close}", fmt_bound(alpha), fmt_bound(beta))
-}
-
-/// An angle in degrees with three decimals, or three significant digits when tiny.
-pub fn fmt_angle(a: f64) -> String {
-    if a != 0.0 && a.abs() < 0.01 {
-        format!("{a:.2e}")
-    } else {
-        format!("{a:.3}")
-    }
-}
+pub use crate::text::{fmt_angle, fmt_bound, fmt_interval};
 
 /// The reasons of the tets below the floor, counted.
 pub fn reasons(c: &ForcedCounts) -> String {
@@ -47,7 +24,7 @@ pub fn reasons(c: &ForcedCounts) -> String {
 
 /// The one line that says the quality target was missed, with the counts and the reasons of
 /// the tets below the floor; `None` when it was met.
-pub fn target_line(q: &QualitySection) -> Option<String> {
+pub fn target_line(q: &QualitySection, names: ParamNames) -> Option<String> {
     let o = &q.outcome;
     if !o.missed() {
         return None;
@@ -57,7 +34,10 @@ pub fn target_line(q: &QualitySection) -> Option<String> {
     let below_floor = match (&q.forced, o.below_floor) {
         (_, 0) => format!("none below {floor}°"),
         (Some(f), n) => format!("{n} below {floor}°: {}", reasons(&f.counts)),
-        (None, n) => format!("{n} below {floor}° (reasons not looked for: --no-analysis)"),
+        (None, n) => format!(
+            "{n} below {floor}° (reasons not looked for: {})",
+            names.of(Param::NoAnalysis)
+        ),
     };
     Some(format!(
         "quality target missed: {} tets below {lo}°, {} above {hi}° (smallest angle {}°); {below_floor}",
@@ -69,12 +49,13 @@ pub fn target_line(q: &QualitySection) -> Option<String> {
 
 /// The line that says a pass stopped by its time budget (`seconds`, as given) had left the
 /// mesh worse than before it, so the mesh from before it was kept; `None` otherwise.
-pub fn budget_line(q: &QualitySection, seconds: Option<f64>) -> Option<String> {
+pub fn budget_line(q: &QualitySection, seconds: Option<f64>, names: ParamNames) -> Option<String> {
     let k = q.pass.budget.as_ref().filter(|k| k.kept_before)?;
     let (a, b) = (&k.after, &k.before);
     let why = if q.pass.out_of_time {
         format!(
-            "--quality-time {} s ran out",
+            "{} {} s ran out",
+            names.of(Param::QualityTime),
             seconds.map_or_else(|| "?".into(), |t| t.to_string())
         )
     } else {

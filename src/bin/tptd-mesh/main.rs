@@ -1,58 +1,67 @@
-//! `tptd-mesh`: command-line front end. Reads a scalar volume (or generates the demo volume),
-//! meshes the interval volume `{alpha <= f <= beta}` into tetrahedra, analyses the mesh and
-//! writes it as `.msh`, `.inp` or `.vtu` (or its level sets as `.obj`, `.ply` or `.stl`), plus
-//! an optional JSON report.
+//! `tptd-mesh`: command-line front end. Meshes the interval volume `{alpha <= f <= beta}` of
+//! a scalar volume (or of the demo volume) into tetrahedra, writes it as `.msh`, `.inp` or
+//! `.vtu` (or its level sets as `.obj`, `.ply` or `.stl`) with an optional JSON report; or
+//! lists critical points (`--critical`), or inspects meshes (`--inspect`).
 //!
-//! This is the only part of the crate that prints. Every failure is reported as one line
-//! `tptd-mesh: error: {file}: {problem}` on stderr with exit status 1 (2 for malformed
-//! arguments and for an output that is the same file as an input file or another output,
-//! found before any work); outputs are written atomically, so a failed run leaves no
-//! (partial) output file behind. A closed stdout is not an error.
-//!
-//! The meshing run itself is the library's ([`tptd::pipeline::mesh_file`]): this program
-//! turns the arguments into its request, shows its progress and warnings on stderr, prints
-//! its summary and maps its errors to exit statuses.
-//!
-//! Modules: [`alloc`] (the memory-capped allocator), [`cli`] (arguments), [`applies`] (options
-//! that do nothing are refused), [`inspect`] (`--inspect`: meshes side by side), [`run`] (the
-//! meshing run: request, progress, the library's summary on stdout), [`critical`]
-//! (`--critical`: request, the library's run and table), [`progress`] (the progress bar and
-//! the warnings on stderr), [`error`] (`{file}: {problem}` errors), [`files`] (the check of
-//! `--inspect` that no output is an input or another output).
+//! The runs are the library's ([`tptd::pipeline`]). This program parses the arguments
+//! ([`cli`]), builds the requests and prints the results ([`run`]) and the progress
+//! ([`progress`]). Every failure is one line `tptd-mesh: error: {file}: {problem}` on stderr,
+//! exit status 1 (2 for malformed arguments and for an output that is an input or another
+//! output); a failed run leaves no output. A closed stdout is not an error.
 
-mod alloc;
-mod applies;
 mod cli;
-mod critical;
-mod error;
-mod files;
-mod inspect;
 mod progress;
 mod run;
 
+use std::io::Write;
+
+use tptd::allocator::{set_out_of_memory_message, CappedAlloc, OutOfMemory};
+
 #[global_allocator]
-static ALLOC: alloc::CappedAlloc = alloc::CappedAlloc;
+static ALLOC: CappedAlloc = CappedAlloc;
 
 fn main() {
     let cli = cli::parse_or_exit();
     tptd::memory::set_limit(cli.memory_limit);
+    set_out_of_memory_message(if cli.critical {
+        |w, m| out_of_memory(w, m, true)
+    } else {
+        |w, m| out_of_memory(w, m, false)
+    });
     clean_up_on_signals();
     let result = if !cli.inspect.is_empty() {
-        inspect::run(cli)
+        run::inspect(cli)
     } else if cli.critical {
-        alloc::set_critical_mode();
-        critical::run(cli)
+        run::critical(cli)
     } else {
-        run::run(cli)
+        run::mesh(cli)
     };
     if let Err(e) = result {
         let msg = e.to_string().replace(['\n', '\r'], " ");
         eprintln!("tptd-mesh: error: {msg}");
         // An output that would replace an input or another output is a usage error.
-        let usage = e.is::<tptd::io::FileClash>()
-            || e.downcast_ref::<tptd::pipeline::PipelineError>()
-                .is_some_and(|p| p.is_usage());
-        std::process::exit(if usage { 2 } else { 1 });
+        std::process::exit(if e.is_usage() { 2 } else { 1 });
+    }
+}
+
+/// The out-of-memory line, with what helps in a `--critical` run or a meshing run.
+fn out_of_memory(w: &mut dyn Write, m: OutOfMemory, critical: bool) -> std::io::Result<()> {
+    let hint = match (critical, m.limit) {
+        (true, _) => "crop the volume or leave out --spectrum and --persistence",
+        (false, Some(_)) => "crop the volume or narrow the interval",
+        (false, None) => "crop the volume, narrow the interval or use --no-analysis",
+    };
+    let size = m.size;
+    match m.limit {
+        Some(l) => writeln!(
+            w,
+            "tptd-mesh: error: out of memory: {size} more would exceed the memory limit of {l}; \
+             raise --memory-limit, {hint}"
+        ),
+        None => writeln!(
+            w,
+            "tptd-mesh: error: out of memory: the system refused {size}; {hint}"
+        ),
     }
 }
 

@@ -109,15 +109,15 @@ impl Progress for TermProgress {
 const SHOW_AFTER: Duration = Duration::from_secs(1);
 
 /// A spinner `{msg} {elapsed}` on stderr for one stage, shown once the stage has run for
-/// [`SHOW_AFTER`] (never with `quiet` or when stderr is not a terminal).
-pub(crate) struct Stage {
+/// [`SHOW_AFTER`] (never with `quiet` or when stderr is not a terminal); dropping it clears it.
+struct Stage {
     pb: ProgressBar,
     done: Arc<Mutex<bool>>,
 }
 
 impl Stage {
     /// Starts the stage `msg` (e.g. `writing m.vtu`).
-    pub(crate) fn start(msg: String, quiet: bool) -> Stage {
+    fn start(msg: String, quiet: bool) -> Stage {
         let pb = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
         pb.set_style(
             ProgressStyle::with_template("{spinner} {msg} {elapsed}")
@@ -138,9 +138,6 @@ impl Stage {
         }
         Stage { pb, done }
     }
-
-    /// Ends the stage and clears its spinner (as dropping it does, e.g. on an error).
-    pub(crate) fn finish(self) {}
 }
 
 impl Drop for Stage {

@@ -1,25 +1,31 @@
-//! One meshing run of `tptd-mesh`: the arguments as a [`MeshRequest`], the run
-//! ([`tptd::pipeline::mesh_file`]) with the progress and warnings on stderr, and the summary
-//! on stdout.
+//! The three runs of `tptd-mesh`: the arguments as the library's request
+//! ([`tptd::pipeline::mesh_file`], [`critical_file`], [`inspect_files`]) with the progress and
+//! warnings on stderr, and the summary or table on stdout.
 
 use std::io::Write;
 
-use anyhow::Result;
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
-use tptd::pipeline::{mesh_file, summary, MeshRequest, QualityRequest};
+use tptd::pipeline::{critical_file, critical_table, inspect_files, mesh_file, summary};
+use tptd::pipeline::{transfer_line, CriticalRequest, InspectRequest, MeshRequest, NoProgress};
+use tptd::pipeline::{PipelineError, QualityRequest};
 
-use crate::cli::{Cli, Spacing};
+use crate::cli::{Cli, Spacing, FLAGS};
 use crate::progress::TermProgress;
 
-pub(crate) use tptd::pipeline::DEMO_OUTPUT;
+type Result = std::result::Result<(), PipelineError>;
 
-/// Runs `tptd-mesh` with the parsed arguments.
-pub(crate) fn run(cli: Cli) -> Result<()> {
+/// Meshes: `tptd-mesh INPUT -o OUT ...`.
+pub(crate) fn mesh(cli: Cli) -> Result {
     let progress = TermProgress::new(cli.quiet);
-    let run = mesh_file(&request(&cli), &progress)?;
+    let run = mesh_file(&mesh_request(&cli), &progress)?;
     if !cli.quiet {
-        let text = summary(&run.report, run.comparison.as_ref(), cli.report.as_deref());
+        let text = summary(
+            &run.report,
+            run.comparison.as_ref(),
+            cli.report.as_deref(),
+            FLAGS,
+        );
         // A closed stdout (e.g. `| head`) is not an error of the run.
         let _ = std::io::stdout().lock().write_all(text.as_bytes());
     }
@@ -29,8 +35,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     Ok(())
 }
 
-/// The request of the arguments.
-fn request(cli: &Cli) -> MeshRequest {
+/// The meshing request of the arguments.
+fn mesh_request(cli: &Cli) -> MeshRequest {
     let quality = cli.quality.then(|| QualityRequest {
         options: QualityOptions {
             min_angle: cli.min_angle,
@@ -49,14 +55,14 @@ fn request(cli: &Cli) -> MeshRequest {
         spacing: cli.spacing.map(|Spacing(s)| s),
         alpha: cli.alpha,
         beta: cli.beta,
-        method: cli.method.method(),
+        method: cli.method.get(),
         threads: cli.threads.map(|n| n as usize),
         output: cli.output.clone(),
         report: cli.report.clone(),
         write: WriteOptions::default()
-            .with_msh_version(cli.msh_version.version())
+            .with_msh_version(cli.msh_version.get())
             .with_ascii(cli.ascii)
-            .with_vtu_encoding(cli.vtu_encoding.encoding()),
+            .with_vtu_encoding(cli.vtu_encoding.get()),
         caps: cli.caps,
         quality,
         check: cli.check,
@@ -64,10 +70,67 @@ fn request(cli: &Cli) -> MeshRequest {
         critical_check: !cli.no_critical_check,
         critical_tol: cli.critical_tol,
         memory_limit: cli.memory_limit,
+        names: FLAGS,
     }
 }
 
-/// Checks `-j` against the machine at once (a huge pool takes long to start and to fail).
-pub(crate) fn check_threads(threads: Option<u32>) -> Result<()> {
-    Ok(tptd::pipeline::check_threads(threads.map(|n| n as usize))?)
+/// Lists the critical points: `tptd-mesh INPUT --critical ...`.
+pub(crate) fn critical(cli: Cli) -> Result {
+    let req = CriticalRequest {
+        input: cli.input.clone(),
+        spacing: cli.spacing.map(|Spacing(s)| s),
+        min_value: cli.min_value.unwrap_or(f64::NEG_INFINITY),
+        max_value: cli.max_value.unwrap_or(f64::INFINITY),
+        kinds: cli.kind.clone().map(|k| k.0).unwrap_or_default(),
+        min_persistence: cli.min_persistence.unwrap_or(0.0),
+        persistence: cli.persistence || cli.min_persistence.is_some(),
+        json: cli.json.clone(),
+        spectrum: cli.spectrum.clone(),
+        transfer: cli.transfer.clone(),
+        transfer_design: cli.transfer_design.get(),
+        transfer_width: cli.transfer_width,
+        threads: cli.threads.map(|n| n as usize),
+        memory_limit: cli.memory_limit,
+        names: FLAGS,
+    };
+    let run = critical_file(&req, &NoProgress)?;
+    if !cli.quiet {
+        if let (Some(path), Some(tf)) = (&req.transfer, &run.transfer) {
+            print(&transfer_line(tf, run.points.len(), path))?;
+        }
+        print(&critical_table(&req.input_name(), &run.points, run.secs))?;
+    }
+    Ok(())
+}
+
+/// Inspects meshes: `tptd-mesh --inspect MESH... [--volume VOLUME --alpha A --beta B]`.
+pub(crate) fn inspect(cli: Cli) -> Result {
+    let req = InspectRequest {
+        meshes: cli.inspect.clone(),
+        volume: cli.volume.clone(),
+        spacing: cli.spacing.map(|Spacing(s)| s),
+        alpha: cli.alpha,
+        beta: cli.beta,
+        json: cli.json.clone(),
+        threads: cli.threads.map(|n| n as usize),
+        memory_limit: cli.memory_limit,
+        names: FLAGS,
+    };
+    let run = inspect_files(&req, &TermProgress::new(cli.quiet))?;
+    if !cli.quiet {
+        print(&run.table())?;
+    }
+    Ok(())
+}
+
+/// Writes `text` on stdout. A closed pipe (e.g. `| head`) is not an error of the run, whose
+/// files are written by then: it ends quietly with status 0.
+fn print(text: &str) -> Result {
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(PipelineError::file(
+            "stdout",
+            format_args!("cannot write: {e}"),
+        )),
+        _ => Ok(()),
+    }
 }

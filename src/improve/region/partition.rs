@@ -80,7 +80,7 @@ fn extract(
     phase: u32,
     sort: bool,
 ) -> (Vec<LocalMesh>, Regions) {
-    let slab = slabs(mesh, work, &ctx.field, ctx.slab_offset);
+    let slab = slabs(mesh, work, &ctx.field, ctx.round.slab_offset);
     let of_tet: Vec<u32> = mesh
         .tets
         .par_iter()
@@ -119,7 +119,7 @@ fn extract(
         }
     }
     // Pinned points (the rim of a submesh) are frozen like shared ones.
-    let pinned = |v: usize| ctx.pinned.is_some_and(|p| p[v]);
+    let pinned = |v: usize| ctx.round.pinned.is_some_and(|p| p[v]);
     let free_in: Vec<u32> = owner
         .iter()
         .zip(&shared)

@@ -1,31 +1,59 @@
-//! The global allocator of `tptd-mesh`: the system allocator, with the explicit memory limit
-//! of [`tptd::memory::set_limit`] enforced, and out-of-memory turned into the one-line error
-//! every other failure gives (instead of Rust's abort).
+//! A global allocator for programs built on the library: the system allocator with the
+//! explicit memory limit of [`crate::memory::set_limit`] enforced, and out-of-memory turned
+//! into one line on stderr and exit status 1 (instead of Rust's abort). A program installs
+//! it with `#[global_allocator] static A: tptd::allocator::CappedAlloc = CappedAlloc;` and
+//! may word the line itself ([`set_out_of_memory_message`]).
 //!
-//! Inside [`tptd::memory::fallible`] a refused allocation returns null, so `try_reserve`
-//! reports it; anywhere else the process removes its unfinished outputs, prints
-//! `tptd-mesh: error: out of memory: …` and exits with status 1.
+//! Inside [`crate::memory::fallible`] a refused allocation returns null, so `try_reserve`
+//! reports it; anywhere else the process removes its unfinished outputs
+//! ([`crate::io::remove_pending_temporaries`]), prints the line and exits with status 1.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::Write;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::OnceLock;
 
-use tptd::memory::{explicit_limit, in_fallible_section, Bytes};
+use crate::memory::{explicit_limit, in_fallible_section, Bytes};
 
 /// Bytes allocated through [`CappedAlloc`] and not yet freed (counted only under a limit).
 static IN_USE: AtomicU64 = AtomicU64::new(0);
 
-/// Whether the run lists critical points (`--critical`) instead of meshing: the
-/// out-of-memory hint then says what helps there.
-static CRITICAL: AtomicBool = AtomicBool::new(false);
+/// An allocation refused: what was asked for and the limit it would have exceeded.
+#[derive(Clone, Copy, Debug)]
+pub struct OutOfMemory {
+    /// The bytes asked for.
+    pub size: Bytes,
+    /// The explicit limit (`None`: the system refused).
+    pub limit: Option<Bytes>,
+}
 
-/// Makes the out-of-memory hint the one of `--critical` runs.
-pub(crate) fn set_critical_mode() {
-    CRITICAL.store(true, Ordering::Relaxed);
+/// Writes the out-of-memory line (with its newline). It must not allocate anything large:
+/// it writes into a buffer on the stack.
+pub type OutOfMemoryMessage = fn(&mut dyn Write, OutOfMemory) -> std::io::Result<()>;
+
+static MESSAGE: OnceLock<OutOfMemoryMessage> = OnceLock::new();
+
+/// Sets the out-of-memory line (once; later calls change nothing). The default is
+/// `out of memory: {size} more would exceed the memory limit of {limit}` or
+/// `out of memory: the system refused {size}`.
+pub fn set_out_of_memory_message(message: OutOfMemoryMessage) {
+    let _ = MESSAGE.set(message);
+}
+
+/// The default out-of-memory line.
+fn default_message(w: &mut dyn Write, m: OutOfMemory) -> std::io::Result<()> {
+    match m.limit {
+        Some(l) => writeln!(
+            w,
+            "out of memory: {} more would exceed the memory limit of {l}",
+            m.size
+        ),
+        None => writeln!(w, "out of memory: the system refused {}", m.size),
+    }
 }
 
 /// The system allocator under the process's explicit memory limit.
-pub(crate) struct CappedAlloc;
+pub struct CappedAlloc;
 
 impl CappedAlloc {
     /// Counts `size` more bytes; false (counting nothing) when that exceeds the limit.
@@ -63,33 +91,14 @@ impl CappedAlloc {
 /// Removes the unfinished outputs, prints one line and exits with status 1. Allocates
 /// nothing large (the message is formatted on the stack).
 fn out_of_memory(size: usize) -> ! {
-    tptd::io::remove_pending_temporaries();
+    crate::io::remove_pending_temporaries();
     let mut buf = [0u8; 320];
     let mut cur = std::io::Cursor::new(&mut buf[..]);
-    let critical = CRITICAL.load(Ordering::Relaxed);
-    let size = Bytes(size as u64);
-    let _ = match explicit_limit() {
-        Some(l) => writeln!(
-            cur,
-            "tptd-mesh: error: out of memory: {size} more would exceed the memory limit of {}; \
-             raise --memory-limit, {}",
-            Bytes(l),
-            if critical {
-                "crop the volume or leave out --spectrum and --persistence"
-            } else {
-                "crop the volume or narrow the interval"
-            }
-        ),
-        None => writeln!(
-            cur,
-            "tptd-mesh: error: out of memory: the system refused {size}; {}",
-            if critical {
-                "crop the volume or leave out --spectrum and --persistence"
-            } else {
-                "crop the volume, narrow the interval or use --no-analysis"
-            }
-        ),
+    let m = OutOfMemory {
+        size: Bytes(size as u64),
+        limit: explicit_limit().map(Bytes),
     };
+    let _ = MESSAGE.get().copied().unwrap_or(default_message)(&mut cur, m);
     let n = cur.position() as usize;
     let _ = std::io::stderr().write_all(&buf[..n]);
     std::process::exit(1)
