@@ -90,12 +90,14 @@ pub fn read_ply_surface(path: &Path) -> Result<TriSoup, ReadError> {
     let mut poly = Vec::new();
     for e in &elements {
         let xyz = ["x", "y", "z"].map(|n| e.props.iter().position(|p| p.name == n));
-        let faces = e
-            .props
-            .iter()
-            .position(|p| p.list_count.is_some() && matches!(p.name.as_str(), "vertex_indices" | "vertex_index"));
+        let faces = e.props.iter().position(|p| {
+            p.list_count.is_some() && matches!(p.name.as_str(), "vertex_indices" | "vertex_index")
+        });
         if e.name == "vertex" && xyz.contains(&None) {
-            return Err(ReadError::invalid(path, "the vertex element lacks x, y or z"));
+            return Err(ReadError::invalid(
+                path,
+                "the vertex element lacks x, y or z",
+            ));
         }
         if e.props.is_empty() {
             continue;
@@ -271,6 +273,7 @@ impl Body<'_> {
             .position(u8::is_ascii_whitespace)
             .unwrap_or(rest.len() - start);
         self.at += start + len;
-        std::str::from_utf8(&rest[start..start + len]).map_err(|_| "bad number (not text)".to_string())
+        std::str::from_utf8(&rest[start..start + len])
+            .map_err(|_| "bad number (not text)".to_string())
     }
 }

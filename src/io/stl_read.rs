@@ -66,7 +66,12 @@ fn parse_binary(path: &Path, bytes: &[u8], n: u32) -> Result<TriSoup, ReadError>
             let at = 12 + 12 * c;
             let coord = |a: usize| {
                 let o = at + 4 * a;
-                f64::from(f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]))
+                f64::from(f32::from_le_bytes([
+                    rec[o],
+                    rec[o + 1],
+                    rec[o + 2],
+                    rec[o + 3],
+                ]))
             };
             points.push([coord(0), coord(1), coord(2)]);
         }
@@ -113,7 +118,10 @@ fn parse_ascii(path: &Path, text: &str) -> Result<TriSoup, ReadError> {
         }
     }
     if in_facet {
-        return Err(ReadError::invalid(path, "truncated: the last facet has no endfacet"));
+        return Err(ReadError::invalid(
+            path,
+            "truncated: the last facet has no endfacet",
+        ));
     }
     finish(path, &points, &triangles)
 }

@@ -66,7 +66,11 @@ pub(crate) fn finish(
             if new_of[i] == u32::MAX {
                 let p = points[i];
                 if let Some(a) = (0..3).find(|&a| !p[a].is_finite()) {
-                    let msg = format!("point {} has a coordinate that is not finite ({})", i + 1, p[a]);
+                    let msg = format!(
+                        "point {} has a coordinate that is not finite ({})",
+                        i + 1,
+                        p[a]
+                    );
                     return Err(ReadError::invalid(path, msg));
                 }
                 let key = p.map(|x| (x + 0.0).to_bits());
@@ -125,7 +129,9 @@ mod tests {
     #[test]
     fn refuses_bad_content() {
         let path = Path::new("bad.ply");
-        let e = finish(path, &[[0.0; 3]], &[[0, 0, 1]]).unwrap_err().to_string();
+        let e = finish(path, &[[0.0; 3]], &[[0, 0, 1]])
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("bad.ply: ") && e.contains("point 2"), "{e}");
         let e = finish(path, &[[f64::NAN, 0.0, 0.0]], &[[0, 0, 0]]).unwrap_err();
         assert!(e.to_string().contains("not finite"), "{e}");
