@@ -214,12 +214,34 @@ impl Rows<'_> {
             let c = self.bvh.closest(q, hint);
             hint = Some(c.slot);
             let d = c.distance2.sqrt();
+            if d == 0.0 {
+                let w = self.orientation * self.tree.winding_number(q);
+                previous = Some((0.0, w > 0.5));
+                *v = on_surface(w, h);
+                continue;
+            }
             let inside = match previous {
                 Some((dp, inside)) if self.closed && dp > h * (1.0 + 1e-9) => inside,
                 _ => self.orientation * self.tree.winding_number(q) > 0.5,
             };
             previous = Some((d, inside));
-            *v = if inside { -d } else { d } + 0.0;
+            *v = if inside { -d } else { d };
         }
+    }
+}
+
+/// The value at a point on a triangle, from its winding number `w` there (the mean of the
+/// two sides') and the voxel size `h`: 0 on the solid's boundary (one side inside, one
+/// outside); on a wall with the solid (the outside) on both sides, where the surface overlaps
+/// itself, `-WALL h` (`+WALL h`), so that the wall is no boundary of `{d <= 0}` and no grid
+/// value is a tie with the level 0 that the mesher would move off by a vanishing amount.
+fn on_surface(w: f64, h: f64) -> f64 {
+    const WALL: f64 = 1e-3;
+    if w > 1.0 {
+        -WALL * h
+    } else if w < 0.0 {
+        WALL * h
+    } else {
+        0.0
     }
 }
