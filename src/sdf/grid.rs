@@ -107,7 +107,7 @@ impl GridGeometry {
             origin,
             spacing,
         };
-        geometry.len()?;
+        geometry.points()?;
         Ok(geometry)
     }
 
@@ -115,7 +115,7 @@ impl GridGeometry {
     ///
     /// # Errors
     /// [`SdfError::Options`] when the count overflows.
-    pub fn len(&self) -> Result<usize, SdfError> {
+    pub fn points(&self) -> Result<usize, SdfError> {
         let [x, y, z] = self.dims;
         x.checked_mul(y)
             .and_then(|n| n.checked_mul(z))
@@ -161,7 +161,7 @@ pub fn signed_distance_grid(
 ) -> Result<SignedDistance, SdfError> {
     let facts = check_surface(points, triangles)?;
     let geometry = GridGeometry::around(facts.bounds, opts)?;
-    let n = geometry.len()?;
+    let n = geometry.points()?;
     let need = (n as u64).saturating_mul(16);
     crate::memory::check(need, format!("a signed-distance grid of {n} points"))
         .map_err(|e| SdfError::Memory(e.to_string()))?;
