@@ -61,3 +61,12 @@ mod vtk_read;
 mod vtu_read;
 pub use mesh_in::{mesh_files, read_mesh};
 pub use mesh_read_common::{MeshFile, MeshReadError, NodeGroup, MESH_EXTENSIONS};
+
+// Closed-surface readers (the twins of the surface writers), for signed-distance input.
+pub mod obj_read;
+pub mod ply_read;
+pub mod stl_read;
+mod surface_in;
+mod surface_read_common;
+pub use surface_in::{is_surface, read_surface, SURFACE_EXTENSIONS};
+pub use surface_read_common::TriSoup;

@@ -1,0 +1,272 @@
+//! What a triangle surface is like before its signed distance is sampled: holes (boundary
+//! loops, with the length of the longest), non-manifold and inconsistently oriented edges,
+//! zero-area triangles, the area and enclosed volume. The edges are the triangles' directed
+//! edges sorted by their undirected key; an edge of one triangle is a boundary edge, of more
+//! than two a non-manifold edge.
+
+use super::SdfError;
+use crate::union_find::UnionFind;
+
+/// What [`check_surface`] found.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfaceFacts {
+    /// Number of points.
+    pub points: usize,
+    /// Number of triangles.
+    pub triangles: usize,
+    /// Triangles of zero area (repeated corners, or corners on one line up to rounding).
+    pub degenerate_triangles: usize,
+    /// Edges of exactly one triangle.
+    pub boundary_edges: usize,
+    /// Boundary loops: connected sets of boundary edges (0 for a closed surface).
+    pub holes: usize,
+    /// Length of the longest boundary loop, in the surface's units (0 without holes).
+    pub largest_hole: f64,
+    /// Edges of more than two triangles.
+    pub non_manifold_edges: usize,
+    /// Edges of two triangles that run along it in the same direction (the triangles'
+    /// orientations disagree).
+    pub misoriented_edges: usize,
+    /// Every edge is run as often in one direction as in the other: the generalised winding
+    /// number is an integer, constant between the triangles (true for closed, consistently
+    /// oriented surfaces, even self-intersecting or non-manifold ones).
+    pub closed: bool,
+    /// Total area.
+    pub area: f64,
+    /// Signed enclosed volume (divergence theorem); negative for a closed surface whose
+    /// triangles face inwards.
+    pub volume: f64,
+    /// Lower and upper corners of the points' box.
+    pub bounds: [[f64; 3]; 2],
+}
+
+impl SurfaceFacts {
+    /// Whether the surface is closed, manifold and consistently oriented.
+    pub fn is_watertight(&self) -> bool {
+        self.closed && self.non_manifold_edges == 0 && self.misoriented_edges == 0
+    }
+
+    /// One line per thing worth a warning (open surface, non-manifold or misoriented edges,
+    /// degenerate triangles, inward orientation); empty for a clean closed surface.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let s = |n: usize| if n == 1 { "" } else { "s" };
+        if self.holes > 0 {
+            w.push(format!(
+                "the surface is open: {} hole{} ({} boundary edge{}), the longest boundary {} long; \
+                 inside and outside are told by the winding number",
+                self.holes,
+                s(self.holes),
+                self.boundary_edges,
+                s(self.boundary_edges),
+                short(self.largest_hole)
+            ));
+        }
+        if self.non_manifold_edges > 0 {
+            let n = self.non_manifold_edges;
+            w.push(format!(
+                "{n} non-manifold edge{} (of more than two triangles)",
+                s(n)
+            ));
+        }
+        if self.misoriented_edges > 0 {
+            let n = self.misoriented_edges;
+            w.push(format!(
+                "{n} edge{} where neighbouring triangles disagree in orientation",
+                s(n)
+            ));
+        }
+        if self.degenerate_triangles > 0 {
+            let n = self.degenerate_triangles;
+            w.push(format!("{n} degenerate (zero-area) triangle{}", s(n)));
+        }
+        if self.volume < 0.0 {
+            w.push(
+                "the triangles face inwards; the surface is read with the opposite orientation"
+                    .into(),
+            );
+        }
+        w
+    }
+}
+
+/// Four significant digits.
+fn short(x: f64) -> String {
+    format!("{}", (x * 1e4).round() / 1e4)
+        .chars()
+        .take(12)
+        .collect()
+}
+
+/// Checks a surface and gathers its [`SurfaceFacts`].
+///
+/// # Errors
+/// [`SdfError::Surface`] when the surface has no triangles, a triangle names a missing point,
+/// a point has a coordinate that is not finite, or every triangle has zero area.
+pub fn check_surface(
+    points: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+) -> Result<SurfaceFacts, SdfError> {
+    if triangles.is_empty() {
+        return Err(SdfError::Surface("the surface has no triangles".into()));
+    }
+    if let Some(t) = triangles
+        .iter()
+        .position(|t| t.iter().any(|&i| i as usize >= points.len()))
+    {
+        return Err(SdfError::Surface(format!(
+            "triangle {} names a point that does not exist",
+            t + 1
+        )));
+    }
+    if let Some(p) = points.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+        return Err(SdfError::Surface(format!(
+            "point {} has a coordinate that is not finite",
+            p + 1
+        )));
+    }
+    let mut facts = SurfaceFacts {
+        points: points.len(),
+        triangles: triangles.len(),
+        ..SurfaceFacts::default()
+    };
+    measure(points, triangles, &mut facts);
+    if facts.degenerate_triangles == triangles.len() {
+        return Err(SdfError::Surface(
+            "every triangle of the surface has zero area".into(),
+        ));
+    }
+    edges(points, triangles, &mut facts);
+    Ok(facts)
+}
+
+/// Area, volume, bounds and degenerate triangles.
+fn measure(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) {
+    let mut bounds = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| points[i as usize]);
+        for p in [a, b, c] {
+            for k in 0..3 {
+                bounds[0][k] = bounds[0][k].min(p[k]);
+                bounds[1][k] = bounds[1][k].max(p[k]);
+            }
+        }
+        let (ab, ac) = (sub(b, a), sub(c, a));
+        let n = cross(ab, ac);
+        let twice_area = dot(n, n).sqrt();
+        let longest2 = dot(ab, ab).max(dot(ac, ac)).max(dot(sub(c, b), sub(c, b)));
+        if twice_area <= 1e-12 * longest2 || t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            f.degenerate_triangles += 1;
+        }
+        f.area += 0.5 * twice_area;
+        f.volume += dot(a, cross(b, c)) / 6.0;
+    }
+    f.bounds = bounds;
+}
+
+/// Boundary, non-manifold and misoriented edges, holes and closedness.
+fn edges(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) {
+    // (low, high, +1 when run low → high)
+    let mut e: Vec<(u32, u32, i8)> = Vec::with_capacity(3 * triangles.len());
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a != b {
+                e.push((a.min(b), a.max(b), if a < b { 1 } else { -1 }));
+            }
+        }
+    }
+    e.sort_unstable();
+    let mut holes = UnionFind::new(points.len());
+    let mut boundary: Vec<(u32, u32)> = Vec::new();
+    f.closed = true;
+    for group in e.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+        let balance: i64 = group.iter().map(|x| i64::from(x.2)).sum();
+        f.closed &= balance == 0;
+        match group.len() {
+            1 => {
+                boundary.push((group[0].0, group[0].1));
+                holes.union(group[0].0, group[0].1);
+            }
+            2 if balance != 0 => f.misoriented_edges += 1,
+            2 => {}
+            _ => f.non_manifold_edges += 1,
+        }
+    }
+    f.boundary_edges = boundary.len();
+    let mut length: rustc_hash::FxHashMap<u32, f64> = Default::default();
+    for &(a, b) in &boundary {
+        let d = sub(points[a as usize], points[b as usize]);
+        *length.entry(holes.find(a)).or_default() += dot(d, d).sqrt();
+    }
+    f.holes = length.len();
+    f.largest_hole = length.values().copied().fold(0.0, f64::max);
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tetrahedron, outward.
+    fn tet() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let p = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let t = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        (p, t)
+    }
+
+    #[test]
+    fn closed_tetrahedron() {
+        let (p, t) = tet();
+        let f = check_surface(&p, &t).unwrap();
+        assert!(f.is_watertight() && f.warnings().is_empty(), "{f:?}");
+        assert!((f.volume - 1.0 / 6.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn one_face_removed_is_one_hole() {
+        let (p, mut t) = tet();
+        t.pop();
+        let f = check_surface(&p, &t).unwrap();
+        assert_eq!((f.holes, f.boundary_edges, f.closed), (1, 3, false));
+        assert!((f.largest_hole - 3.0 * 2f64.sqrt()).abs() < 1e-12);
+        assert_eq!(f.warnings().len(), 1);
+    }
+
+    #[test]
+    fn errors_and_orientation() {
+        let (p, mut t) = tet();
+        assert!(check_surface(&p, &[]).is_err());
+        assert!(check_surface(&p, &[[0, 1, 9]]).is_err());
+        assert!(check_surface(&p, &[[0, 1, 1]]).is_err());
+        t[0] = [0, 1, 2];
+        let f = check_surface(&p, &t).unwrap();
+        assert_eq!((f.misoriented_edges, f.closed), (3, false));
+        let (_, mut t) = tet();
+        for x in &mut t {
+            x.swap(0, 1);
+        }
+        let f = check_surface(&p, &t).unwrap();
+        assert!(f.volume < 0.0 && f.closed);
+    }
+}
