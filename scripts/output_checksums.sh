@@ -27,26 +27,34 @@ VOLUMES=(
   "noisy_256|benchmarks/data/noisy_256.npy|--alpha -2 --beta 2"
 )
 
-for entry in "${VOLUMES[@]}"; do
-  IFS='|' read -r name input interval <<<"$entry"
-  src=("$input")
-  [ "$input" = demo ] && src=(--demo)
-  if [ "$input" != demo ] && [ ! -f "$input" ]; then
-    echo "missing  $name ($input)" >&2
-    continue
-  fi
-  for method in ctd tptd std six five; do
-    for out in v41.msh v22.msh inp vtu; do
-      args=()
-      [ "$out" = v22.msh ] && args=(--msh-version 2.2)
-      # shellcheck disable=SC2086
-      "$BIN" "${src[@]}" $interval --method "$method" -o "$TMP/out.${out##*.}" \
-        --no-analysis -q "${args[@]}"
-      echo "$(sha256sum <"$TMP/out.${out##*.}" | cut -c1-64)  $name $method $out"
-      rm -f "$TMP/out.${out##*.}"
+# sums LABEL "EXTRA ARGS" "OUTPUTS" ENTRY...: the SHA-256 of each output of every method on each
+# volume, one line each: `SUM  NAME METHOD [LABEL] OUTPUT`.
+sums() {
+  local label=$1 extra=$2 outs=$3 entry name input interval method out
+  shift 3
+  for entry in "$@"; do
+    IFS='|' read -r name input interval <<<"$entry"
+    local src=("$input")
+    [ "$input" = demo ] && src=(--demo)
+    if [ "$input" != demo ] && [ ! -f "$input" ]; then
+      echo "missing  $name ($input)" >&2
+      continue
+    fi
+    for method in ctd tptd std six five; do
+      for out in $outs; do
+        local args=()
+        [ "$out" = v22.msh ] && args=(--msh-version 2.2)
+        # shellcheck disable=SC2086
+        "$BIN" "${src[@]}" $interval --method "$method" $extra -o "$TMP/out.${out##*.}" \
+          --no-analysis -q "${args[@]}"
+        echo "$(sha256sum <"$TMP/out.${out##*.}" | cut -c1-64)  $name $method ${label:+$label }$out"
+        rm -f "$TMP/out.${out##*.}"
+      done
     done
   done
-done
+}
+
+sums "" "" "v41.msh v22.msh inp vtu" "${VOLUMES[@]}"
 
 # name | input | interval arguments  (`--quality`: every method, msh 4.1 and vtu)
 THIN=benchmarks/data/thin
@@ -55,21 +63,4 @@ QUALITY=(
   "t1_crop64|$THIN/t1_crop64.npy|--alpha 100.3 --beta 140.2"
   "smooth48|$THIN/smooth48.npy|--alpha -0.3 --beta 0.3"
 )
-for entry in "${QUALITY[@]}"; do
-  IFS='|' read -r name input interval <<<"$entry"
-  src=("$input")
-  [ "$input" = demo ] && src=(--demo)
-  if [ "$input" != demo ] && [ ! -f "$input" ]; then
-    echo "missing  $name ($input)" >&2
-    continue
-  fi
-  for method in ctd tptd std six five; do
-    for out in msh vtu; do
-      # shellcheck disable=SC2086
-      "$BIN" "${src[@]}" $interval --method "$method" --quality -o "$TMP/out.$out" \
-        --no-analysis -q 2>/dev/null
-      echo "$(sha256sum <"$TMP/out.$out" | cut -c1-64)  $name $method quality $out"
-      rm -f "$TMP/out.$out"
-    done
-  done
-done
+sums quality --quality "msh vtu" "${QUALITY[@]}"

@@ -6,6 +6,8 @@
 //! triangles. Nodes are stored depth-first: a node's left child follows it, its right child
 //! is at [`Node::right`]; every node covers a contiguous range of the reordered triangles.
 
+use crate::geom::{dot, sub};
+
 /// Most triangles in a leaf.
 pub const LEAF_SIZE: usize = 4;
 
@@ -174,7 +176,8 @@ impl Bvh {
     }
 }
 
-fn centroid(t: &Tri) -> [f64; 3] {
+/// The centroid of a triangle.
+pub(crate) fn centroid(t: &Tri) -> [f64; 3] {
     [0, 1, 2].map(|a| (t[0][a] + t[1][a] + t[2][a]) / 3.0)
 }
 
@@ -183,16 +186,6 @@ fn grow(lo: &mut [f64; 3], hi: &mut [f64; 3], p: [f64; 3]) {
         lo[a] = lo[a].min(p[a]);
         hi[a] = hi[a].max(p[a]);
     }
-}
-
-#[inline]
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// `p + s u + t v`.

@@ -5,6 +5,7 @@
 //! than two a non-manifold edge.
 
 use super::SdfError;
+use crate::geom::{cross, dot, sub};
 use crate::union_find::UnionFind;
 
 /// What [`check_surface`] found.
@@ -201,22 +202,6 @@ fn edges(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) {
     }
     f.holes = length.len();
     f.largest_hole = length.values().copied().fold(0.0, f64::max);
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 #[cfg(test)]

@@ -17,7 +17,8 @@
 
 use rayon::prelude::*;
 
-use super::bvh::{Bvh, Tri};
+use super::bvh::{centroid, Bvh, Tri};
+use crate::geom::{cross, dot, norm, sub};
 
 /// Ratio of a node's distance to its radius beyond which its expansion replaces its
 /// triangles. Barill et al. use 2; the truncation error of the second-order expansion falls
@@ -158,34 +159,6 @@ pub fn solid_angle(t: &Tri, q: [f64; 3]) -> f64 {
 
 fn area_vector(t: &Tri) -> [f64; 3] {
     cross(sub(t[1], t[0]), sub(t[2], t[0])).map(|x| 0.5 * x)
-}
-
-fn centroid(t: &Tri) -> [f64; 3] {
-    [0, 1, 2].map(|a| (t[0][a] + t[1][a] + t[2][a]) / 3.0)
-}
-
-#[inline]
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-#[inline]
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-#[inline]
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 #[cfg(test)]
