@@ -2,6 +2,8 @@
 //! method, with and without the quality pass, on wide intervals, all valid embeddings whose
 //! boundary stays within half a voxel of its level sets.
 
+mod common;
+
 use tptd::check::{check_mesh, level_bound, CheckOptions, CheckReport, ProblemKind, HALF_VOXEL};
 use tptd::improve::{improve_meshed, QualityOptions, DEFAULT_WARP};
 use tptd::{mesh_interval, MeshOptions, Method, ScalarGrid, TetMesh};
@@ -461,4 +463,74 @@ fn a_bubble_around_one_grid_vertex_is_found_on_its_level() {
         .unwrap()
         .mesh;
     assert_valid("bubble", &m, &g, (f64::NEG_INFINITY, 180.7));
+}
+
+/// A field rough at the voxel scale: 24 plane waves with wave numbers up to 1.2 rad/voxel
+/// along each axis (wavelengths down to about three voxels), unit spacing.
+fn rough(n: usize, seed: u64) -> ScalarGrid {
+    let mut rng = common::Rng::new(seed);
+    let waves: Vec<([f64; 3], f64, f64)> = (0..24)
+        .map(|_| {
+            let k = [0, 1, 2].map(|_| rng.range(-1.2, 1.2));
+            (k, rng.range(0.0, 6.3), rng.range(0.5, 1.0))
+        })
+        .collect();
+    let mut values: Vec<f64> = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = [x, y, z].map(|c| c as f64);
+                let f: f64 = waves
+                    .iter()
+                    .map(|(k, ph, a)| a * (k[0] * p[0] + k[1] * p[1] + k[2] * p[2] + ph).sin())
+                    .sum();
+                values.push(f);
+            }
+        }
+    }
+    ScalarGrid::new([n; 3], values).unwrap()
+}
+
+/// On fields rough at the voxel scale the level set folds within a cell, and the quality
+/// pass's projections (whole-mesh and per vertex), its volume restoration and its boundary
+/// splits move corners to points of the level set across such a fold, which left boundary
+/// triangles up to 0.55 voxel from their level set in each of these cases while the plain
+/// mesh kept within half a voxel. Each such change now keeps a face that was near its level
+/// set near it.
+#[test]
+fn the_quality_pass_keeps_rough_boundaries_near_their_level_sets() {
+    for (seed, level) in [(2, -1.2863), (3, 0.3137), (5, 0.3137), (7, -1.2863)] {
+        let g = rough(20, seed);
+        let opts = MeshOptions::new(f64::NEG_INFINITY, level, Method::Ctd);
+        let check = CheckOptions::with_grid(&g, f64::NEG_INFINITY, level);
+        let plain = check_mesh(&mesh_interval(&g, &opts).unwrap().mesh, &check);
+        assert!(plain.valid, "rough {seed} plain: {}", plain.summary_line());
+        let mut out = mesh_interval(&g, &opts.warp(DEFAULT_WARP)).unwrap();
+        improve_meshed(
+            &mut out,
+            &g,
+            f64::NEG_INFINITY,
+            level,
+            &QualityOptions::default(),
+        );
+        let r = check_mesh(&out.mesh, &check);
+        assert!(r.valid, "rough {seed} --quality: {}", r.summary_line());
+        assert_eq!(r.betti, plain.betti, "rough {seed}");
+    }
+}
+
+/// Open: on the same rough fields the plain ctd mesh itself leaves boundary triangles up to
+/// 0.66 voxel from their level set: the decomposition bounds how far each cut lies from the
+/// trilinear crossing along its edge (the decomposition's sag limits), not how far the middle
+/// of a triangle spanning a cell whose level set folds lies from it.
+#[test]
+#[ignore = "plain ctd triangles sag beyond half a voxel on fields rough at the voxel scale"]
+fn plain_ctd_boundaries_stay_within_half_a_voxel_on_rough_fields() {
+    for (seed, level) in [(0, 0.3137), (1, 0.3137), (12, -1.2863)] {
+        let g = rough(20, seed);
+        let opts = MeshOptions::new(f64::NEG_INFINITY, level, Method::Ctd);
+        let check = CheckOptions::with_grid(&g, f64::NEG_INFINITY, level);
+        let r = check_mesh(&mesh_interval(&g, &opts).unwrap().mesh, &check);
+        assert!(r.valid, "rough {seed} plain: {}", r.summary_line());
+    }
 }

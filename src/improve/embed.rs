@@ -17,7 +17,7 @@ use crate::check::triangles_cross;
 use crate::field::GUARD_DISTANCE;
 use crate::geom::sample_points_spaced;
 use crate::levels::Levels;
-use crate::mesh::BoundaryLabel;
+use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// Spacing (index units) of the sample points of a triangle.
 const SAMPLE_SPACING: f64 = 0.25;
@@ -45,13 +45,53 @@ pub fn near_level(ctx: &Ctx, u: [f64; 3], level: f64, bound: f64) -> bool {
 /// Whether every sample point of triangle `t` (index space) with label `label` lies within
 /// [`GUARD_DISTANCE`] of its level set (box triangles: always).
 pub fn triangle_near_level(ctx: &Ctx, t: [[f64; 3]; 3], label: BoundaryLabel) -> bool {
+    triangle_within(ctx, t, label, GUARD_DISTANCE)
+}
+
+/// Whether every sample point of triangle `t` (index space) with label `label` lies within
+/// `bound` of its level set (box triangles: always).
+fn triangle_within(ctx: &Ctx, t: [[f64; 3]; 3], label: BoundaryLabel, bound: f64) -> bool {
     let Some(level) = label_level(label, &ctx.levels) else {
         return true;
     };
     match sample_points(t) {
-        Some(mut points) => points.all(|p| near_level(ctx, p, level, GUARD_DISTANCE)),
+        Some(mut points) => points.all(|p| near_level(ctx, p, level, bound)),
         None => false,
     }
+}
+
+/// How far (index units) a face that was already beyond [`GUARD_DISTANCE`] may be from its
+/// level set after a projection of its corners ([`projected_face_keeps_level`]): still
+/// inside the half voxel the checker allows.
+pub const SLACK_DISTANCE: f64 = 0.45;
+
+/// Whether a change that takes boundary face `before` to `after` (corners in index space,
+/// label `label`) and brings corners onto their level set (a projection, a split, a move
+/// along the level set) leaves the face near its level set. A face near it before
+/// ([`triangle_near_level`]) must stay near it. A face already beyond it may stay so while a
+/// corner is still off the level set (the other corners' projections come later, and such a
+/// face would otherwise hold every corner back), but once all three corners are on it the
+/// face must lie within [`SLACK_DISTANCE`]. Nothing a later operation does brings such a
+/// face back: the moves and collapses keep only faces near their levels.
+pub fn projected_face_keeps_level(
+    ctx: &Ctx,
+    label: BoundaryLabel,
+    before: [[f64; 3]; 3],
+    after: [[f64; 3]; 3],
+) -> bool {
+    let Some(level) = label_level(label, &ctx.levels) else {
+        return true;
+    };
+    if triangle_near_level(ctx, after, label) {
+        return true;
+    }
+    if triangle_near_level(ctx, before, label) {
+        return false;
+    }
+    let settled = after
+        .iter()
+        .all(|&u| (ctx.field.value(u) - level).abs() <= ctx.tol);
+    !settled || triangle_within(ctx, after, label, SLACK_DISTANCE)
 }
 
 /// Whether the boundary faces `faces` of region `lm`, with vertex `v` at index point `u`, all
@@ -82,15 +122,52 @@ pub fn move_keeps_boundary(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> bo
 }
 
 /// Whether projecting level vertex `v` onto its level set at index point `u` keeps the
-/// boundary faces at `v` clear of the boundary faces around them. Their distance to the level
-/// set is not asked: the projection brings `v` to it, and a face whose other corners are
-/// still off their level would otherwise hold every corner back.
-pub fn projection_keeps_boundary(lm: &LocalMesh, v: u32, u: [f64; 3]) -> bool {
+/// boundary faces at `v` near their level sets as [`projected_face_keeps_level`] asks (a
+/// detour to a point of the level set away from `v` can put a face across a fold of the
+/// level set) and clear of the boundary faces around them.
+pub fn projection_keeps_boundary(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> bool {
     if !lm.on_boundary(v) {
         return true;
     }
     let faces = boundary_faces_at(lm, v);
-    !crosses_nearby(lm, &faces, (v, v), u)
+    let keeps_level = |f: &BoundaryFace| {
+        let before = f.tri.map(|w| lm.u[w as usize]);
+        let after = f.tri.map(|w| if w == v { u } else { lm.u[w as usize] });
+        projected_face_keeps_level(ctx, f.label, before, after)
+    };
+    faces.iter().all(keeps_level) && !crosses_nearby(lm, &faces, (v, v), u)
+}
+
+/// The moved corners of the boundary faces of `mesh` that, with every point at `position`
+/// (physical), leave their level set as [`projected_face_keeps_level`] refuses, among the
+/// faces with a corner flagged in `moved`: moves of the whole-mesh projection to take back.
+pub fn moves_leaving_level(
+    mesh: &TetMesh,
+    ctx: &Ctx,
+    position: &[[f64; 3]],
+    moved: &[bool],
+) -> Vec<u32> {
+    use rayon::prelude::*;
+    let index = |p: &[[f64; 3]], tri: &[u32; 3]| tri.map(|v| ctx.field.to_index(p[v as usize]));
+    let mut back: Vec<u32> = mesh
+        .boundary
+        .par_iter()
+        .zip(&mesh.boundary_labels)
+        .filter(|(tri, &label)| {
+            tri.iter().any(|&v| moved[v as usize])
+                && !projected_face_keeps_level(
+                    ctx,
+                    label,
+                    index(&mesh.points, tri),
+                    index(position, tri),
+                )
+        })
+        .flat_map_iter(|(tri, _)| *tri)
+        .filter(|&v| moved[v as usize])
+        .collect();
+    back.sort_unstable();
+    back.dedup();
+    back
 }
 
 /// Whether merging `a` into `b` keeps the boundary faces that `a` leaves to `b` near their

@@ -73,7 +73,8 @@ pub fn project_mesh(
     let mut bad = inverted_moves(mesh, &moved, all, &first);
     // Moves whose boundary faces would cross another face or leave the level set are taken
     // back too (on a thin interval a node's trilinear level set can lie across the other
-    // sheet), then the inversion check runs again around them.
+    // sheet; on a rough field, across a fold of its own), then the inversion check runs
+    // again around them.
     loop {
         revert_inverting(mesh, ctx, (&target, &mut moved), &around_moved, bad);
         let position: Vec<[f64; 3]> = (0..mesh.points.len())
@@ -84,6 +85,9 @@ pub fn project_mesh(
             })
             .collect();
         bad = super::verify::moves_breaking_embedding(mesh, ctx, &position, &moved);
+        bad.extend(embed::moves_leaving_level(mesh, ctx, &position, &moved));
+        bad.sort_unstable();
+        bad.dedup();
         if bad.is_empty() {
             break;
         }
@@ -271,7 +275,7 @@ fn project_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     }
     let free = c.free_axes();
     let direct = ctx.field.project(u, target, free, ctx.tol);
-    let keeps = |p: [f64; 3]| embed::projection_keeps_boundary(lm, v, p);
+    let keeps = |p: [f64; 3]| embed::projection_keeps_boundary(lm, ctx, v, p);
     if let Some(p) = direct.filter(|&p| lm.star_above_at(v, p, ctx, 0.0) && keeps(p)) {
         lm.set_position(v, p, ctx);
         return true;

@@ -10,6 +10,7 @@
 //! below the target), so the topology holds and no element gets worse than what was there.
 
 use super::constraint::Constraint;
+use super::embed;
 use super::region::{face_key, BoundaryFace, EdgeTets, LocalMesh};
 use super::Ctx;
 use crate::geom::{norm, signed_volume, sub};
@@ -297,6 +298,18 @@ fn plan(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<Split> {
     let value = ctx.levels[level as usize];
     let p = ctx.field.project(mid, value, 0b111, ctx.tol)?;
     if norm(sub(p, mid)) > REACH * norm(sub(ub, ua)) {
+        return None;
+    }
+    // The halves of the two faces must stay near the level set (the midpoint's projection
+    // can land across a fold of it).
+    let halves_near = faces.iter().all(|f| {
+        let before = f.tri.map(|v| lm.u[v as usize]);
+        [a, b].into_iter().all(|from| {
+            let after = f.tri.map(|v| if v == from { p } else { lm.u[v as usize] });
+            embed::projected_face_keeps_level(ctx, f.label, before, after)
+        })
+    });
+    if !halves_near {
         return None;
     }
     let con = Constraint {
