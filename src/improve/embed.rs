@@ -130,12 +130,25 @@ pub fn projection_keeps_boundary(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3])
         return true;
     }
     let faces = boundary_faces_at(lm, v);
-    let keeps_level = |f: &BoundaryFace| {
+    faces_keep_level(lm, ctx, &faces, v, u) && !crosses_nearby(lm, &faces, (v, v), u)
+}
+
+/// Whether moving vertex `v` of region `lm` to index point `u` along its level set keeps the
+/// boundary faces at `v` near their level sets as [`projected_face_keeps_level`] asks.
+/// Crossings are left to the check after the phase ([`super::verify`]): the volume
+/// restoration's many small steps along the level set cross nothing on their own.
+pub fn level_move_keeps_level(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> bool {
+    !lm.on_boundary(v) || faces_keep_level(lm, ctx, &boundary_faces_at(lm, v), v, u)
+}
+
+/// Whether each of `faces` (at `v`) keeps near its level set with `v` at `u`
+/// ([`projected_face_keeps_level`]).
+fn faces_keep_level(lm: &LocalMesh, ctx: &Ctx, faces: &[BoundaryFace], v: u32, u: [f64; 3]) -> bool {
+    faces.iter().all(|f| {
         let before = f.tri.map(|w| lm.u[w as usize]);
         let after = f.tri.map(|w| if w == v { u } else { lm.u[w as usize] });
         projected_face_keeps_level(ctx, f.label, before, after)
-    };
-    faces.iter().all(keeps_level) && !crosses_nearby(lm, &faces, (v, v), u)
+    })
 }
 
 /// The moved corners of the boundary faces of `mesh` that, with every point at `position`

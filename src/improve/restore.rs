@@ -124,7 +124,7 @@ fn restore_at(lm: &mut LocalMesh, ctx: &Ctx, v: u32, owed: &mut f64) -> bool {
             if (*owed + dv).abs() < owed.abs()
                 && star.qualities_above(x, ctx, floor * (1.0 - 1e-12), &mut qs, &mut hint)
                 && qs.iter().zip(&floors).all(|(q, f)| q >= f)
-                && embed::projection_keeps_boundary(lm, ctx, v, p)
+                && embed::level_move_keeps_level(lm, ctx, v, p)
             {
                 *owed += dv;
                 lm.set_position_with(v, p, ctx, &qs);
