@@ -33,6 +33,7 @@ impl Progress for Record {
             StageKind::Step => "step",
             StageKind::Meshing { .. } => "meshing",
             StageKind::Pass => "pass",
+            StageKind::Sampling => "sampling",
         };
         self.push(format!("stage {kind} {name}"));
     }
