@@ -150,8 +150,8 @@ fn a_torus_is_a_solid_ring() {
     let exact = 2.0 * std::f64::consts::PI.powi(2) * 1.0 * 0.4 * 0.4;
     let v = r["volume"].as_f64().unwrap();
     assert!((v - exact).abs() < 0.03 * exact, "{v} vs {exact}");
-    // the grid: 64 voxels along the longest side (2.8), 3 more on each side
-    assert_eq!(r["dims"][0], 64 + 1 + 6, "{}", r["dims"]);
+    // the grid: 64 voxels along the longest side (2.8), 3.5 more on each side
+    assert_eq!(r["dims"][0], 64 + 2 + 6, "{}", r["dims"]);
 }
 
 #[test]

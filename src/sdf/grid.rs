@@ -2,9 +2,10 @@
 //!
 //! The grid has cubic voxels: the surface's box spans [`SurfaceGridOptions::resolution`]
 //! voxels along its longest side (or the voxels are [`SurfaceGridOptions::voxel_size`]
-//! wide), is centred in the grid, and [`SurfaceGridOptions::margin`] (a distance) and
-//! [`SurfaceGridOptions::padding`] voxels are added on every side so the level set meshed
-//! (zero, or an offset up to the margin) closes inside the grid.
+//! wide) and is centred in the grid with its sides midway between grid planes;
+//! [`SurfaceGridOptions::margin`] (a distance) and [`SurfaceGridOptions::padding`] voxels are
+//! added on every side so the level set meshed (zero, or an offset up to the margin) closes
+//! inside the grid.
 //!
 //! Each grid point gets its distance to the nearest triangle ([`Bvh::closest`]), negative
 //! where the generalised winding number exceeds one half ([`WindingTree`]). Rows along x are
@@ -94,7 +95,9 @@ impl GridGeometry {
                     "voxel size {spacing} makes {cells} voxels along an axis; choose a coarser one"
                 )));
             }
-            dims[a] = (cells as usize + 1 + 2 * opts.padding).max(2);
+            // one vertex more than the cells: the box ends half a voxel between grid planes,
+            // so that flat faces on it (a machined part's) are no planes of zeros and saddles
+            dims[a] = cells as usize + 2 + 2 * opts.padding;
             let centre = 0.5 * (bounds[0][a] + bounds[1][a]);
             origin[a] = centre - 0.5 * (dims[a] - 1) as f64 * spacing;
         }

@@ -76,7 +76,7 @@ pub(crate) struct Cli {
     pub(crate) spacing: Option<Spacing>,
 
     /// Surface input: voxels of the signed-distance grid along the longest side of the
-    /// surface's box, which is padded by 3 voxels [default: 64]
+    /// surface's box, which is padded by at least 3 voxels [default: 64]
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub(crate) resolution: Option<u32>,
 
