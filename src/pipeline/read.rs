@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use crate::demo::demo_volume;
-use crate::io::{is_curvilinear, read_curvilinear, read_surface, read_volume, TriSoup};
+use crate::io::{is_curvilinear, is_surface, read_curvilinear, read_surface, read_volume, TriSoup};
 use crate::sdf::{surface_volume_with_progress, SdfError, SurfaceFacts, SurfaceGridOptions};
 use crate::{CurvilinearGrid, ScalarGrid};
 
@@ -115,14 +115,20 @@ fn read_curvilinear_input(job: &Job) -> Result<Option<CurvilinearGrid>, Pipeline
 /// Reads the volume `input` (the demo volume for `None`) and gives it `spacing`.
 ///
 /// # Errors
-/// The reader's error, or `{input}: {spacing}: …` for a spacing the grid refuses (the
-/// parameter named by `names`).
+/// The reader's error (a closed surface is refused: it is no volume), or
+/// `{input}: {spacing}: …` for a spacing the grid refuses (the parameter named by `names`).
 pub fn read_grid(
     input: Option<&Path>,
     spacing: Option<[f64; 3]>,
     names: ParamNames,
 ) -> Result<ScalarGrid, PipelineError> {
     let mut grid = match input {
+        Some(p) if is_surface(p) => {
+            return Err(PipelineError::file(
+                p.display(),
+                "a closed surface is meshed as a solid, not read as a volume here",
+            ))
+        }
         Some(p) => read_volume(p).map_err(PipelineError::other)?,
         None => demo_volume(),
     };
