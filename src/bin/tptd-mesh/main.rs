@@ -1,5 +1,6 @@
 //! `tptd-mesh`: command-line front end. Meshes the interval volume `{alpha <= f <= beta}` of
-//! a scalar volume (or of the demo volume) into tetrahedra, writes it as `.msh`, `.inp` or
+//! a scalar volume (or of the demo volume, or of a closed surface's signed distance) into
+//! tetrahedra, writes it as `.msh`, `.inp` or
 //! `.vtu` (or its level sets as `.obj`, `.ply` or `.stl`) with an optional JSON report; or
 //! lists critical points (`--critical`), or inspects meshes (`--inspect`).
 //!
