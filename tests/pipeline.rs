@@ -12,6 +12,7 @@ use common::files::write_npy;
 use tptd::pipeline::{
     mesh_file, MeshRequest, NoProgress, PipelineError, Progress, QualityRequest, StageKind,
 };
+use tptd::sdf::SurfaceGridOptions;
 
 /// A [`Progress`] that records every call, one line each.
 #[derive(Default)]
@@ -33,6 +34,7 @@ impl Progress for Record {
             StageKind::Step => "step",
             StageKind::Meshing { .. } => "meshing",
             StageKind::Pass => "pass",
+            StageKind::Sampling => "sampling",
         };
         self.push(format!("stage {kind} {name}"));
     }
@@ -188,6 +190,74 @@ fn errors_are_one_line_with_their_kind_and_leave_no_output() {
     let e = fails(&nothing, dir.path(), &[]);
     assert!(
         e.message().contains("contains no part of the volume"),
+        "{e}"
+    );
+}
+
+/// A unit cube as an OBJ, outward.
+fn write_cube(path: &Path) {
+    let mut s = String::new();
+    for k in 0..8 {
+        s += &format!("v {} {} {}\n", k & 1, (k >> 1) & 1, (k >> 2) & 1);
+    }
+    for f in [
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+    ] {
+        s += &format!("f {} {} {} {}\n", f[0], f[1], f[2], f[3]);
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+#[test]
+fn a_closed_surface_is_sampled_as_a_stage_of_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = dir.path().join("cube.obj");
+    write_cube(&cube);
+    let out = dir.path().join("cube.vtu");
+    let req = MeshRequest {
+        input: Some(cube.clone()),
+        output: Some(out.clone()),
+        surface_grid: SurfaceGridOptions {
+            resolution: Some(8),
+            ..SurfaceGridOptions::default()
+        },
+        ..MeshRequest::default()
+    };
+    let record = Record::default();
+    let run = mesh_file(&req, &record).unwrap();
+    assert_eq!(run.report.betti, Some([1, 0, 0]));
+    assert!(
+        (run.report.volume - 1.0).abs() < 0.03,
+        "{}",
+        run.report.volume
+    );
+    // 8 voxels, half a voxel and 3 more on each side
+    assert_eq!(run.grid.dims, [16, 16, 16]);
+    assert!(run.warnings().is_empty(), "{:?}", run.warnings());
+    let expected = [
+        format!("step reading {}", cube.display()),
+        "sampling signed distance".to_string(),
+        "meshing meshing".to_string(),
+        format!("step writing {}", out.display()),
+    ];
+    assert_eq!(stages(&record.lines()), expected);
+    // a grid for a surface, asked of a volume: a usage error before any work
+    let demo = MeshRequest {
+        output: Some(dir.path().join("demo.vtu")),
+        ..req
+    };
+    let volume = MeshRequest {
+        input: None,
+        ..demo
+    };
+    let e = fails(&volume, dir.path(), &["cube.obj", "cube.vtu"]);
+    assert!(
+        e.is_usage() && e.message().contains("resolution applies only"),
         "{e}"
     );
 }

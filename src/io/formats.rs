@@ -2,8 +2,9 @@
 //! ([`VolumeFormat`]; the dispatchers [`super::read_volume`] and [`super::read_curvilinear`],
 //! [`super::input_files`] and the unknown-format message read its table), the mesh readers
 //! ([`MeshReader`], for [`super::read_mesh`]), the mesh writers ([`MeshFormat`], for
-//! [`super::write_mesh`]), the surface writers ([`SurfaceFormat`], for
-//! [`super::write_surface`]) and the transfer-function writers ([`TransferFormat`]).
+//! [`super::write_mesh`]), the surface formats ([`SurfaceFormat`]: the isosurfaces
+//! [`super::write_surface`] writes and the closed surfaces [`super::read_surface`] reads) and
+//! the transfer-function writers ([`TransferFormat`]).
 
 use std::path::Path;
 
@@ -69,8 +70,8 @@ impl VolumeFormat {
     }
 }
 
-/// The supported extensions for messages: the volume ones, then the curvilinear ones in
-/// parentheses.
+/// The supported input extensions for messages: the volume ones, then the curvilinear
+/// ones and the closed-surface ones in parentheses.
 pub(crate) fn supported_extensions() -> String {
     let list = |curvilinear: bool| {
         let exts = EXTENSIONS
@@ -78,7 +79,28 @@ pub(crate) fn supported_extensions() -> String {
             .filter(|(_, f)| f.is_curvilinear() == curvilinear);
         exts.map(|(ext, _)| *ext).collect::<Vec<_>>().join(", ")
     };
-    format!("{} (curvilinear: {})", list(false), list(true))
+    let surfaces: Vec<String> = SURFACE_FORMATS
+        .iter()
+        .map(|(e, _)| format!(".{e}"))
+        .collect();
+    format!(
+        "{} (curvilinear: {}; closed surfaces: {})",
+        list(false),
+        list(true),
+        surfaces.join(", ")
+    )
+}
+
+/// The surface extensions for messages: `.obj, .ply or .stl`.
+pub(crate) fn surface_extensions() -> String {
+    let exts: Vec<String> = SURFACE_FORMATS
+        .iter()
+        .map(|(e, _)| format!(".{e}"))
+        .collect();
+    match exts.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => exts.join(""),
+    }
 }
 
 /// The extension of `path` (what follows its file name's last dot), lower case.
@@ -159,7 +181,8 @@ impl MeshFormat {
     }
 }
 
-/// An output surface format (isosurfaces).
+/// A triangle-surface format: an isosurface output, or a closed-surface input meshed as the
+/// solid it bounds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SurfaceFormat {
     /// Wavefront `.obj` ([`super::obj`]).
@@ -170,8 +193,8 @@ pub enum SurfaceFormat {
     Stl,
 }
 
-/// The surface writers' extensions (lower case, without the dot).
-const SURFACE_WRITERS: [(&str, SurfaceFormat); 3] = [
+/// The surface formats' extensions (lower case, without the dot), written and read alike.
+const SURFACE_FORMATS: [(&str, SurfaceFormat); 3] = [
     ("obj", SurfaceFormat::Obj),
     ("ply", SurfaceFormat::Ply),
     ("stl", SurfaceFormat::Stl),
@@ -181,7 +204,7 @@ impl SurfaceFormat {
     /// The surface format named by the extension of `path` (case-insensitive): `.obj`, `.ply`
     /// or `.stl`; `None` for any other.
     pub fn from_path(path: &Path) -> Option<Self> {
-        by_extension(&SURFACE_WRITERS, path)
+        by_extension(&SURFACE_FORMATS, path)
     }
 }
 
@@ -215,8 +238,10 @@ mod tests {
     fn the_message_lists_every_extension() {
         assert_eq!(
             supported_extensions(),
-            ".npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha (curvilinear: .vts, .xyz)"
+            ".npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha (curvilinear: .vts, .xyz; closed \
+             surfaces: .obj, .ply, .stl)"
         );
+        assert_eq!(surface_extensions(), ".obj, .ply or .stl");
     }
 
     #[test]

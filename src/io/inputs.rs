@@ -11,8 +11,9 @@ use super::read_common::ReadError;
 /// The files the readers read for the input `path`: `path` itself first, then the files its
 /// header names — the detached data file of an NRRD header (`data file:`) or a MetaImage
 /// header (`ElementDataFile`), and the function file of a Plot3D grid (`function`, else the
-/// `.q` or `.f` next to it; `function` is ignored for other inputs). Reads only the headers,
-/// never the samples.
+/// `.q` or `.f` next to it; `function` is ignored for other inputs). A closed surface
+/// (`.obj`, `.stl`, `.ply`) is its one file: an `.obj`'s material library is not read. Reads
+/// only the headers, never the samples.
 ///
 /// Multi-file data (file lists and patterns) are refused here as the readers refuse them.
 /// An extension no reader knows gives `path` alone (the reader refuses it later).
@@ -28,6 +29,7 @@ pub fn input_files(path: &Path, function: Option<&Path>) -> Result<Vec<PathBuf>,
             let f = super::plot3d::function_file(path, function)?;
             Ok(vec![path.to_path_buf(), f])
         }
+        // a closed surface, a `.npy`, a NIfTI image, a `.vts`: one file
         _ => Ok(vec![path.to_path_buf()]),
     }
 }
@@ -159,6 +161,8 @@ mod tests {
         assert_eq!(input_files(&xyz, Some(&q)).unwrap(), [xyz.clone(), q]);
         let npy = d.join("v.npy");
         assert_eq!(input_files(&npy, Some(&nhdr)).unwrap(), [npy]);
+        let obj = d.join("s.OBJ");
+        assert_eq!(input_files(&obj, None).unwrap(), [obj]);
     }
 
     #[test]

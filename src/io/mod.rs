@@ -3,9 +3,10 @@
 //! [`crate::mesh::TetMesh`] (and [`crate::mesh::TriSurface`]).
 //!
 //! Each side has a dispatcher that picks the format by extension over a module of what its
-//! formats share: `volume.rs` over `read_common.rs` (volume readers; the extensions in
-//! `formats.rs`), `mesh_in.rs` over `mesh_read_common.rs` (mesh readers), `mesh_out.rs` over
-//! `write_common.rs` (writers). No reader or writer imports its dispatcher.
+//! formats share: `volume.rs` over `read_common.rs` (volume readers), `surface_in.rs` over
+//! `surface_read_common.rs` (closed surfaces), `mesh_in.rs` over `mesh_read_common.rs` (mesh
+//! readers), `mesh_out.rs` over `write_common.rs` (writers). Every extension is named once, in
+//! `formats.rs`. No reader or writer imports its dispatcher.
 
 pub mod atomic;
 mod formats;
@@ -68,5 +69,5 @@ pub mod ply_read;
 pub mod stl_read;
 mod surface_in;
 mod surface_read_common;
-pub use surface_in::{is_surface, read_surface, SURFACE_EXTENSIONS};
+pub use surface_in::{is_surface, read_surface};
 pub use surface_read_common::TriSoup;

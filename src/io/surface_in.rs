@@ -1,24 +1,18 @@
-//! Closed-surface input by file extension: [`read_surface`] chooses among the readers
-//! `obj_read` (`.obj`, through `tobj`), `stl_read` (`.stl`, binary or ASCII) and `ply_read`
-//! (`.ply`, ASCII or binary). All return a [`TriSoup`]; the readers share
+//! Closed-surface input by file extension (the table in [`super::formats`]): [`read_surface`]
+//! chooses among the readers `obj_read` (`.obj`, through `tobj`), `stl_read` (`.stl`, binary
+//! or ASCII) and `ply_read` (`.ply`, ASCII or binary). All return a [`TriSoup`]; the readers share
 //! [`super::surface_read_common`], never this dispatcher.
 
 use std::path::Path;
 
+use super::formats::{surface_extensions, SurfaceFormat};
 use super::read_common::ReadError;
 use super::surface_read_common::TriSoup;
 
-/// The surface file extensions [`read_surface`] reads, for messages.
-pub const SURFACE_EXTENSIONS: &str = ".obj, .stl or .ply";
-
-/// Whether `path` ends in one of [`SURFACE_EXTENSIONS`] (any case).
+/// Whether `path` names a closed-surface input ([`read_surface`]): its extension is `.obj`,
+/// `.stl` or `.ply` (any case; the table in [`super::formats`]).
 pub fn is_surface(path: &Path) -> bool {
-    extension(path).is_some_and(|e| matches!(e.as_str(), "obj" | "stl" | "ply"))
-}
-
-fn extension(path: &Path) -> Option<String> {
-    path.extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+    SurfaceFormat::from_path(path).is_some()
 }
 
 /// Reads a triangle surface by file extension (case-insensitive): `.obj`
@@ -31,13 +25,13 @@ fn extension(path: &Path) -> Option<String> {
 /// naming the file (unreadable, empty, truncated, no triangles, an index out of range, a
 /// coordinate that is not finite). Never panics, whatever the file holds.
 pub fn read_surface(path: &Path) -> Result<TriSoup, ReadError> {
-    match extension(path).as_deref() {
-        Some("obj") => super::obj_read::read_obj_surface(path),
-        Some("stl") => super::stl_read::read_stl_surface(path),
-        Some("ply") => super::ply_read::read_ply_surface(path),
-        _ => Err(ReadError::unsupported(
+    match SurfaceFormat::from_path(path) {
+        Some(SurfaceFormat::Obj) => super::obj_read::read_obj_surface(path),
+        Some(SurfaceFormat::Stl) => super::stl_read::read_stl_surface(path),
+        Some(SurfaceFormat::Ply) => super::ply_read::read_ply_surface(path),
+        None => Err(ReadError::unsupported(
             path,
-            format!("unknown surface format (expected {SURFACE_EXTENSIONS})"),
+            format!("unknown surface format (expected {})", surface_extensions()),
         )),
     }
 }

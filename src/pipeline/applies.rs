@@ -9,7 +9,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use crate::io::{is_curvilinear, is_plot3d, MeshFormat, SurfaceFormat, TransferFormat};
+use crate::io::{is_curvilinear, is_plot3d, is_surface, MeshFormat, SurfaceFormat, TransferFormat};
 
 use super::request::{too_many_threads, DEMO_OUTPUT};
 use super::{Param, ParamNames, PipelineError};
@@ -108,6 +108,16 @@ pub enum Inapplicable {
     },
     /// A spacing was given for a curvilinear grid (its points give the geometry).
     CurvilinearSpacing(PathBuf),
+    /// A spacing was given for a closed surface (its grid has cubic voxels, set by the
+    /// resolution or the voxel size).
+    SurfaceSpacing(PathBuf),
+    /// `param` and `other` set the same thing in two ways: one only may be given.
+    Exclusive {
+        /// The parameter given second.
+        param: Param,
+        /// The parameter given first.
+        other: Param,
+    },
     /// More worker threads than the machine takes.
     TooManyThreads {
         /// The threads asked for.
@@ -179,6 +189,21 @@ impl Inapplicable {
                 n(Param::Spacing),
                 input.display()
             ),
+            Inapplicable::SurfaceSpacing(input) => format!(
+                "{} does not apply to a closed surface ({}: its grid has cubic voxels; use {} or \
+                 {})",
+                n(Param::Spacing),
+                input.display(),
+                n(Param::Resolution),
+                n(Param::VoxelSize)
+            ),
+            Inapplicable::Exclusive { param, other } => {
+                format!(
+                    "{} and {} exclude each other: give one",
+                    n(*other),
+                    n(*param)
+                )
+            }
             Inapplicable::TooManyThreads {
                 threads,
                 max,
@@ -222,7 +247,7 @@ const CRITICAL_ONLY: [Param; 9] = [
 ];
 
 /// Parameters that only meshing uses.
-const MESH_ONLY: [Param; 13] = [
+const MESH_ONLY: [Param; 15] = [
     Param::Alpha,
     Param::Beta,
     Param::Method,
@@ -236,6 +261,8 @@ const MESH_ONLY: [Param; 13] = [
     Param::NoAnalysis,
     Param::CriticalTol,
     Param::NoCriticalCheck,
+    Param::Resolution,
+    Param::VoxelSize,
 ];
 
 /// Parameters that apply to an inspection.
@@ -277,6 +304,13 @@ pub fn check_applies(g: &Given) -> Result<(), Inapplicable> {
                     param,
                     mode: Param::Critical,
                     why: "it lists the critical points and meshes nothing",
+                });
+            }
+            if g.input.is_some_and(is_surface) {
+                return Err(Inapplicable::InputKind {
+                    param: Param::Critical,
+                    only: "a volume input",
+                    input: g.input.map(Path::to_path_buf),
                 });
             }
             return check_transfer(g.transfer);
@@ -366,7 +400,8 @@ fn check_output(g: &Given, output: &Path) -> Result<(), Inapplicable> {
     Ok(())
 }
 
-/// The parameters of curvilinear inputs are given with one, the spacing without one.
+/// The parameters of curvilinear inputs are given with one, the spacing without one; those
+/// of closed surfaces with one, and not both.
 fn check_input(g: &Given) -> Result<(), Inapplicable> {
     let curvilinear = g.input.is_some_and(is_curvilinear);
     let plot3d = g.input.is_some_and(is_plot3d);
@@ -383,10 +418,35 @@ fn check_input(g: &Given) -> Result<(), Inapplicable> {
     if g.has(Param::Function) && !plot3d {
         return refuse(Param::Function, "a Plot3D grid input (.xyz)");
     }
+    check_surface_input(g)?;
     match g.input {
         Some(input) if g.has(Param::Spacing) && curvilinear => {
             Err(Inapplicable::CurvilinearSpacing(input.to_path_buf()))
         }
         _ => Ok(()),
     }
+}
+
+/// The resolution or the voxel size (not both) with a closed surface, no spacing.
+fn check_surface_input(g: &Given) -> Result<(), Inapplicable> {
+    let Some(input) = g.input.filter(|p| is_surface(p)) else {
+        return match g.first(&[Param::Resolution, Param::VoxelSize]) {
+            Some(param) => Err(Inapplicable::InputKind {
+                param,
+                only: "a closed-surface input (.obj, .ply, .stl)",
+                input: g.input.map(Path::to_path_buf),
+            }),
+            None => Ok(()),
+        };
+    };
+    if g.has(Param::Spacing) {
+        return Err(Inapplicable::SurfaceSpacing(input.to_path_buf()));
+    }
+    if g.has(Param::Resolution) && g.has(Param::VoxelSize) {
+        return Err(Inapplicable::Exclusive {
+            param: Param::VoxelSize,
+            other: Param::Resolution,
+        });
+    }
+    Ok(())
 }

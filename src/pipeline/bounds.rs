@@ -13,10 +13,13 @@ use super::text::fmt_bound;
 use super::Param;
 
 /// The warnings about the bounds and the geometry of the input, in order: bounds equal to
-/// grid values, a nearly singular direction matrix (not for a `curvilinear` grid's values),
-/// bounds near critical values (unless the request skips that check).
+/// grid values (not for a closed surface, whose grid vertices on the surface, or on an offset
+/// of it, are exactly there), a nearly singular direction matrix (not for a `curvilinear`
+/// grid's values), bounds near critical values (unless the request skips that check).
 pub(crate) fn warn_input(grid: &ScalarGrid, job: &Job, curvilinear: bool, reporter: &Reporter) {
-    warn_exact_bounds(grid, job, reporter);
+    if !job.surface() {
+        warn_exact_bounds(grid, job, reporter);
+    }
     if !curvilinear {
         warn_near_singular(grid, job, reporter);
     }

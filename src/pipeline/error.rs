@@ -22,6 +22,15 @@ impl PipelineError {
         }
     }
 
+    /// A usage error about `file` (a request refused for how it was asked): displays as
+    /// `{file}: {problem}`.
+    pub(crate) fn usage(file: impl fmt::Display, problem: impl fmt::Display) -> Self {
+        PipelineError {
+            usage: true,
+            ..Self::file(file, problem)
+        }
+    }
+
     /// An error whose message is `error`'s own (its `Display`).
     pub fn other(error: impl fmt::Display) -> Self {
         PipelineError {

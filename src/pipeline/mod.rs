@@ -5,7 +5,8 @@
 //!
 //! 1. checks the request (`request.rs`): the interval, the thread count, the output format,
 //!    that the outputs can be written and that none is an input file or another output;
-//! 2. reads the input (`read.rs`): a volume, the demo volume or a curvilinear grid;
+//! 2. reads the input (`read.rs`): a volume, the demo volume, a curvilinear grid, or a closed
+//!    surface whose signed distance it samples (the interval then defaults to `(-inf, 0]`);
 //! 3. warns about the bounds (`bounds.rs`): bounds equal to grid values, a nearly singular
 //!    direction matrix, bounds near critical values;
 //! 4. chooses between streaming the mesh to disk and holding it in memory, and checks the

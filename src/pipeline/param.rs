@@ -19,6 +19,8 @@ pub enum Param {
     MshVersion,
     VtuEncoding,
     Spacing,
+    Resolution,
+    VoxelSize,
     Field,
     Function,
     Caps,
@@ -53,7 +55,7 @@ pub enum Param {
 
 impl Param {
     /// Every parameter.
-    pub const ALL: [Param; 40] = {
+    pub const ALL: [Param; 42] = {
         use Param::*;
         [
             Input,
@@ -66,6 +68,8 @@ impl Param {
             MshVersion,
             VtuEncoding,
             Spacing,
+            Resolution,
+            VoxelSize,
             Field,
             Function,
             Caps,
@@ -113,6 +117,8 @@ impl Param {
             MshVersion => "msh_version",
             VtuEncoding => "vtu_encoding",
             Spacing => "spacing",
+            Resolution => "resolution",
+            VoxelSize => "voxel_size",
             Field => "field",
             Function => "function",
             Caps => "caps",

@@ -17,6 +17,9 @@ pub enum StageKind {
     },
     /// The quality pass: no measure, its message may change ([`Progress::message`]).
     Pass,
+    /// Sampling the signed distance of a closed surface on a grid: [`Progress::fraction`]
+    /// reports the grid points done.
+    Sampling,
 }
 
 /// The receiver of a run's progress and warnings. Stages do not nest: each
@@ -97,7 +100,8 @@ impl Stage<'_> {
         self.progress.message(message);
     }
 
-    /// The progress callback of meshing: the most cells reported done so far, of the total.
+    /// The progress callback of meshing (sampling): the most cells (points) reported done so
+    /// far, of the total.
     pub(crate) fn counter(&self) -> impl Fn(usize, usize) + Sync + '_ {
         let high = AtomicU64::new(0);
         move |done, total| {

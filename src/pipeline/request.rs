@@ -8,9 +8,10 @@ use std::time::Duration;
 use crate::demo::{DEMO_ALPHA, DEMO_BETA};
 use crate::improve::QualityOptions;
 use crate::io::{
-    check_clashes, check_writable, input_run_files, output_run_files, MeshFormat, SurfaceFormat,
-    WriteOptions,
+    check_clashes, check_writable, input_run_files, is_surface, output_run_files, MeshFormat,
+    SurfaceFormat, WriteOptions,
 };
+use crate::sdf::{SurfaceGridOptions, INSIDE_LEVEL};
 use crate::{MeshOptions, Method};
 
 use super::text::fmt_bound;
@@ -24,19 +25,25 @@ pub const DEMO_OUTPUT: &str = "tptd-demo.vtu";
 /// `tptd-mesh --demo`.
 #[derive(Clone, Debug)]
 pub struct MeshRequest {
-    /// The input volume (a curvilinear grid for `.vts` and Plot3D `.xyz`); `None`: the demo
-    /// volume ([`crate::demo::demo_volume`]).
+    /// The input volume (a curvilinear grid for `.vts` and Plot3D `.xyz`; a closed surface
+    /// for `.obj`, `.stl` and `.ply`, meshed as the solid it bounds); `None`: the demo volume
+    /// ([`crate::demo::demo_volume`]).
     pub input: Option<PathBuf>,
     /// The Plot3D function file (`.q` or `.f`) of an `.xyz` input.
     pub function: Option<PathBuf>,
     /// The field of a curvilinear input to mesh (its first one when `None`).
     pub field: Option<String>,
-    /// The grid spacing instead of the file's (not with a curvilinear input).
+    /// The grid spacing instead of the file's (not with a curvilinear input or a surface).
     pub spacing: Option<[f64; 3]>,
+    /// The signed-distance grid of a closed-surface input: its resolution or voxel size and
+    /// padding (its margin is set from `beta`, so that an offset surface fits).
+    pub surface_grid: SurfaceGridOptions,
     /// Lower bound of the interval (`None`: `-inf`). One bound at least is needed, except
-    /// for the demo, whose interval is its own without both.
+    /// for the demo, whose interval is its own without both. For a closed surface the values
+    /// are signed distances in the surface's units, negative inside.
     pub alpha: Option<f64>,
-    /// Upper bound of the interval (`None`: `inf`).
+    /// Upper bound of the interval (`None`: `inf`; for a closed surface `0`, the surface
+    /// itself: a positive `beta` offsets it outwards, a negative one inwards).
     pub beta: Option<f64>,
     /// The cell decomposition.
     pub method: Method,
@@ -75,6 +82,7 @@ impl Default for MeshRequest {
             function: None,
             field: None,
             spacing: None,
+            surface_grid: SurfaceGridOptions::default(),
             alpha: None,
             beta: None,
             method: Method::Ctd,
@@ -141,6 +149,11 @@ impl Job<'_> {
     pub(crate) fn demo(&self) -> bool {
         self.req.input.is_none()
     }
+
+    /// Whether the input is a closed surface (`.obj`, `.stl`, `.ply`).
+    pub(crate) fn surface(&self) -> bool {
+        self.req.input.as_deref().is_some_and(is_surface)
+    }
 }
 
 /// Checks the request before any work: the interval, the thread count, the output format
@@ -157,6 +170,7 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
         (None, false) => return Err(PipelineError::file(&input_name, "no output given")),
     };
     let (alpha, beta) = interval(req, &input_name)?;
+    check_surface_grid(req, &input_name)?;
     check_threads(req.threads, req.names)?;
     check_outputs(req, &output)?;
     let opts = MeshOptions {
@@ -179,12 +193,14 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
     })
 }
 
-/// The interval `(alpha, beta)` of the request (the demo's without both bounds), which must
-/// not be empty.
+/// The interval `(alpha, beta)` of the request (the demo's without both bounds; for a
+/// closed surface, a bound not given is `-inf` or `0`), which must not be empty.
 fn interval(req: &MeshRequest, input_name: &str) -> Result<(f64, f64), PipelineError> {
     let n = req.names;
+    let surface = req.input.as_deref().is_some_and(is_surface);
     let (alpha, beta) = match (req.alpha, req.beta) {
         (None, None) if req.input.is_none() => (DEMO_ALPHA, DEMO_BETA),
+        (a, b) if surface => (a.unwrap_or(f64::NEG_INFINITY), b.unwrap_or(INSIDE_LEVEL)),
         (None, None) => {
             return Err(PipelineError::file(
                 input_name,
@@ -210,6 +226,29 @@ fn interval(req: &MeshRequest, input_name: &str) -> Result<(f64, f64), PipelineE
         ));
     }
     Ok((alpha, beta))
+}
+
+/// Checks the signed-distance grid of the request: a resolution or a voxel size only for a
+/// closed surface, not both, a resolution of 1 at least, a voxel size positive and finite.
+/// A refusal is a usage error.
+fn check_surface_grid(req: &MeshRequest, input_name: &str) -> Result<(), PipelineError> {
+    let n = req.names;
+    let g = &req.surface_grid;
+    let (res, voxel) = (n.of(Param::Resolution), n.of(Param::VoxelSize));
+    let problem = match (g.resolution, g.voxel_size) {
+        (None, None) => return Ok(()),
+        (Some(_), _) | (_, Some(_)) if !req.input.as_deref().is_some_and(is_surface) => {
+            let p = if g.resolution.is_some() { res } else { voxel };
+            format!("{p} applies only to a closed-surface input (.obj, .ply, .stl)")
+        }
+        (Some(_), Some(_)) => format!("{res} and {voxel} exclude each other: give one"),
+        (Some(0), None) => format!("{res} 0: the resolution must be at least 1"),
+        (None, Some(h)) if !(h.is_finite() && h > 0.0) => {
+            format!("{voxel} {h}: the voxel size must be positive and finite")
+        }
+        _ => return Ok(()),
+    };
+    Err(PipelineError::usage(input_name, problem))
 }
 
 /// Most worker threads accepted per core: more only adds overhead.

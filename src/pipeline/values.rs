@@ -52,6 +52,17 @@ pub fn nonnegative(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A finite number `> 0`.
+///
+/// # Errors
+/// What was expected and what was given.
+pub fn positive(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("expected a finite number > 0, got '{s}'")),
+    }
+}
+
 /// A smallest dihedral angle a tetrahedron can have (below 70.5°), in degrees.
 ///
 /// # Errors

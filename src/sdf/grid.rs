@@ -2,8 +2,10 @@
 //!
 //! The grid has cubic voxels: the surface's box spans [`SurfaceGridOptions::resolution`]
 //! voxels along its longest side (or the voxels are [`SurfaceGridOptions::voxel_size`]
-//! wide), is centred in the grid, and [`SurfaceGridOptions::padding`] voxels are added on
-//! every side so the zero level set closes inside the grid.
+//! wide) and is centred in the grid with its sides midway between grid planes;
+//! [`SurfaceGridOptions::margin`] (a distance) and [`SurfaceGridOptions::padding`] voxels are
+//! added on every side so the level set meshed (zero, or an offset up to the margin) closes
+//! inside the grid.
 //!
 //! Each grid point gets its distance to the nearest triangle ([`Bvh::closest`]), negative
 //! where the generalised winding number exceeds one half ([`WindingTree`]). Rows along x are
@@ -12,6 +14,8 @@
 //! between triangles, [`SurfaceFacts::closed`]) a point within the empty ball of the previous
 //! one (`|d| >` one voxel) takes its sign without a winding-number query. Every value depends
 //! on its row alone, so the output is the same for any number of threads.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
@@ -28,8 +32,11 @@ pub struct SurfaceGridOptions {
     pub resolution: Option<usize>,
     /// Width of a voxel in the surface's units (exclusive with `resolution`).
     pub voxel_size: Option<f64>,
-    /// Voxels added beyond the surface's box on every side.
+    /// Voxels added beyond the surface's box (and the margin) on every side.
     pub padding: usize,
+    /// Distance in the surface's units added beyond the surface's box on every side, before
+    /// the padding: room for an offset surface `{d = margin}` (0 by default).
+    pub margin: f64,
 }
 
 /// The resolution used when neither a resolution nor a voxel size is given.
@@ -44,6 +51,7 @@ impl Default for SurfaceGridOptions {
             resolution: None,
             voxel_size: None,
             padding: DEFAULT_PADDING,
+            margin: 0.0,
         }
     }
 }
@@ -64,41 +72,32 @@ impl GridGeometry {
     ///
     /// # Errors
     /// [`SdfError::Options`] for both a resolution and a voxel size, a zero resolution, a
-    /// voxel size that is not positive and finite, or a grid too large to address.
+    /// voxel size that is not positive and finite, a margin that is negative or not finite, or
+    /// a grid too large to address.
     pub fn around(bounds: [[f64; 3]; 2], opts: &SurfaceGridOptions) -> Result<Self, SdfError> {
         let extent = [0, 1, 2].map(|a| (bounds[1][a] - bounds[0][a]).max(0.0));
         let longest = extent.iter().copied().fold(0.0, f64::max);
-        let spacing = match (opts.resolution, opts.voxel_size) {
-            (Some(_), Some(_)) => {
-                return Err(SdfError::Options(
-                    "give a resolution or a voxel size, not both".into(),
-                ))
-            }
-            (_, Some(h)) if !(h.is_finite() && h > 0.0) => {
-                return Err(SdfError::Options(format!(
-                    "voxel size {h} must be positive"
-                )))
-            }
-            (_, Some(h)) => h,
-            (Some(0), None) => {
-                return Err(SdfError::Options("resolution 0 must be at least 1".into()))
-            }
-            (r, None) => longest / r.unwrap_or(DEFAULT_RESOLUTION) as f64,
-        };
-        if !(spacing.is_finite() && spacing > 0.0) {
-            return Err(SdfError::Surface("the surface's box has no extent".into()));
+        let spacing = spacing(longest, opts)?;
+        if !(opts.margin.is_finite() && opts.margin >= 0.0) {
+            return Err(SdfError::Options(format!(
+                "margin {} must be finite and not negative",
+                opts.margin
+            )));
         }
         let mut dims = [0usize; 3];
         let mut origin = [0.0; 3];
         for a in 0..3 {
+            let extent = extent[a] + 2.0 * opts.margin;
             // a hair of slack so a box of exactly n voxels is not rounded up to n + 1
-            let cells = (extent[a] / spacing * (1.0 - 1e-12)).ceil();
+            let cells = (extent / spacing * (1.0 - 1e-12)).ceil();
             if cells > 1e7 {
                 return Err(SdfError::Options(format!(
                     "voxel size {spacing} makes {cells} voxels along an axis; choose a coarser one"
                 )));
             }
-            dims[a] = (cells as usize + 1 + 2 * opts.padding).max(2);
+            // one vertex more than the cells: the box ends half a voxel between grid planes,
+            // so that flat faces on it (a machined part's) are no planes of zeros and saddles
+            dims[a] = cells as usize + 2 + 2 * opts.padding;
             let centre = 0.5 * (bounds[0][a] + bounds[1][a]);
             origin[a] = centre - 0.5 * (dims[a] - 1) as f64 * spacing;
         }
@@ -135,6 +134,29 @@ impl GridGeometry {
     }
 }
 
+/// The voxel size `opts` gives a box whose longest side is `longest`.
+fn spacing(longest: f64, opts: &SurfaceGridOptions) -> Result<f64, SdfError> {
+    let spacing = match (opts.resolution, opts.voxel_size) {
+        (Some(_), Some(_)) => {
+            return Err(SdfError::Options(
+                "give a resolution or a voxel size, not both".into(),
+            ))
+        }
+        (_, Some(h)) if !(h.is_finite() && h > 0.0) => {
+            return Err(SdfError::Options(format!(
+                "voxel size {h} must be positive"
+            )))
+        }
+        (_, Some(h)) => h,
+        (Some(0), None) => return Err(SdfError::Options("resolution 0 must be at least 1".into())),
+        (r, None) => longest / r.unwrap_or(DEFAULT_RESOLUTION) as f64,
+    };
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return Err(SdfError::Surface("the surface's box has no extent".into()));
+    }
+    Ok(spacing)
+}
+
 /// The signed distance of a surface on a grid, with what the surface check found.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SignedDistance {
@@ -159,6 +181,20 @@ pub fn signed_distance_grid(
     triangles: &[[u32; 3]],
     opts: &SurfaceGridOptions,
 ) -> Result<SignedDistance, SdfError> {
+    signed_distance_grid_with_progress(points, triangles, opts, &|_, _| {})
+}
+
+/// [`signed_distance_grid`], calling `progress(done, total)` with the grid points sampled so
+/// far of all of them after each row (from the worker threads, `done` not always increasing).
+///
+/// # Errors
+/// As [`signed_distance_grid`].
+pub fn signed_distance_grid_with_progress(
+    points: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    opts: &SurfaceGridOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<SignedDistance, SdfError> {
     let facts = check_surface(points, triangles)?;
     let geometry = GridGeometry::around(facts.bounds, opts)?;
     let n = geometry.points()?;
@@ -182,10 +218,14 @@ pub fn signed_distance_grid(
     crate::memory::try_reserve(&mut values, n).map_err(|e| SdfError::Memory(e.to_string()))?;
     values.resize(n, 0.0);
     let [nx, ny, _] = geometry.dims;
+    let done = AtomicUsize::new(0);
     values
         .par_chunks_mut(nx)
         .enumerate()
-        .for_each(|(row, out)| rows.fill(row % ny, row / ny, out));
+        .for_each(|(row, out)| {
+            rows.fill(row % ny, row / ny, out);
+            progress(done.fetch_add(nx, Ordering::Relaxed) + nx, n);
+        });
     Ok(SignedDistance {
         values,
         geometry,

@@ -14,8 +14,8 @@ pub mod surface_check;
 pub mod winding;
 
 pub use grid::{
-    signed_distance_grid, GridGeometry, SignedDistance, SurfaceGridOptions, DEFAULT_PADDING,
-    DEFAULT_RESOLUTION,
+    signed_distance_grid, signed_distance_grid_with_progress, GridGeometry, SignedDistance,
+    SurfaceGridOptions, DEFAULT_PADDING, DEFAULT_RESOLUTION,
 };
 pub use surface_check::{check_surface, SurfaceFacts};
 
@@ -50,7 +50,21 @@ pub fn surface_volume(
     triangles: &[[u32; 3]],
     opts: &SurfaceGridOptions,
 ) -> Result<(ScalarGrid, SurfaceFacts), SdfError> {
-    let sd = signed_distance_grid(points, triangles, opts)?;
+    surface_volume_with_progress(points, triangles, opts, &|_, _| {})
+}
+
+/// [`surface_volume`], calling `progress(done, total)` with the grid points sampled so far
+/// ([`signed_distance_grid_with_progress`]).
+///
+/// # Errors
+/// See [`signed_distance_grid`].
+pub fn surface_volume_with_progress(
+    points: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    opts: &SurfaceGridOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(ScalarGrid, SurfaceFacts), SdfError> {
+    let sd = signed_distance_grid_with_progress(points, triangles, opts, progress)?;
     let g = sd.geometry;
     let grid = ScalarGrid::with_geometry(g.dims, [g.spacing; 3], g.origin, IDENTITY, sd.values)
         .map_err(|e| SdfError::Options(e.to_string()))?;

@@ -11,7 +11,7 @@ use tptd::critical::{CriticalKind, TransferDesign};
 use tptd::io::msh::MshVersion;
 use tptd::io::vtu::VtuEncoding;
 use tptd::pipeline::values::{bound, max_angle, memory_size, min_angle, nonnegative, ratio};
-use tptd::pipeline::values::{kinds, seconds, spacing};
+use tptd::pipeline::values::{kinds, positive, seconds, spacing};
 use tptd::pipeline::{check_applies, Given, Mode, Param, ParamNames};
 use tptd::Method;
 
@@ -21,11 +21,16 @@ use tptd::Method;
 /// Grid values equal to a bound count as outside the interval. Lengths and volumes are in the
 /// file's units (millimetres for NIfTI and most NRRD and MetaImage images; voxels for .npy,
 /// whose spacing is 1 unless --spacing says otherwise).
+///
+/// A closed surface (.obj, .stl, .ply) is meshed as the solid it bounds: its signed distance d
+/// (negative inside, by the winding number; in the surface's units) is sampled on a grid
+/// around it and {d <= 0} is meshed; --beta B offsets the surface outwards by B (inwards if
+/// negative), --alpha A < B keeps only a shell {A <= d <= B}.
 #[derive(Parser, Debug)]
 #[command(name = "tptd-mesh", version)]
 pub(crate) struct Cli {
-    /// Input volume (.npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha), or a curvilinear grid
-    /// (.vts, or a Plot3D .xyz with its .q or .f file)
+    /// Input volume (.npy, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha), a curvilinear grid (.vts,
+    /// or a Plot3D .xyz with its .q or .f file), or a closed surface (.obj, .stl, .ply)
     #[arg(value_name = "INPUT", required_unless_present_any = ["demo", "inspect"])]
     pub(crate) input: Option<PathBuf>,
 
@@ -35,11 +40,12 @@ pub(crate) struct Cli {
     #[arg(short, long, value_name = "OUT", required_unless_present_any = ["demo", "critical", "inspect"])]
     pub(crate) output: Option<PathBuf>,
 
-    /// Lower bound of the interval [default: -inf; --alpha and/or --beta is required]
+    /// Lower bound of the interval [default: -inf; --alpha and/or --beta is required, except
+    /// with a surface input]
     #[arg(long, value_name = "A", allow_hyphen_values = true, value_parser = bound)]
     pub(crate) alpha: Option<f64>,
 
-    /// Upper bound of the interval [default: inf]
+    /// Upper bound of the interval [default: inf; with a surface input 0, the surface]
     #[arg(long, value_name = "B", allow_hyphen_values = true, value_parser = bound)]
     pub(crate) beta: Option<f64>,
 
@@ -68,6 +74,16 @@ pub(crate) struct Cli {
     /// Grid spacing instead of the file's (a voxel's size in the file's units), e.g. 0.5,0.5,1.2
     #[arg(long, value_name = "SX,SY,SZ", allow_hyphen_values = true, value_parser = |s: &str| spacing(s).map(Spacing))]
     pub(crate) spacing: Option<Spacing>,
+
+    /// Surface input: voxels of the signed-distance grid along the longest side of the
+    /// surface's box, which is padded by at least 3 voxels [default: 64]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub(crate) resolution: Option<u32>,
+
+    /// Surface input: width of the signed-distance grid's cubic voxels, in the surface's units
+    /// (instead of --resolution)
+    #[arg(long, value_name = "H", allow_hyphen_values = true, value_parser = positive)]
+    pub(crate) voxel_size: Option<f64>,
 
     /// Curvilinear input: the scalar (.vts) or Plot3D variable (a name such as density, or a
     /// 1-based number) to mesh [default: the first]

@@ -1,7 +1,8 @@
 //! `tptd-mesh`: command-line front end. Meshes the interval volume `{alpha <= f <= beta}` of
-//! a scalar volume (or of the demo volume) into tetrahedra, writes it as `.msh`, `.inp` or
-//! `.vtu` (or its level sets as `.obj`, `.ply` or `.stl`) with an optional JSON report; or
-//! lists critical points (`--critical`), or inspects meshes (`--inspect`).
+//! a scalar volume (or of the demo volume, or of a closed surface's signed distance) into
+//! tetrahedra, writes it as `.msh`, `.inp` or `.vtu` (or its level sets as `.obj`, `.ply` or
+//! `.stl`) with an optional JSON report; or lists critical points (`--critical`), or inspects
+//! meshes (`--inspect`).
 //!
 //! The runs are the library's ([`tptd::pipeline`]). This program parses the arguments
 //! ([`cli`]), builds the requests and prints the results ([`run`]) and the progress

@@ -1,6 +1,7 @@
-//! Progress on stderr: the bar of the meshing stage, the spinner of the quality pass, and a
-//! spinner for every other stage (read, analysis, write) that takes more than a second; and
-//! the warnings of a run, one line each.
+//! Progress on stderr: the bar of the meshing stage, the spinner of the quality pass, the bar
+//! of sampling a surface's signed distance and a spinner for every other stage (read,
+//! analysis, write), both once they take more than a second; and the warnings of a run, one
+//! line each.
 
 use std::io::IsTerminal;
 use std::sync::{Arc, Mutex, PoisonError};
@@ -71,7 +72,8 @@ impl TermProgress {
 impl Progress for TermProgress {
     fn stage(&self, name: &str, kind: StageKind) {
         let shown = match kind {
-            StageKind::Step => Shown::Stage(Stage::start(name.to_string(), self.quiet)),
+            StageKind::Step => Shown::Stage(Stage::start(name.to_string(), SPINNER, self.quiet)),
+            StageKind::Sampling => Shown::Stage(Stage::start(name.to_string(), BAR, self.quiet)),
             StageKind::Meshing { cells } => Shown::Bar(progress_bar(cells, self.quiet)),
             StageKind::Pass => Shown::Bar(pass_spinner(name, self.quiet)),
         };
@@ -79,10 +81,14 @@ impl Progress for TermProgress {
     }
 
     fn fraction(&self, done: u64, total: u64) {
-        if let Some(Shown::Bar(pb)) = &*self.current() {
-            pb.set_length(total);
-            pb.set_position(done);
-        }
+        let current = self.current();
+        let pb = match &*current {
+            Some(Shown::Bar(pb)) => pb,
+            Some(Shown::Stage(s)) => &s.pb,
+            None => return,
+        };
+        pb.set_length(total);
+        pb.set_position(done);
     }
 
     fn message(&self, message: &str) {
@@ -108,7 +114,13 @@ impl Progress for TermProgress {
 /// How long a stage runs before its spinner appears.
 const SHOW_AFTER: Duration = Duration::from_secs(1);
 
-/// A spinner `{msg} {elapsed}` on stderr for one stage, shown once the stage has run for
+/// The display of a stage without a measure.
+const SPINNER: &str = "{spinner} {msg} {elapsed}";
+
+/// The display of a stage whose fraction done is known.
+const BAR: &str = "{msg} {bar:40} {percent:>3}% {elapsed_precise} eta {eta}";
+
+/// A spinner or a bar (`template`) on stderr for one stage, shown once the stage has run for
 /// [`SHOW_AFTER`] (never with `quiet` or when stderr is not a terminal); dropping it clears it.
 struct Stage {
     pb: ProgressBar,
@@ -117,10 +129,10 @@ struct Stage {
 
 impl Stage {
     /// Starts the stage `msg` (e.g. `writing m.vtu`).
-    fn start(msg: String, quiet: bool) -> Stage {
+    fn start(msg: String, template: &str, quiet: bool) -> Stage {
         let pb = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
         pb.set_style(
-            ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+            ProgressStyle::with_template(template)
                 .unwrap_or_else(|_| ProgressStyle::default_spinner()),
         );
         pb.set_message(msg);

@@ -9,6 +9,7 @@ use tptd::io::WriteOptions;
 use tptd::pipeline::{critical_file, critical_table, inspect_files, mesh_file, summary};
 use tptd::pipeline::{transfer_line, CriticalRequest, InspectRequest, MeshRequest, NoProgress};
 use tptd::pipeline::{PipelineError, QualityRequest};
+use tptd::sdf::SurfaceGridOptions;
 
 use crate::cli::{Cli, Spacing, FLAGS};
 use crate::progress::TermProgress;
@@ -53,6 +54,11 @@ fn mesh_request(cli: &Cli) -> MeshRequest {
         function: cli.function.clone(),
         field: cli.field.clone(),
         spacing: cli.spacing.map(|Spacing(s)| s),
+        surface_grid: SurfaceGridOptions {
+            resolution: cli.resolution.map(|n| n as usize),
+            voxel_size: cli.voxel_size,
+            ..SurfaceGridOptions::default()
+        },
         alpha: cli.alpha,
         beta: cli.beta,
         method: cli.method.get(),

@@ -1,0 +1,287 @@
+//! End-to-end tests of `tptd-mesh` with a closed-surface input (`SURFACE.obj|.stl|.ply`):
+//! the solid `{d <= 0}` of the signed distance meshed with the right topology and judged by
+//! the checker (`--check`), an open surface meshed with a warning naming its hole, and the
+//! refusals: an empty or garbage file, a surface option with a volume, an output that is the
+//! input.
+
+mod common;
+
+use std::collections::HashMap;
+use std::fs;
+use std::path::Path;
+
+use common::files::{listing, write_npy};
+use common::output::{assert_ok, read_json, run_in, stderr};
+use serde_json::Value;
+
+type Soup = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
+/// A sphere: an octahedron subdivided `levels` times, projected, outward.
+fn sphere(centre: [f64; 3], r: f64, levels: usize) -> Soup {
+    let mut p: Vec<[f64; 3]> = vec![
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+    ];
+    let mut t: Vec<[u32; 3]> = vec![
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    for _ in 0..levels {
+        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut next = Vec::new();
+        for tri in &t {
+            let mut m = [0u32; 3];
+            for e in 0..3 {
+                let (a, b) = (tri[e], tri[(e + 1) % 3]);
+                m[e] = *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    let q = [0, 1, 2].map(|k| p[a as usize][k] + p[b as usize][k]);
+                    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+                    p.push(q.map(|x| x / n));
+                    (p.len() - 1) as u32
+                });
+            }
+            next.extend([
+                [tri[0], m[0], m[2]],
+                [m[0], tri[1], m[1]],
+                [m[2], m[1], tri[2]],
+                m,
+            ]);
+        }
+        t = next;
+    }
+    let p = p
+        .iter()
+        .map(|q| [0, 1, 2].map(|k| centre[k] + r * q[k]))
+        .collect();
+    (p, t)
+}
+
+/// A torus around the z axis (radii `big`, `small`), `nu × nv` quads, outward.
+fn torus(big: f64, small: f64, nu: usize, nv: usize) -> Soup {
+    let tau = std::f64::consts::TAU;
+    let mut p = Vec::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            let (u, v) = (tau * i as f64 / nu as f64, tau * j as f64 / nv as f64);
+            let rho = big + small * v.cos();
+            p.push([rho * u.cos(), rho * u.sin(), small * v.sin()]);
+        }
+    }
+    let id = |i: usize, j: usize| ((i % nu) * nv + j % nv) as u32;
+    let mut t = Vec::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            t.push([a, b, c]);
+            t.push([a, c, d]);
+        }
+    }
+    (p, t)
+}
+
+fn write_obj(path: &Path, (p, t): &Soup) {
+    let mut s = String::from("# test surface\n");
+    for q in p {
+        s += &format!("v {} {} {}\n", q[0], q[1], q[2]);
+    }
+    for f in t {
+        s += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+    }
+    fs::write(path, s).unwrap();
+}
+
+/// Binary STL: 80-byte header, count, then per triangle a zero normal, three corners and a
+/// zero attribute.
+fn write_stl(path: &Path, (p, t): &Soup) {
+    let mut b = vec![0u8; 80];
+    b.extend((t.len() as u32).to_le_bytes());
+    for f in t {
+        b.extend([0u8; 12]);
+        for &i in f {
+            for x in p[i as usize] {
+                b.extend((x as f32).to_le_bytes());
+            }
+        }
+        b.extend([0u8; 2]);
+    }
+    fs::write(path, b).unwrap();
+}
+
+/// Meshes `input` in `dir` with `--check` and a report, and gives the report and stderr.
+fn mesh_checked(dir: &Path, input: &str, extra: &[&str]) -> (Value, String) {
+    let mut args = vec![input, "-o", "m.vtu", "--check", "--report", "r.json"];
+    args.extend_from_slice(extra);
+    let o = run_in(dir, &args);
+    assert_ok(&o);
+    let r = read_json(&dir.join("r.json"));
+    assert_eq!(r["check"]["valid"], Value::Bool(true), "{}", r["check"]);
+    (r, stderr(&o))
+}
+
+/// The error line of a refused run, which must leave `dir` as it was.
+fn refused(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let before = listing(dir);
+    let o = run_in(dir, args);
+    assert!(!o.status.success(), "{args:?} ran");
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert_eq!(listing(dir), before, "{args:?} left files");
+    (o.status.code(), err)
+}
+
+#[test]
+fn a_torus_is_a_solid_ring() {
+    let dir = tempfile::tempdir().unwrap();
+    write_obj(&dir.path().join("torus.obj"), &torus(1.0, 0.4, 48, 24));
+    let (r, err) = mesh_checked(dir.path(), "torus.obj", &["--resolution", "64"]);
+    assert_eq!(r["betti"], serde_json::json!([1, 1, 0]), "{r}");
+    assert!(!err.contains("warning"), "{err}");
+    // the surface's units: the solid torus has volume 2 pi^2 R r^2
+    let exact = 2.0 * std::f64::consts::PI.powi(2) * 1.0 * 0.4 * 0.4;
+    let v = r["volume"].as_f64().unwrap();
+    assert!((v - exact).abs() < 0.03 * exact, "{v} vs {exact}");
+    // the grid: 64 voxels along the longest side (2.8), 3.5 more on each side
+    assert_eq!(r["dims"][0], 64 + 2 + 6, "{}", r["dims"]);
+}
+
+#[test]
+fn two_spheres_a_few_voxels_apart_stay_two() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut p, mut t) = sphere([-1.1, 0.0, 0.0], 1.0, 4);
+    let (q, u) = sphere([1.1, 0.0, 0.0], 1.0, 4);
+    let off = p.len() as u32;
+    p.extend(q);
+    t.extend(u.iter().map(|x| x.map(|i| i + off)));
+    write_stl(&dir.path().join("pair.stl"), &(p, t));
+    // 4.2 long in 64 voxels: the gap of 0.2 is three voxels
+    let (r, _) = mesh_checked(dir.path(), "pair.stl", &["--resolution", "64"]);
+    assert_eq!(r["betti"], serde_json::json!([2, 0, 0]), "{r}");
+}
+
+#[test]
+fn beta_offsets_the_surface_in_its_units() {
+    let dir = tempfile::tempdir().unwrap();
+    write_obj(&dir.path().join("ball.obj"), &sphere([0.0; 3], 1.0, 3));
+    let args = ["--voxel-size", "0.1", "--beta", "0.5"];
+    let (r, _) = mesh_checked(dir.path(), "ball.obj", &args);
+    assert_eq!(r["betti"], serde_json::json!([1, 0, 0]), "{r}");
+    // the offset ball of radius 1.5 fits in the grid: no box boundary
+    let exact = 4.0 / 3.0 * std::f64::consts::PI * 1.5f64.powi(3);
+    let v = r["volume"].as_f64().unwrap();
+    assert!((v - exact).abs() < 0.03 * exact, "{v} vs {exact}");
+    assert_eq!(r["boundary_triangles"]["box"], 0, "{r}");
+}
+
+#[test]
+fn an_open_surface_is_meshed_with_a_warning_naming_the_hole() {
+    let dir = tempfile::tempdir().unwrap();
+    let (p, t) = sphere([0.0; 3], 1.0, 3);
+    // remove the cap above z = 0.9: one hole, its rim about 2 pi 0.44 long
+    let t: Vec<[u32; 3]> = t
+        .into_iter()
+        .filter(|f| f.iter().any(|&i| p[i as usize][2] < 0.9))
+        .collect();
+    write_obj(&dir.path().join("cup.obj"), &(p, t));
+    let (r, err) = mesh_checked(dir.path(), "cup.obj", &["--resolution", "32"]);
+    let warning = err
+        .lines()
+        .find(|l| l.contains("open"))
+        .unwrap_or_else(|| panic!("no warning: {err}"));
+    assert!(
+        warning.starts_with("tptd-mesh: warning: cup.obj: the surface is open: 1 hole"),
+        "{warning}"
+    );
+    assert!(warning.contains("the longest boundary"), "{warning}");
+    assert_eq!(r["betti"], serde_json::json!([1, 0, 0]), "{r}");
+    assert!(r["warnings"][0].as_str().unwrap().contains("1 hole"), "{r}");
+}
+
+#[test]
+fn empty_and_garbage_surfaces_are_one_line_errors_that_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("empty.obj"), b"").unwrap();
+    fs::write(d.join("junk.stl"), b"this is not an stl file at all").unwrap();
+    fs::write(d.join("junk.ply"), b"\x00\x01garbage\xff").unwrap();
+    // every triangle flat: read, but no solid
+    fs::write(d.join("flat.obj"), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+    for name in ["empty.obj", "junk.stl", "junk.ply", "flat.obj"] {
+        let (code, err) = refused(d, &[name, "-o", "m.vtu", "--report", "r.json"]);
+        assert_eq!(code, Some(1), "{err}");
+        assert!(
+            err.starts_with(&format!("tptd-mesh: error: {name}: ")),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn surface_options_are_refused_where_they_do_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_npy(&d.join("v.npy"), [4, 4, 4], |i, j, k| (i + j + k) as f64);
+    write_obj(&d.join("ball.obj"), &sphere([0.0; 3], 1.0, 1));
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["v.npy", "--alpha", "1", "--resolution", "32", "-o", "m.vtu"],
+            "--resolution applies only to a closed-surface input",
+        ),
+        (
+            &["--demo", "--voxel-size", "0.1"],
+            "--voxel-size applies only to a closed-surface input",
+        ),
+        (
+            &[
+                "ball.obj",
+                "--resolution",
+                "8",
+                "--voxel-size",
+                "0.1",
+                "-o",
+                "m.vtu",
+            ],
+            "--resolution and --voxel-size exclude each other",
+        ),
+        (
+            &["ball.obj", "--spacing", "1,1,1", "-o", "m.vtu"],
+            "--spacing does not apply to a closed surface",
+        ),
+        (
+            &["ball.obj", "--critical"],
+            "--critical applies only to a volume input",
+        ),
+    ];
+    for (args, expected) in cases {
+        let (code, err) = refused(d, args);
+        assert_eq!(code, Some(2), "{err}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+    }
+    let (code, err) = refused(d, &["ball.obj", "--resolution", "0", "-o", "m.vtu"]);
+    assert_eq!(code, Some(2), "{err}");
+}
+
+#[test]
+fn the_output_never_overwrites_the_input_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_obj(&d.join("ball.obj"), &sphere([0.0; 3], 1.0, 1));
+    let before = fs::read(d.join("ball.obj")).unwrap();
+    for out in ["ball.obj", "./ball.obj"] {
+        let (code, err) = refused(d, &["ball.obj", "-o", out]);
+        assert_eq!(code, Some(2), "{err}");
+        assert!(err.contains("refusing to overwrite"), "{err}");
+    }
+    let (code, _) = refused(d, &["ball.obj", "-o", "m.vtu", "--report", "ball.obj"]);
+    assert_eq!(code, Some(2));
+    assert_eq!(fs::read(d.join("ball.obj")).unwrap(), before);
+}
