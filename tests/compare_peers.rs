@@ -72,7 +72,10 @@ fn ours_against_tetgen_and_ftetwild() {
     for d in domains {
         let name = d["name"].as_str().unwrap();
         let reference = &d["reference_betti"];
-        assert!(reference.is_array(), "{name}: no reference Betti numbers\n{out}");
+        assert!(
+            reference.is_array(),
+            "{name}: no reference Betti numbers\n{out}"
+        );
         for tool in ["ctd", "ctd --quality"] {
             let r = row(d, tool);
             if r["status"] != "ok" {
@@ -105,9 +108,10 @@ fn ours_against_tetgen_and_ftetwild() {
         }
         // Smallest dihedral angle after --quality against every TetGen mesh of the domain.
         let ours_min = row(d, "ctd --quality")["min"].as_f64();
-        for r in rows(d).iter().filter(|r| {
-            r["tool"].as_str().unwrap().starts_with("tetgen") && r["status"] == "ok"
-        }) {
+        for r in rows(d)
+            .iter()
+            .filter(|r| r["tool"].as_str().unwrap().starts_with("tetgen") && r["status"] == "ok")
+        {
             let (Some(ours), Some(theirs)) = (ours_min, r["min"].as_f64()) else {
                 continue;
             };
@@ -120,9 +124,13 @@ fn ours_against_tetgen_and_ftetwild() {
             }
         }
     }
-    let tetgen_ran = domains.iter().flat_map(rows).any(|r| {
-        r["tool"].as_str().unwrap().starts_with("tetgen") && r["status"] == "ok"
-    });
-    assert!(tetgen_ran, "no TetGen run finished: nothing compared\n{out}");
+    let tetgen_ran = domains
+        .iter()
+        .flat_map(rows)
+        .any(|r| r["tool"].as_str().unwrap().starts_with("tetgen") && r["status"] == "ok");
+    assert!(
+        tetgen_ran,
+        "no TetGen run finished: nothing compared\n{out}"
+    );
     assert!(failures.is_empty(), "{}\n{out}", failures.join("\n"));
 }

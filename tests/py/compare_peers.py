@@ -8,14 +8,18 @@ usage: compare_peers.py --bin TPTD_MESH --out DIR --json FILE [--peer-timeout S]
 
 Domains (unit spacing; levels off round numbers so that no grid value equals a bound):
 torus, genus 3, two balls 0.3 voxel apart, a thin spherical shell (two-sided interval), a
-seeded smooth random field and a 32^3 crop of the MNI152 white-matter template (nilearn).
+seeded smooth random field (grids 20^3-24^3) and a 24^3 crop of the MNI152 white-matter
+template (nilearn): at 32^3, TetGen and fTetWild on the crop need minutes here.
 
 Per domain:
   ours      `tptd-mesh vol.npy [--alpha A] [--beta B] -o ctd.msh --check`, and with `--quality`
   surfaces  "ours": the boundary of our ctd --quality mesh (of the ctd mesh if that failed):
-            on the level sets like ctd's, and better shaped, which spares TetGen minutes; "mc": marching cubes (scikit-image, Lewiner)
+            on the level sets like ctd's, and better shaped, which spares TetGen minutes;
+            "mc": marching cubes (scikit-image, Lewiner)
             of each finite bound on the volume padded by one layer outside the interval, so the
-            surface is closed; each oriented outward, with one hole point per enclosed cavity
+            surface is closed (where the domain meets the grid box it closes up to a voxel
+            outside it, which the checker reports as `outside_grid`); each oriented outward,
+            with one hole point per enclosed cavity
   TetGen    the PyPI `tetgen` package, `pq1.2` and `pq1.2/10` on our surface, `pq1.2` on the
             marching-cubes one (not on the MNI crop's: over a minute)
   fTetWild  `pytetwild.tetrahedralize(V, F, edge_length_abs=1.5, epsilon=3e-3, optimize=True,
@@ -238,7 +242,8 @@ def run_domain(args, name, t_start):
         cmd = [sys.executable, os.path.abspath(__file__), "--worker", kind, npz, prefix, param]
         jobs.append((row, cmd, prefix, d))
     return {"name": name, "shape": list(f.shape), "dtype": str(f.dtype), "alpha": alpha, "beta": beta,
-            "note": note, "our_surface": src and os.path.basename(src), "rows": rows, "vol": vol, "bounds": b, "meshes": meshes, "jobs": jobs}
+            "note": note, "our_surface": src and os.path.basename(src), "rows": rows,
+            "vol": vol, "bounds": b, "meshes": meshes, "jobs": jobs}
 
 
 def run_peer(args, job, t_start):
@@ -339,7 +344,8 @@ def main():
         print(f"[compare_peers] {len(jobs)} peer runs: {time.perf_counter() - t0:.1f} s", flush=True)
         domains = list(pool.map(lambda dom: finish_domain(args, dom), domains))
     payload = {"domains": domains, "peer_timeout": args.peer_timeout, "budget": args.budget,
-               "ftetwild_edge": FTETWILD_EDGE, "ftetwild_epsilon": FTETWILD_EPSILON, "total_seconds": time.perf_counter() - t0,
+               "ftetwild_edge": FTETWILD_EDGE, "ftetwild_epsilon": FTETWILD_EPSILON,
+               "total_seconds": time.perf_counter() - t0,
                "loadavg": os.getloadavg()}
     with open(args.json, "w") as fj:
         json.dump(payload, fj, indent=1)
