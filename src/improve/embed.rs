@@ -143,7 +143,13 @@ pub fn level_move_keeps_level(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) ->
 
 /// Whether each of `faces` (at `v`) keeps near its level set with `v` at `u`
 /// ([`projected_face_keeps_level`]).
-fn faces_keep_level(lm: &LocalMesh, ctx: &Ctx, faces: &[BoundaryFace], v: u32, u: [f64; 3]) -> bool {
+fn faces_keep_level(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    faces: &[BoundaryFace],
+    v: u32,
+    u: [f64; 3],
+) -> bool {
     faces.iter().all(|f| {
         let before = f.tri.map(|w| lm.u[w as usize]);
         let after = f.tri.map(|w| if w == v { u } else { lm.u[w as usize] });
