@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The full test suite, then the README's commands. Installs what the tests need when it is missing:
-# gmsh and CalculiX (Debian packages), numpy, meshio and VTK (PyPI).
+# gmsh and CalculiX (Debian packages), numpy, meshio and VTK (PyPI), and for the comparison with
+# TetGen and fTetWild (tests/compare_peers.rs) tetgen, pytetwild, scikit-image, nilearn, nibabel
+# and pyvista (PyPI).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -16,6 +18,10 @@ fi
 if ! python3 -c "import numpy, meshio, vtk" >/dev/null 2>&1; then
   echo "installing numpy meshio vtk (pip)"
   python3 -m pip install -q numpy meshio vtk
+fi
+if ! python3 -c "import scipy, tetgen, pytetwild, skimage, nilearn, nibabel, pyvista" >/dev/null 2>&1; then
+  echo "installing scipy tetgen pytetwild scikit-image nilearn nibabel pyvista (pip)"
+  python3 -m pip install -q scipy tetgen pytetwild scikit-image nilearn nibabel pyvista
 fi
 
 cargo test --all-targets "$@"
