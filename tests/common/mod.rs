@@ -10,6 +10,7 @@ pub mod mc33;
 pub mod mc33_table;
 pub mod output;
 pub mod reference;
+pub mod soup;
 
 /// splitmix64: tiny, seedable, good enough for test data.
 #[derive(Clone, Debug)]
