@@ -239,11 +239,11 @@ fn check_on_level(name: &str, field: &Field, alpha: f64, beta: f64, mesh: &TetMe
 }
 
 /// The relative volume change allowed when the improved mesh is not closer to the sampled
-/// trilinear volume than the plain one (issue 6: 0.5 %).
+/// trilinear volume than the plain one (the quality goal: 0.5 %).
 const VOLUME_FLOOR: f64 = 5e-3;
 
 /// The angles the default pass must reach on the smooth closed domains: its targets, 15° and
-/// 155° (issue 6), up to rounding.
+/// 155° (the quality goal), up to rounding.
 const FLOOR: (f64, f64) = (15.0 - 1e-6, 155.0 + 1e-6);
 
 /// The relative volume change allowed at targets above the default, which coarsen more (and
@@ -333,10 +333,10 @@ fn a_boundary_collapse_limit_keeps_the_invariants_and_the_shell_at_its_target() 
     // Boundary collapses limited to three times the mean edge at the removed node (the
     // default) keep the invariants on a 1.2-voxel layer and end no worse than unlimited
     // ones. The limit used to raise this shell's smallest angle (27.32° -> 28.08° at
-    // 30°/140°); since warping snaps vertices whose link the other level crosses (build
-    // eb4cfe0) and the smoothing takes one step a call (session 28), both end at the target
+    // 30°/140°); since warping snaps vertices whose link the other level crosses and the
+    // smoothing takes one step a call, both end at the target
     // here, and on no benchmark shell at 24³-40³ does the limit change the angles
-    // (docs/QUALITY-LOG.md, *Session 28*). Without the edge splits, which change the shell's
+    // (docs/QUALITY-LOG.md, 2026-12-05). Without the edge splits, which change the shell's
     // last elements either way.
     let f = benchmark_shell(36);
     let unlimited = QualityOptions {
@@ -369,7 +369,7 @@ fn a_boundary_collapse_limit_keeps_the_invariants_and_the_shell_at_its_target() 
 fn volume_restoration_moves_only_level_nodes_and_lowers_no_element() {
     // Restoration is the pass's last stage: the same pass without it is the mesh it starts
     // from. It must give volume back (torus: -0.36 % -> -0.14 %, shell: -0.51 % -> -0.07 %,
-    // measured on eb4cfe0), keep every tet and every interior node, and take no element below the
+    // measured with the link-snapping warping), keep every tet and every interior node, and take no element below the
     // target that was not below it (nor lower one that was).
     for (name, f, a, b) in [
         ("torus", torus(36, 10.0, 4.2), f64::NEG_INFINITY, 0.0),
@@ -418,7 +418,7 @@ fn boundary_splits_give_a_thin_tube_its_volume_back() {
     // A torus whose tube is 1.9 voxels in radius: its boundary nodes on the level set inscribe
     // the surface in it, and without splits the pass leaves it 1.13 % below the plain mesh,
     // which is within 0.1 % of the trilinear volume; with them 0.55 % below (measured). That
-    // is still more than issue 6 allows (0.5 %): splits that would make poor tets are not
+    // is still more than the quality goal allows (0.5 %): splits that would make poor tets are not
     // made. The benchmark's genus-3 solid (tubes of the same radius) goes from -1.08 % to
     // -0.32 % (docs/QUALITY-LOG.md).
     let f = torus(28, 8.0, 1.9);
@@ -559,7 +559,7 @@ fn output_does_not_depend_on_the_thread_count() {
 #[test]
 fn thin_shells_reach_the_default_target() {
     // The benchmark's thin shell (1.2 voxels) at sizes where, before warping snapped vertices
-    // whose link the other level crosses (eb4cfe0), the default pass needed one of three
+    // whose link the other level crosses, the default pass needed one of three
     // mechanisms to reach 15° (measured then): the last round's slab boundaries shifted by
     // half a slab (48³: 11.1° with every round cut alike), stuck regions retried with other
     // smoothing (36³: 14.19° without; 24³: 14.84° without, 15.00° after the second variant)
@@ -568,7 +568,7 @@ fn thin_shells_reach_the_default_target() {
     // three turned off (measured), so this test now checks the outcome only: no small
     // benchmark domain shows those mechanisms at the default target today, the full-size
     // volumes do (the T1 band ends at 9.44° without the compass search, 9.65° without the
-    // shift, 11.51° with both; docs/QUALITY-LOG.md, *Session 24*).
+    // shift, 11.51° with both; docs/QUALITY-LOG.md, 2026-12-04).
     for n in [48, 36, 24, 20] {
         let (name, o) = default_shell(n);
         check_angles(&name, &o, FLOOR);
@@ -580,7 +580,7 @@ fn every_target_stage_polishes_its_stuck_regions() {
     // Stages above the default do not retry stuck regions (that made them worse), but each
     // stage's last round polishes them with the compass search. The benchmark's 24³ shell at
     // 25°/145° ends at 21.82° without it, 25.00° with it (measured on build 879126a's
-    // warping, which joins snapped nodes; on eb4cfe0's the 36³ shell at 20°/150° showed it,
+    // warping, which joins snapped nodes; on the link-snapping warping the 36³ shell at 20°/150° showed it,
     // 16.93° -> 20.00°, and no longer does).
     let (name, o) = shell_at_targets(24, (25.0, 145.0));
     check_angles(&name, &o, (25.0 - 1e-9, 145.0 + 1e-9));
@@ -591,7 +591,7 @@ fn a_collapse_judged_after_its_moves_frees_stuck_caps() {
     // Some tets left below the target need two steps: a collapse that alone leaves a poor
     // tet, then moves that lift it. The polish of a stuck region tries such collapses on a
     // copy and keeps one when the region's worst tet ends higher (src/improve/composite.rs).
-    // Measured on eb4cfe0's warping: the benchmark's genus-3 solid at 35³ ends at 13.68°
+    // Measured on the link-snapping warping: the benchmark's genus-3 solid at 35³ ends at 13.68°
     // without it, 15.00° with it; the 34³ shell at 25°/145° at 21.87° without, 25.00° with.
     // On build 879126a's warping the genus-3 solid reaches 15° without it too, and the shell
     // ends at 22.13° without it (measured): the shell is what this test can fail on.
@@ -611,10 +611,10 @@ fn stages_above_the_default_polish_twice() {
     // straddle a shifted boundary is never whole in one region there. In the stages above the
     // default a second polishing round follows with the boundaries back in place. The
     // benchmark's 30³ shell at 30°/140° ends at 28.49° with one polishing round, 30.00° with
-    // two (measured on build 2cdfd42, one smoothing step a call; over the shells at 24³–40³
+    // two (measured with one smoothing step a call; over the shells at 24³–40³
     // the second round raised 10 of 17 and none fell. Before, the 36³ shell showed it with
     // the one-division sine, 29.21° -> 30.00°, the 29³ one with the sine edge by edge,
-    // 27.83° -> 30.00°, and on eb4cfe0's warping the genus-3 solid at 36³ and 25°/145°,
+    // 27.83° -> 30.00°, and on the link-snapping warping the genus-3 solid at 36³ and 25°/145°,
     // 24.81° -> 25.00°).
     let (name, o) = shell_at_targets(30, (30.0, 140.0));
     check_angles(&name, &o, (30.0 - 1e-9, 140.0 + 1e-9));
@@ -656,7 +656,7 @@ fn in_f32(mut f: Field) -> Field {
 fn a_higher_target_ends_at_least_where_the_default_pass_does() {
     // The first stage of a ladder is the default pass, stuck regions retried as in the
     // single pass. Without the retries there, the benchmark's 24³ shell ended at 14.84° at
-    // 20°/150° against 15.00° by default (measured before eb4cfe0; 20.00° with them; since
+    // 20°/150° against 15.00° by default (measured before the link-snapping warping; 20.00° with them; since
     // that build's warping it starts better and ends at 20.02° either way).
     let f = benchmark_shell(24);
     let default = mesh_and_improve(&f, -0.6, 0.6);
@@ -742,7 +742,7 @@ fn check_sublevel_volume(name: &str, f: &Field, limit: f64) {
 #[test]
 fn a_pass_that_leaves_a_small_solid_off_its_volume_runs_again() {
     // Small solids with parts a voxel or two thick: boundary collapses along long edges take
-    // volume the restoration cannot give back. Measured on build 2cdfd42 with the run again
+    // volume the restoration cannot give back. Measured with one smoothing step a call, with the run again
     // turned off: a torus of tube radius 1.76 voxels at 22³ -0.80 %, the genus-3 solid at
     // 20³ without the edge splits -1.04 %. Run again with boundary collapses limited to
     // shorter edges, they end at -0.34 % and +0.03 %. (Since the smoothing takes one step a
