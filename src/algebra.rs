@@ -66,7 +66,18 @@ pub fn condition_number(m: &[[f64; 3]; 3]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
+    /// A seeded xorshift stream uniform in [-1, 1): the random cases of the bit-for-bit tests.
+    pub(crate) fn uniform_signed() -> impl FnMut() -> f64 {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
     use super::*;
 
     #[test]
@@ -83,13 +94,7 @@ mod tests {
     /// outputs keep their bytes.
     #[test]
     fn determinant_and_inverse_match_the_cofactor_formulas_bit_for_bit() {
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = uniform_signed();
         for _ in 0..1000 {
             let m: [[f64; 3]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| next()));
             let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])

@@ -373,13 +373,7 @@ mod tests {
 
     #[test]
     fn sicn_keeps_the_bits_of_the_cofactor_formula() {
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = crate::algebra::tests::uniform_signed();
         for _ in 0..2000 {
             let p: [[f64; 3]; 4] = std::array::from_fn(|_| [next(), next(), next()]);
             assert_eq!(sicn(p).to_bits(), sicn_by_hand(p).to_bits());

@@ -103,10 +103,14 @@ pub fn faces_near_level_with(
     v: u32,
     u: [f64; 3],
 ) -> bool {
-    faces.iter().all(|f| {
-        let t = f.tri.map(|w| if w == v { u } else { lm.u[w as usize] });
-        triangle_near_level(ctx, t, f.label)
-    })
+    faces
+        .iter()
+        .all(|f| triangle_near_level(ctx, corners_with(lm, f, v, u), f.label))
+}
+
+/// The corners (index space) of face `f` of region `lm` with vertex `v` at `u`.
+fn corners_with(lm: &LocalMesh, f: &BoundaryFace, v: u32, u: [f64; 3]) -> [[f64; 3]; 3] {
+    f.tri.map(|w| if w == v { u } else { lm.u[w as usize] })
 }
 
 /// Whether moving vertex `v` of region `lm` to index point `u` keeps the boundary faces at `v`
@@ -152,8 +156,7 @@ fn faces_keep_level(
 ) -> bool {
     faces.iter().all(|f| {
         let before = f.tri.map(|w| lm.u[w as usize]);
-        let after = f.tri.map(|w| if w == v { u } else { lm.u[w as usize] });
-        projected_face_keeps_level(ctx, f.label, before, after)
+        projected_face_keeps_level(ctx, f.label, before, corners_with(lm, f, v, u))
     })
 }
 

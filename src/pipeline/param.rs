@@ -5,153 +5,76 @@
 
 use std::fmt;
 
-/// A parameter of a meshing, critical-point or inspection request.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[allow(missing_docs)] // each variant is the parameter of its name
-pub enum Param {
-    Input,
-    Output,
-    Alpha,
-    Beta,
-    Method,
-    Report,
-    Threads,
-    MshVersion,
-    VtuEncoding,
-    Spacing,
-    Resolution,
-    VoxelSize,
-    Field,
-    Function,
-    Caps,
-    Ascii,
-    NoAnalysis,
-    Check,
-    Quality,
-    MinAngle,
-    MaxAngle,
-    QualityTime,
-    BoundaryCollapseRatio,
-    SplitSag,
-    Demo,
-    MemoryLimit,
-    Quiet,
-    Critical,
-    Json,
-    Inspect,
-    Volume,
-    Spectrum,
-    Transfer,
-    TransferDesign,
-    TransferWidth,
-    Persistence,
-    MinPersistence,
-    MinValue,
-    MaxValue,
-    Kind,
-    CriticalTol,
-    NoCriticalCheck,
+/// Declares [`Param`] with one line per parameter: its variant and its neutral name.
+macro_rules! params {
+    ($($variant:ident => $name:literal,)*) => {
+        /// A parameter of a meshing, critical-point or inspection request.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        #[allow(missing_docs)] // each variant is the parameter of its name
+        pub enum Param {
+            $($variant,)*
+        }
+
+        impl Param {
+            /// Every parameter.
+            pub const ALL: [Param; [$(Param::$variant,)*].len()] = [$(Param::$variant,)*];
+
+            /// The neutral name: snake case, e.g. `alpha`, `quality_time`.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Param::$variant => $name,)*
+                }
+            }
+        }
+    };
+}
+
+params! {
+    Input => "input",
+    Output => "output",
+    Alpha => "alpha",
+    Beta => "beta",
+    Method => "method",
+    Report => "report",
+    Threads => "threads",
+    MshVersion => "msh_version",
+    VtuEncoding => "vtu_encoding",
+    Spacing => "spacing",
+    Resolution => "resolution",
+    VoxelSize => "voxel_size",
+    Field => "field",
+    Function => "function",
+    Caps => "caps",
+    Ascii => "ascii",
+    NoAnalysis => "no_analysis",
+    Check => "check",
+    Quality => "quality",
+    MinAngle => "min_angle",
+    MaxAngle => "max_angle",
+    QualityTime => "quality_time",
+    BoundaryCollapseRatio => "boundary_collapse_ratio",
+    SplitSag => "split_sag",
+    Demo => "demo",
+    MemoryLimit => "memory_limit",
+    Quiet => "quiet",
+    Critical => "critical",
+    Json => "json",
+    Inspect => "inspect",
+    Volume => "volume",
+    Spectrum => "spectrum",
+    Transfer => "transfer",
+    TransferDesign => "transfer_design",
+    TransferWidth => "transfer_width",
+    Persistence => "persistence",
+    MinPersistence => "min_persistence",
+    MinValue => "min_value",
+    MaxValue => "max_value",
+    Kind => "kind",
+    CriticalTol => "critical_tol",
+    NoCriticalCheck => "no_critical_check",
 }
 
 impl Param {
-    /// Every parameter.
-    pub const ALL: [Param; 42] = {
-        use Param::*;
-        [
-            Input,
-            Output,
-            Alpha,
-            Beta,
-            Method,
-            Report,
-            Threads,
-            MshVersion,
-            VtuEncoding,
-            Spacing,
-            Resolution,
-            VoxelSize,
-            Field,
-            Function,
-            Caps,
-            Ascii,
-            NoAnalysis,
-            Check,
-            Quality,
-            MinAngle,
-            MaxAngle,
-            QualityTime,
-            BoundaryCollapseRatio,
-            SplitSag,
-            Demo,
-            MemoryLimit,
-            Quiet,
-            Critical,
-            Json,
-            Inspect,
-            Volume,
-            Spectrum,
-            Transfer,
-            TransferDesign,
-            TransferWidth,
-            Persistence,
-            MinPersistence,
-            MinValue,
-            MaxValue,
-            Kind,
-            CriticalTol,
-            NoCriticalCheck,
-        ]
-    };
-
-    /// The neutral name: snake case, e.g. `alpha`, `quality_time`.
-    pub fn name(self) -> &'static str {
-        use Param::*;
-        match self {
-            Input => "input",
-            Output => "output",
-            Alpha => "alpha",
-            Beta => "beta",
-            Method => "method",
-            Report => "report",
-            Threads => "threads",
-            MshVersion => "msh_version",
-            VtuEncoding => "vtu_encoding",
-            Spacing => "spacing",
-            Resolution => "resolution",
-            VoxelSize => "voxel_size",
-            Field => "field",
-            Function => "function",
-            Caps => "caps",
-            Ascii => "ascii",
-            NoAnalysis => "no_analysis",
-            Check => "check",
-            Quality => "quality",
-            MinAngle => "min_angle",
-            MaxAngle => "max_angle",
-            QualityTime => "quality_time",
-            BoundaryCollapseRatio => "boundary_collapse_ratio",
-            SplitSag => "split_sag",
-            Demo => "demo",
-            MemoryLimit => "memory_limit",
-            Quiet => "quiet",
-            Critical => "critical",
-            Json => "json",
-            Inspect => "inspect",
-            Volume => "volume",
-            Spectrum => "spectrum",
-            Transfer => "transfer",
-            TransferDesign => "transfer_design",
-            TransferWidth => "transfer_width",
-            Persistence => "persistence",
-            MinPersistence => "min_persistence",
-            MinValue => "min_value",
-            MaxValue => "max_value",
-            Kind => "kind",
-            CriticalTol => "critical_tol",
-            NoCriticalCheck => "no_critical_check",
-        }
-    }
-
     /// The parameter of neutral name `name`.
     pub fn from_name(name: &str) -> Option<Param> {
         Param::ALL.into_iter().find(|p| p.name() == name)
