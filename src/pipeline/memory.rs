@@ -7,7 +7,8 @@ use crate::ScalarGrid;
 
 use super::request::Job;
 use super::text::fmt_interval;
-use super::{Param, PipelineError};
+use super::{Mode, Param, ParamNames, PipelineError};
+use crate::allocator::OutOfMemory;
 
 /// Whether the mesh goes straight to disk slab by slab: a volume mesh output without the
 /// quality pass (which needs the whole mesh), a curvilinear mapping or the check (which reads
@@ -62,4 +63,38 @@ pub(crate) fn check_memory(
             ),
         )
     })
+}
+
+/// Writes the out-of-memory line of a run in `mode` (without a program prefix, with its
+/// newline): what was refused, and what helps, naming the parameters by `names`. It allocates
+/// nothing, as [`crate::allocator::OutOfMemoryMessage`] requires.
+pub fn out_of_memory_line(
+    w: &mut dyn std::io::Write,
+    m: OutOfMemory,
+    mode: Mode,
+    names: ParamNames,
+) -> std::io::Result<()> {
+    let size = m.size;
+    match m.limit {
+        Some(l) => write!(
+            w,
+            "out of memory: {size} more would exceed the memory limit of {l}; raise {}, ",
+            names.of(Param::MemoryLimit)
+        )?,
+        None => write!(w, "out of memory: the system refused {size}; ")?,
+    }
+    match (mode, m.limit) {
+        (Mode::Critical, _) => writeln!(
+            w,
+            "crop the volume or leave out {} and {}",
+            names.of(Param::Spectrum),
+            names.of(Param::Persistence)
+        ),
+        (_, Some(_)) => writeln!(w, "crop the volume or narrow the interval"),
+        (_, None) => writeln!(
+            w,
+            "crop the volume, narrow the interval or use {}",
+            names.of(Param::NoAnalysis)
+        ),
+    }
 }

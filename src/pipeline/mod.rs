@@ -51,6 +51,7 @@ pub use applies::{check_applies, Given, Inapplicable, Mode};
 pub use critical::{critical_file, critical_table, transfer_line, CriticalRequest, CriticalRun};
 pub use error::PipelineError;
 pub use inspect::{inspect_files, InspectRequest, InspectRun};
+pub use memory::out_of_memory_line;
 pub use param::{Param, ParamNames};
 pub use progress::{NoProgress, Progress, StageKind};
 pub use read::read_grid;

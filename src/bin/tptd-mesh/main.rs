@@ -17,6 +17,7 @@ mod run;
 use std::io::Write;
 
 use tptd::allocator::{set_out_of_memory_message, CappedAlloc, OutOfMemory};
+use tptd::pipeline::{out_of_memory_line, Mode};
 
 #[global_allocator]
 static ALLOC: CappedAlloc = CappedAlloc;
@@ -25,9 +26,9 @@ fn main() {
     let cli = cli::parse_or_exit();
     tptd::memory::set_limit(cli.memory_limit);
     set_out_of_memory_message(if cli.critical {
-        |w, m| out_of_memory(w, m, true)
+        |w, m| out_of_memory(w, m, Mode::Critical)
     } else {
-        |w, m| out_of_memory(w, m, false)
+        |w, m| out_of_memory(w, m, Mode::Mesh)
     });
     clean_up_on_signals();
     let result = if !cli.inspect.is_empty() {
@@ -45,25 +46,10 @@ fn main() {
     }
 }
 
-/// The out-of-memory line, with what helps in a `--critical` run or a meshing run.
-fn out_of_memory(w: &mut dyn Write, m: OutOfMemory, critical: bool) -> std::io::Result<()> {
-    let hint = match (critical, m.limit) {
-        (true, _) => "crop the volume or leave out --spectrum and --persistence",
-        (false, Some(_)) => "crop the volume or narrow the interval",
-        (false, None) => "crop the volume, narrow the interval or use --no-analysis",
-    };
-    let size = m.size;
-    match m.limit {
-        Some(l) => writeln!(
-            w,
-            "tptd-mesh: error: out of memory: {size} more would exceed the memory limit of {l}; \
-             raise --memory-limit, {hint}"
-        ),
-        None => writeln!(
-            w,
-            "tptd-mesh: error: out of memory: the system refused {size}; {hint}"
-        ),
-    }
+/// The out-of-memory line of a run in `mode`.
+fn out_of_memory(w: &mut dyn Write, m: OutOfMemory, mode: Mode) -> std::io::Result<()> {
+    write!(w, "tptd-mesh: error: ")?;
+    out_of_memory_line(w, m, mode, cli::FLAGS)
 }
 
 /// On SIGINT or SIGTERM: remove the temporaries of unfinished outputs, print one line and

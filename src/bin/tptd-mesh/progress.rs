@@ -13,45 +13,11 @@ use tptd::pipeline::{Progress, StageKind};
 /// Grids with more cells than this get a progress bar (when stderr is a terminal).
 const PROGRESS_MIN_CELLS: usize = 2_000_000;
 
-/// A progress bar on stderr for the meshing stage, hidden unless stderr is a terminal and the
-/// grid (of `cells` cells) is large.
-fn progress_bar(cells: usize, quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() || cells <= PROGRESS_MIN_CELLS {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
-    pb.set_style(
-        ProgressStyle::with_template("meshing {bar:40} {percent:>3}% {elapsed_precise} eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    pb
-}
-
-/// The spinner `{msg}` of the quality pass, shown at once unless `quiet` or stderr is not a
-/// terminal.
-fn pass_spinner(msg: &str, quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::new_spinner();
-    pb.set_message(msg.to_string());
-    pb.enable_steady_tick(Duration::from_millis(200));
-    pb
-}
-
-/// What shows the current stage.
-enum Shown {
-    /// The meshing bar or the spinner of the quality pass.
-    Bar(ProgressBar),
-    /// The spinner of another stage.
-    Stage(Stage),
-}
-
 /// The [`Progress`] of a run on stderr: bars and spinners (none with `quiet`), and each
 /// warning as one line `tptd-mesh: warning: {message}`.
 pub(crate) struct TermProgress {
     quiet: bool,
-    current: Mutex<Option<Shown>>,
+    current: Mutex<Option<Stage>>,
 }
 
 impl TermProgress {
@@ -64,46 +30,38 @@ impl TermProgress {
     }
 
     /// The current stage's display.
-    fn current(&self) -> std::sync::MutexGuard<'_, Option<Shown>> {
+    fn current(&self) -> std::sync::MutexGuard<'_, Option<Stage>> {
         self.current.lock().unwrap_or_else(PoisonError::into_inner)
     }
 }
 
 impl Progress for TermProgress {
     fn stage(&self, name: &str, kind: StageKind) {
-        let shown = match kind {
-            StageKind::Step => Shown::Stage(Stage::start(name.to_string(), SPINNER, self.quiet)),
-            StageKind::Sampling => Shown::Stage(Stage::start(name.to_string(), BAR, self.quiet)),
-            StageKind::Meshing { cells } => Shown::Bar(progress_bar(cells, self.quiet)),
-            StageKind::Pass => Shown::Bar(pass_spinner(name, self.quiet)),
+        let (template, show_after) = match kind {
+            StageKind::Step => (SPINNER, Some(SHOW_AFTER)),
+            StageKind::Sampling => (BAR, Some(SHOW_AFTER)),
+            StageKind::Meshing { cells } => (BAR, (cells > PROGRESS_MIN_CELLS).then_some(NOW)),
+            StageKind::Pass => (SPINNER, Some(NOW)),
         };
-        *self.current() = Some(shown);
+        let show_after = show_after.filter(|_| !self.quiet && std::io::stderr().is_terminal());
+        *self.current() = Some(Stage::start(name.to_string(), template, show_after));
     }
 
     fn fraction(&self, done: u64, total: u64) {
-        let current = self.current();
-        let pb = match &*current {
-            Some(Shown::Bar(pb)) => pb,
-            Some(Shown::Stage(s)) => &s.pb,
-            None => return,
-        };
-        pb.set_length(total);
-        pb.set_position(done);
+        if let Some(s) = &*self.current() {
+            s.pb.set_length(total);
+            s.pb.set_position(done);
+        }
     }
 
     fn message(&self, message: &str) {
-        match &*self.current() {
-            Some(Shown::Bar(pb)) => pb.set_message(message.to_string()),
-            Some(Shown::Stage(s)) => s.pb.set_message(message.to_string()),
-            None => {}
+        if let Some(s) = &*self.current() {
+            s.pb.set_message(message.to_string());
         }
     }
 
     fn finish(&self) {
-        let shown = self.current().take();
-        if let Some(Shown::Bar(pb)) = shown {
-            pb.finish_and_clear();
-        }
+        self.current().take();
     }
 
     fn warn(&self, message: &str) {
@@ -114,6 +72,9 @@ impl Progress for TermProgress {
 /// How long a stage runs before its spinner appears.
 const SHOW_AFTER: Duration = Duration::from_secs(1);
 
+/// At once.
+const NOW: Duration = Duration::ZERO;
+
 /// The display of a stage without a measure.
 const SPINNER: &str = "{spinner} {msg} {elapsed}";
 
@@ -121,7 +82,7 @@ const SPINNER: &str = "{spinner} {msg} {elapsed}";
 const BAR: &str = "{msg} {bar:40} {percent:>3}% {elapsed_precise} eta {eta}";
 
 /// A spinner or a bar (`template`) on stderr for one stage, shown once the stage has run for
-/// [`SHOW_AFTER`] (never with `quiet` or when stderr is not a terminal); dropping it clears it.
+/// `show_after` (never when `None`); dropping it clears it.
 struct Stage {
     pb: ProgressBar,
     done: Arc<Mutex<bool>>,
@@ -129,7 +90,7 @@ struct Stage {
 
 impl Stage {
     /// Starts the stage `msg` (e.g. `writing m.vtu`).
-    fn start(msg: String, template: &str, quiet: bool) -> Stage {
+    fn start(msg: String, template: &str, show_after: Option<Duration>) -> Stage {
         let pb = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
         pb.set_style(
             ProgressStyle::with_template(template)
@@ -137,10 +98,10 @@ impl Stage {
         );
         pb.set_message(msg);
         let done = Arc::new(Mutex::new(false));
-        if !quiet && std::io::stderr().is_terminal() {
+        if let Some(after) = show_after {
             let (pb, done) = (pb.clone(), Arc::clone(&done));
             std::thread::spawn(move || {
-                std::thread::sleep(SHOW_AFTER);
+                std::thread::sleep(after);
                 let done = done.lock().unwrap_or_else(PoisonError::into_inner);
                 if !*done {
                     pb.set_draw_target(ProgressDrawTarget::stderr());
