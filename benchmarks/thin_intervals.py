@@ -115,6 +115,7 @@ def volume_file(key, force):
     _, name, make, _, _ = DOMAINS[key]
     path = os.path.join(DATA, name)
     if force or not os.path.exists(path):
+        os.makedirs(DATA, exist_ok=True)
         np.save(path, make())
     return path
 

@@ -22,8 +22,8 @@ MNI="$NILEARN/datasets/data"
 # name | input ('demo' for the bundled one) | interval arguments
 VOLUMES=(
   "demo|demo|"
-  "mni_t1|$MNI/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz|--alpha 152 --beta 202"
-  "mni_wm|$MNI/mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz|--alpha 127.5"
+  "mni_t1|$MNI/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz|--alpha 151.0135 --beta 201.0135"
+  "mni_wm|$MNI/mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz|--alpha 127.0135"
   "noisy_256|benchmarks/data/noisy_256.npy|--alpha -2 --beta 2"
 )
 

@@ -160,14 +160,15 @@ fn faces_keep_level(
     })
 }
 
-/// The moved corners of the boundary faces of `mesh` that, with every point at `position`
-/// (physical), leave their level set as [`projected_face_keeps_level`] refuses, among the
-/// faces with a corner flagged in `moved`: moves of the whole-mesh projection to take back.
+/// The moved corners (flagged in `moved`) of the boundary faces of `mesh` that, with every
+/// point at `position` (physical), leave their level set as [`projected_face_keeps_level`]
+/// refuses, among the faces with a corner flagged in `changed` (the others are as they were
+/// when last asked): moves of the whole-mesh projection to take back.
 pub fn moves_leaving_level(
     mesh: &TetMesh,
     ctx: &Ctx,
     position: &[[f64; 3]],
-    moved: &[bool],
+    (moved, changed): (&[bool], &[bool]),
 ) -> Vec<u32> {
     use rayon::prelude::*;
     let index = |p: &[[f64; 3]], tri: &[u32; 3]| tri.map(|v| ctx.field.to_index(p[v as usize]));
@@ -176,7 +177,8 @@ pub fn moves_leaving_level(
         .par_iter()
         .zip(&mesh.boundary_labels)
         .filter(|(tri, &label)| {
-            tri.iter().any(|&v| moved[v as usize])
+            tri.iter().any(|&v| changed[v as usize])
+                && tri.iter().any(|&v| moved[v as usize])
                 && !projected_face_keeps_level(
                     ctx,
                     label,

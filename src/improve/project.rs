@@ -75,8 +75,17 @@ pub fn project_mesh(
     // back too (on a thin interval a node's trilinear level set can lie across the other
     // sheet; on a rough field, across a fold of its own), then the inversion check runs
     // again around them.
+    // The first check looks at every move; each later one only around the moves taken back
+    // (the other faces are where they were when last checked).
+    let mut changed = moved.clone();
+    let mut first_check = true;
     loop {
+        let before = moved.clone();
         revert_inverting(mesh, ctx, (&target, &mut moved), &around_moved, bad);
+        if !first_check {
+            changed = before.iter().zip(&moved).map(|(&b, &m)| b && !m).collect();
+        }
+        first_check = false;
         let position: Vec<[f64; 3]> = (0..mesh.points.len())
             .into_par_iter()
             .map(|v| match target[v] {
@@ -84,8 +93,9 @@ pub fn project_mesh(
                 _ => mesh.points[v],
             })
             .collect();
-        bad = super::verify::moves_breaking_embedding(mesh, ctx, &position, &moved);
-        bad.extend(embed::moves_leaving_level(mesh, ctx, &position, &moved));
+        let flags = (moved.as_slice(), changed.as_slice());
+        bad = super::verify::moves_breaking_embedding(mesh, ctx, &position, flags);
+        bad.extend(embed::moves_leaving_level(mesh, ctx, &position, flags));
         bad.sort_unstable();
         bad.dedup();
         if bad.is_empty() {

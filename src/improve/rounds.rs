@@ -273,6 +273,9 @@ fn run_round(
                 return Round::Idle;
             }
             p.report.rounds += 1;
+        } else if ctx.out_of_time() {
+            p.report.out_of_time = true;
+            break;
         }
         let regions = improve_phase(mesh, ctx, phase, (&work, &off), p.quality, p.report);
         collect_drift(&regions, p.drift);
@@ -308,7 +311,12 @@ fn improve_phase(
                 region_tets: lm.tets.len(),
                 ..Default::default()
             };
-            schedule::improve_local(lm, ctx, &mut r);
+            // A region reached after the budget ran out stays as it was copied out.
+            if ctx.out_of_time() {
+                r.out_of_time = true;
+            } else {
+                schedule::improve_local(lm, ctx, &mut r);
+            }
             r
         })
         .collect();

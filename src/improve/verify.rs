@@ -45,6 +45,15 @@ struct Index {
     buckets: FxHashMap<[i32; 3], Vec<u32>>,
 }
 
+/// Whether two faces have the same corners.
+fn same_triangle(f: &Face, g: &Face) -> bool {
+    let mut a = f.ids;
+    let mut b = g.ids;
+    a.sort_unstable();
+    b.sort_unstable();
+    a == b
+}
+
 fn bounds(p: &[Point; 3]) -> ([f64; 3], [f64; 3]) {
     let lo = [0, 1, 2].map(|a| p[0][a].min(p[1][a]).min(p[2][a]));
     let hi = [0, 1, 2].map(|a| p[0][a].max(p[1][a]).max(p[2][a]));
@@ -60,6 +69,31 @@ fn cells(p: &[Point; 3]) -> impl Iterator<Item = [i32; 3]> {
 }
 
 impl Index {
+    /// The faces that cross `g` (which need not be in the index; the same triangle, by its
+    /// corners, does not count).
+    fn crossing(&self, g: &Face) -> Vec<u32> {
+        let (lo, hi) = bounds(&g.p);
+        let mut seen: Vec<u32> = Vec::new();
+        let mut out = Vec::new();
+        for c in cells(&g.p) {
+            for &j in self.buckets.get(&c).into_iter().flatten() {
+                if seen.contains(&j) {
+                    continue;
+                }
+                seen.push(j);
+                let f = &self.faces[j as usize];
+                let (flo, fhi) = bounds(&f.p);
+                if (0..3).any(|a| flo[a] > hi[a] || fhi[a] < lo[a]) || same_triangle(f, g) {
+                    continue;
+                }
+                if triangles_cross([&f.ids, &g.ids], [&f.p, &g.p]) {
+                    out.push(j);
+                }
+            }
+        }
+        out
+    }
+
     fn new(faces: Vec<Face>) -> Self {
         let mut buckets: FxHashMap<[i32; 3], Vec<u32>> = FxHashMap::default();
         for (i, f) in faces.iter().enumerate() {
@@ -215,36 +249,48 @@ pub fn keep_embedded(
     undone.iter().filter(|&&u| u).count()
 }
 
-/// The moved corners of the boundary faces of `mesh` that, with every point at `position`
-/// (physical), cross another boundary face, among the faces with a corner flagged in
-/// `moved`: the moves of the whole-mesh projection to take back.
+/// The moved corners (flagged in `moved`) of the boundary faces of `mesh` that, with every
+/// point at `position` (physical), cross another boundary face, among the pairs with a face
+/// that has a corner flagged in `changed`: the moves of the whole-mesh projection to take
+/// back. Pairs of faces with no corner in `changed` are not looked at: the first call passes
+/// every move; after moves are taken back, only the faces around those changed.
 pub fn moves_breaking_embedding(
     mesh: &TetMesh,
     ctx: &Ctx,
     position: &[[f64; 3]],
-    moved: &[bool],
+    (moved, changed): (&[bool], &[bool]),
 ) -> Vec<u32> {
-    let faces: Vec<Face> = mesh
-        .boundary
-        .iter()
-        .map(|tri| Face {
-            p: tri.map(|v| ctx.field.to_index(position[v as usize])),
-            ids: tri.map(|v| v as u64),
-            changed_by: if tri.iter().any(|&v| moved[v as usize]) {
-                0
-            } else {
-                u32::MAX
-            },
-        })
-        .collect();
-    let index = Index::new(faces);
-    let mut back: Vec<u32> = (0..index.faces.len())
+    let face = |tri: &[u32; 3]| Face {
+        p: tri.map(|v| ctx.field.to_index(position[v as usize])),
+        ids: tri.map(|v| v as u64),
+        changed_by: 0,
+    };
+    // The changed faces in buckets, and every face looked up in them (in parallel).
+    let near: Vec<u32> = (0..mesh.boundary.len() as u32)
         .into_par_iter()
         .filter(|&i| {
-            let f = &index.faces[i];
-            f.changed_by != u32::MAX && index.crosses_another(i)
+            mesh.boundary[i as usize]
+                .iter()
+                .any(|&v| changed[v as usize])
         })
-        .flat_map_iter(|i| mesh.boundary[i])
+        .collect();
+    let index = Index::new(
+        near.iter()
+            .map(|&i| face(&mesh.boundary[i as usize]))
+            .collect(),
+    );
+    let mut back: Vec<u32> = mesh
+        .boundary
+        .par_iter()
+        .flat_map_iter(|tri| {
+            let g = face(tri);
+            let crossed = index.crossing(&g);
+            let own = (!crossed.is_empty()).then_some(*tri);
+            let others = crossed
+                .into_iter()
+                .map(|j| mesh.boundary[near[j as usize] as usize]);
+            own.into_iter().chain(others).flatten()
+        })
         .filter(|&v| moved[v as usize])
         .collect();
     back.sort_unstable();
