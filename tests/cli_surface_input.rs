@@ -51,18 +51,86 @@ fn a_torus_is_a_solid_ring() {
     assert_eq!(r["dims"][0], 64 + 2 + 6, "{}", r["dims"]);
 }
 
-#[test]
-fn two_spheres_a_few_voxels_apart_stay_two() {
-    let dir = tempfile::tempdir().unwrap();
-    let (mut p, mut t) = sphere([-1.1, 0.0, 0.0], 1.0, 4);
-    let (q, u) = sphere([1.1, 0.0, 0.0], 1.0, 4);
+/// Two unit spheres 0.2 apart (along x), as one soup.
+fn two_spheres(gap: f64) -> common::soup::Soup {
+    let c = 1.0 + 0.5 * gap;
+    let (mut p, mut t) = sphere([-c, 0.0, 0.0], 1.0, 4);
+    let (q, u) = sphere([c, 0.0, 0.0], 1.0, 4);
     let off = p.len() as u32;
     p.extend(q);
     t.extend(u.iter().map(|x| x.map(|i| i + off)));
-    write_stl(&dir.path().join("pair.stl"), &(p, t));
+    (p, t)
+}
+
+#[test]
+fn two_spheres_a_few_voxels_apart_stay_two() {
+    let dir = tempfile::tempdir().unwrap();
+    write_stl(&dir.path().join("pair.stl"), &two_spheres(0.2));
     // 4.2 long in 64 voxels: the gap of 0.2 is three voxels
-    let (r, _) = mesh_checked(dir.path(), "pair.stl", &["--resolution", "64"]);
+    let (r, err) = mesh_checked(dir.path(), "pair.stl", &["--resolution", "64"]);
     assert_eq!(r["betti"], serde_json::json!([2, 0, 0]), "{r}");
+    assert!(!err.contains("warning"), "{err}");
+}
+
+#[test]
+fn spheres_closer_than_a_voxel_merge_with_a_warning_that_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    write_stl(&dir.path().join("pair.stl"), &two_spheres(0.2));
+    // 4.2 long in 12 voxels of 0.35: the gap of 0.2 is less than one
+    let (r, err) = mesh_checked(dir.path(), "pair.stl", &["--resolution", "12"]);
+    assert_eq!(r["betti"], serde_json::json!([1, 0, 0]), "{r}");
+    let line = err
+        .lines()
+        .find(|l| l.contains("closed piece"))
+        .unwrap_or_else(|| panic!("no warning: {err}"));
+    assert!(
+        line.starts_with("tptd-mesh: warning: pair.stl: the surface has 2 closed pieces but the mesh has 1 component and 0 cavities"),
+        "{line}"
+    );
+    assert!(
+        line.contains("closer together than about a voxel merged"),
+        "{line}"
+    );
+    assert!(line.contains("on this grid of voxels 0.35 wide"), "{line}");
+    assert!(line.ends_with("a larger --resolution keeps them"), "{line}");
+    assert!(r["warnings"].to_string().contains("closed pieces"), "{r}");
+    // an offset that joins them is what was asked for: no warning
+    let o = run_in(
+        dir.path(),
+        &[
+            "pair.stl",
+            "--beta",
+            "0.3",
+            "--resolution",
+            "12",
+            "-o",
+            "b.vtu",
+        ],
+    );
+    assert_ok(&o);
+    assert!(!stderr(&o).contains("closed piece"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_self_intersecting_surface_is_meshed_as_the_union_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    // two unit spheres overlapping by half their diameter: their surfaces cross
+    write_obj(&dir.path().join("overlap.obj"), &two_spheres(-1.0));
+    let (r, err) = mesh_checked(dir.path(), "overlap.obj", &["--resolution", "32"]);
+    assert_eq!(r["betti"], serde_json::json!([1, 0, 0]), "{r}");
+    let line = err
+        .lines()
+        .find(|l| l.contains("intersects itself"))
+        .unwrap_or_else(|| panic!("no warning: {err}"));
+    assert!(
+        line.starts_with("tptd-mesh: warning: overlap.obj: the surface intersects itself ("),
+        "{line}"
+    );
+    assert!(!err.contains("closed piece"), "{err}");
+    // the union of two unit balls whose centres are 1 apart: 2 (4/3 pi) - (5/12 pi)
+    let exact = std::f64::consts::PI * (8.0 / 3.0 - 5.0 / 12.0);
+    let v = r["volume"].as_f64().unwrap();
+    assert!((v - exact).abs() < 0.03 * exact, "{v} vs {exact}");
 }
 
 #[test]

@@ -104,18 +104,19 @@ pub fn mesh_file(req: &MeshRequest, progress: &dyn Progress) -> Result<MeshRun, 
     let t_args = secs(t_total);
 
     let t = Instant::now();
-    let (grid, curvilinear) = read::read_input(&job, &reporter)?;
+    let input = read::read_input(&job, &reporter)?;
+    let (grid, curvilinear) = (&input.grid, input.curvilinear.as_ref());
     let t_read = secs(t);
     let t = Instant::now();
     let streaming = memory::streams(&job, curvilinear.is_some());
-    bounds::warn_input(&grid, &job, curvilinear.is_some(), &reporter);
-    memory::check_memory(&grid, &job, streaming)?;
+    bounds::warn_input(grid, &job, curvilinear.is_some(), &reporter);
+    memory::check_memory(grid, &job, streaming)?;
     let t_checks = t_args + secs(t);
 
     let mut w = if streaming {
-        run::stream_to_disk(&job, &grid, &reporter)?
+        run::stream_to_disk(&job, grid, &reporter)?
     } else {
-        run::mesh_in_memory(&job, &grid, curvilinear.as_ref(), &reporter)?
+        run::mesh_in_memory(&job, grid, curvilinear, &reporter)?
     };
     let t_quality = w.t_quality.take();
     let mut timings = Timings {
@@ -133,13 +134,14 @@ pub fn mesh_file(req: &MeshRequest, progress: &dyn Progress) -> Result<MeshRun, 
         total: secs(t_total),
     };
     timings.close();
-    let mut report = report::make_report(&job, &grid, &mut w, timings);
+    let mut report = report::make_report(&job, grid, &mut w, timings);
+    read::warn_sampling(&job, &input, &report, &reporter);
     report.warnings = reporter.take_warnings();
     report::commit(&report, req.report.as_deref(), w.file)?;
     Ok(MeshRun {
         report,
         comparison: w.comparison,
-        grid,
+        grid: input.grid,
         mesh: w.mesh,
     })
 }

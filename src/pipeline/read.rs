@@ -6,6 +6,7 @@ use std::path::Path;
 
 use crate::demo::demo_volume;
 use crate::io::{is_curvilinear, is_surface, read_curvilinear, read_surface, read_volume, TriSoup};
+use crate::report::Report;
 use crate::sdf::{surface_volume_with_progress, SdfError, SurfaceFacts, SurfaceGridOptions};
 use crate::{CurvilinearGrid, ScalarGrid};
 
@@ -13,14 +14,28 @@ use super::progress::{Reporter, StageKind};
 use super::request::Job;
 use super::{Param, ParamNames, PipelineError};
 
+/// The input as read: the volume, and the curvilinear grid or the closed surface's facts it
+/// came from.
+pub(crate) struct Input {
+    /// The values meshed (a curvilinear grid's in parameter space; a surface's signed
+    /// distance).
+    pub(crate) grid: ScalarGrid,
+    /// The curvilinear grid of a `.vts` or `.xyz` input.
+    pub(crate) curvilinear: Option<CurvilinearGrid>,
+    /// What the surface check found on a closed-surface input.
+    pub(crate) surface: Option<SurfaceFacts>,
+}
+
 /// Reads the input volume (a curvilinear grid's values in parameter space, with the grid; a
-/// closed surface's signed distance).
-pub(crate) fn read_input(
-    job: &Job,
-    reporter: &Reporter,
-) -> Result<(ScalarGrid, Option<CurvilinearGrid>), PipelineError> {
+/// closed surface's signed distance, with the surface's facts).
+pub(crate) fn read_input(job: &Job, reporter: &Reporter) -> Result<Input, PipelineError> {
     if job.surface() {
-        return Ok((read_surface_input(job, reporter)?, None));
+        let (grid, facts) = read_surface_input(job, reporter)?;
+        return Ok(Input {
+            grid,
+            curvilinear: None,
+            surface: Some(facts),
+        });
     }
     let stage = reporter.stage(&format!("reading {}", job.input_name), StageKind::Step);
     let curvilinear = read_curvilinear_input(job)?;
@@ -29,13 +44,43 @@ pub(crate) fn read_input(
         None => read_grid(job.req.input.as_deref(), job.req.spacing, job.req.names)?,
     };
     stage.finish();
-    Ok((grid, curvilinear))
+    Ok(Input {
+        grid,
+        curvilinear,
+        surface: None,
+    })
+}
+
+/// On a closed-surface input meshed as the solid it bounds (no offset, no shell), the warning
+/// when the mesh's components and cavities do not match the surface's pieces
+/// ([`SurfaceFacts::sampling_warning`]).
+pub(crate) fn warn_sampling(job: &Job, input: &Input, report: &Report, reporter: &Reporter) {
+    let (Some(facts), Some(betti)) = (&input.surface, report.betti) else {
+        return;
+    };
+    let solid = job.opts.alpha == f64::NEG_INFINITY && job.opts.beta == 0.0;
+    let on_box = report.boundary_triangles.get("box").copied().unwrap_or(0) > 0;
+    if let (true, false, Some(w)) = (
+        solid,
+        on_box,
+        facts.sampling_warning(betti, input.grid.spacing[0]),
+    ) {
+        let n = job.req.names;
+        let finer = match job.req.surface_grid.voxel_size {
+            Some(_) => format!("a smaller {}", n.of(Param::VoxelSize)),
+            None => format!("a larger {}", n.of(Param::Resolution)),
+        };
+        reporter.warn(format_args!("{}: {w}; {finer} keeps them", job.input_name));
+    }
 }
 
 /// The signed distance of the closed surface of the input (`.obj`, `.stl`, `.ply`) on the
 /// grid of the request, negative inside. What the surface check finds (holes, non-manifold
 /// edges, ...) is warned about, naming the file.
-fn read_surface_input(job: &Job, reporter: &Reporter) -> Result<ScalarGrid, PipelineError> {
+fn read_surface_input(
+    job: &Job,
+    reporter: &Reporter,
+) -> Result<(ScalarGrid, SurfaceFacts), PipelineError> {
     let req = job.req;
     let name = &job.input_name;
     let Some(path) = req.input.as_deref() else {
@@ -55,7 +100,7 @@ fn read_surface_input(job: &Job, reporter: &Reporter) -> Result<ScalarGrid, Pipe
     for w in facts.warnings() {
         reporter.warn(format_args!("{name}: {w}"));
     }
-    Ok(grid)
+    Ok((grid, facts))
 }
 
 /// Samples the signed distance of `soup` (in a pool of the job's threads) as a stage with its

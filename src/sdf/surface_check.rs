@@ -39,6 +39,11 @@ pub struct SurfaceFacts {
     pub volume: f64,
     /// Lower and upper corners of the points' box.
     pub bounds: [[f64; 3]; 2],
+    /// Connected pieces of the surface (triangles joined through shared corners).
+    pub components: usize,
+    /// Pairs of triangles that cross or overlap each other ([`super::self_cross`]): the
+    /// surface intersects itself.
+    pub crossing_pairs: usize,
 }
 
 impl SurfaceFacts {
@@ -47,11 +52,42 @@ impl SurfaceFacts {
         self.closed && self.non_manifold_edges == 0 && self.misoriented_edges == 0
     }
 
+    /// What the solid meshed from a watertight surface that does not cross itself, with
+    /// Betti numbers `betti` on a grid of voxels `voxel` wide, says about the sampling: each
+    /// piece of such a surface bounds a component of the solid or one of its cavities, so
+    /// `b0 + b2` must equal [`SurfaceFacts::components`]; fewer means that pieces closer than
+    /// about a voxel merged (or a part thinner than that vanished), more that a part thinner
+    /// than a voxel broke (a finer grid keeps them). `None` when they agree or the surface is
+    /// not such a surface.
+    pub fn sampling_warning(&self, betti: [usize; 3], voxel: f64) -> Option<String> {
+        let found = betti[0] + betti[2];
+        if !self.is_watertight() || self.crossing_pairs > 0 || found == self.components {
+            return None;
+        }
+        let why = if found < self.components {
+            "pieces of the surface closer together than about a voxel merged, or a part \
+             thinner than that vanished"
+        } else {
+            "a part of the solid thinner than about a voxel broke apart"
+        };
+        Some(format!(
+            "the surface has {} closed piece{} but the mesh has {} component{} and {} \
+             cavit{} (Betti numbers {betti:?}): on this grid of voxels {} wide, {why}",
+            self.components,
+            plural(self.components),
+            betti[0],
+            plural(betti[0]),
+            betti[2],
+            if betti[2] == 1 { "y" } else { "ies" },
+            short(voxel)
+        ))
+    }
+
     /// One line per thing worth a warning (open surface, non-manifold or misoriented edges,
     /// degenerate triangles, inward orientation); empty for a clean closed surface.
     pub fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
-        let s = |n: usize| if n == 1 { "" } else { "s" };
+        let s = plural;
         if self.holes > 0 {
             w.push(format!(
                 "the surface is open: {} hole{} ({} boundary edge{}), the longest boundary {} long; \
@@ -81,6 +117,14 @@ impl SurfaceFacts {
             let n = self.degenerate_triangles;
             w.push(format!("{n} degenerate (zero-area) triangle{}", s(n)));
         }
+        if self.crossing_pairs > 0 {
+            let n = self.crossing_pairs;
+            w.push(format!(
+                "the surface intersects itself ({n} pair{} of triangles cross); the solid is \
+                 where the winding number is at least one half, so overlapping parts are joined",
+                s(n)
+            ));
+        }
         if self.volume < 0.0 {
             w.push(
                 "the triangles face inwards; the surface is read with the opposite orientation"
@@ -88,6 +132,15 @@ impl SurfaceFacts {
             );
         }
         w
+    }
+}
+
+/// `"s"` unless `n` is 1.
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
     }
 }
 
@@ -131,20 +184,23 @@ pub fn check_surface(
         triangles: triangles.len(),
         ..SurfaceFacts::default()
     };
-    measure(points, triangles, &mut facts);
+    let degenerate = measure(points, triangles, &mut facts);
     if facts.degenerate_triangles == triangles.len() {
         return Err(SdfError::Surface(
             "every triangle of the surface has zero area".into(),
         ));
     }
     edges(points, triangles, &mut facts);
+    facts.components = components(points.len(), triangles);
+    facts.crossing_pairs = super::self_cross::crossing_pairs(points, triangles, &degenerate);
     Ok(facts)
 }
 
-/// Area, volume, bounds and degenerate triangles.
-fn measure(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) {
+/// Area, volume, bounds and degenerate triangles; per triangle, whether it is degenerate.
+fn measure(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) -> Vec<bool> {
+    let mut degenerate = vec![false; triangles.len()];
     let mut bounds = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
-    for t in triangles {
+    for (t, flag) in triangles.iter().zip(&mut degenerate) {
         let [a, b, c] = t.map(|i| points[i as usize]);
         for p in [a, b, c] {
             for k in 0..3 {
@@ -158,11 +214,31 @@ fn measure(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) {
         let longest2 = dot(ab, ab).max(dot(ac, ac)).max(dot(sub(c, b), sub(c, b)));
         if twice_area <= 1e-12 * longest2 || t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
             f.degenerate_triangles += 1;
+            *flag = true;
         }
         f.area += 0.5 * twice_area;
         f.volume += dot(a, cross(b, c)) / 6.0;
     }
     f.bounds = bounds;
+    degenerate
+}
+
+/// Connected pieces of the triangles, through shared corners.
+fn components(points: usize, triangles: &[[u32; 3]]) -> usize {
+    let mut uf = UnionFind::new(points);
+    let mut used = vec![false; points];
+    for t in triangles {
+        uf.union(t[0], t[1]);
+        uf.union(t[1], t[2]);
+        t.iter().for_each(|&i| used[i as usize] = true);
+    }
+    let mut roots: Vec<u32> = (0..points as u32)
+        .filter(|&i| used[i as usize])
+        .map(|i| uf.find(i))
+        .collect();
+    roots.sort_unstable();
+    roots.dedup();
+    roots.len()
 }
 
 /// Boundary, non-manifold and misoriented edges, holes and closedness.
@@ -226,6 +302,15 @@ mod tests {
         let f = check_surface(&p, &t).unwrap();
         assert!(f.is_watertight() && f.warnings().is_empty(), "{f:?}");
         assert!((f.volume - 1.0 / 6.0).abs() < 1e-15);
+        assert_eq!((f.components, f.crossing_pairs), (1, 0));
+        assert_eq!(f.sampling_warning([1, 0, 0], 0.1), None);
+        let merged = f.sampling_warning([0, 0, 0], 0.1).unwrap();
+        assert!(
+            merged.contains("1 closed piece but the mesh has 0 components"),
+            "{merged}"
+        );
+        let broke = f.sampling_warning([2, 0, 0], 0.1).unwrap();
+        assert!(broke.contains("broke apart"), "{broke}");
     }
 
     #[test]
