@@ -278,17 +278,9 @@ pub fn split_dipping_diagonal(
         return next;
     }
     let corners: [f64; 8] = std::array::from_fn(|c| pts.val[c]);
-    let g = |t: f64| eval(&corners, [t; 3]);
-    // The sample farthest from the ends' side.
-    let away = if v0 <= alpha { -1.0 } else { 1.0 };
-    let (t, value) = (1..DIP_SAMPLES)
-        .map(|k| k as f64 / DIP_SAMPLES as f64)
-        .map(|t| (t, g(t)))
-        .max_by(|x, y| (away * (v0 - x.1)).total_cmp(&(away * (v0 - y.1))))
-        .expect("samples");
-    if class(value) == class(v0) || value == alpha || value == beta {
+    let Some((t, value)) = dip(|t| eval(&corners, [t; 3]), v0, alpha, beta) else {
         return next;
-    }
+    };
     // The levels the value passes from the ends' side, each with its lower side as the
     // classes have it (at or below alpha; below beta).
     let lower_alpha = |x: f64| x <= alpha;
@@ -314,6 +306,43 @@ pub fn split_dipping_diagonal(
     pts.val[next] = value;
     bisect(tets, 0, 7, next as u8);
     next + 1
+}
+
+/// The sample of the main diagonal (field `g`, ends in the class of `v0`) farthest beyond a
+/// level from the ends' side, if one lies in another class and on no level: the highest
+/// sample when the ends are below, the lowest when above, and from ends inside the band
+/// whichever of the two leaves it by more (a diagonal between two corners just under beta
+/// that rises through it in the middle of the cell dips as much as one that sinks).
+fn dip(g: impl Fn(f64) -> f64, v0: f64, alpha: f64, beta: f64) -> Option<(f64, f64)> {
+    let class = |v: f64| super::plan::class(v, alpha, beta);
+    let samples = (1..DIP_SAMPLES).map(|k| k as f64 / DIP_SAMPLES as f64);
+    let (mut low, mut high) = ((0.0, f64::INFINITY), (0.0, f64::NEG_INFINITY));
+    for t in samples {
+        let v = g(t);
+        if v < low.1 {
+            low = (t, v);
+        }
+        if v > high.1 {
+            high = (t, v);
+        }
+    }
+    let beyond = |(_, v): (f64, f64)| {
+        let passes = class(v) != class(v0) && v != alpha && v != beta;
+        passes.then_some((alpha - v).max(v - beta))
+    };
+    let candidates = match class(v0) {
+        1 => [None, beyond(high).map(|d| (d, high))],
+        2 => [beyond(low).map(|d| (d, low)), None],
+        _ => [
+            beyond(low).map(|d| (d, low)),
+            beyond(high).map(|d| (d, high)),
+        ],
+    };
+    candidates
+        .into_iter()
+        .flatten()
+        .max_by(|x, y| x.0.total_cmp(&y.0))
+        .map(|(_, s)| s)
 }
 
 /// Whether the cycle given by its edges `ring` splits into one non-empty arc of vertices
