@@ -298,7 +298,8 @@ pub fn split_dipping_diagonal(
         })
         .collect();
     for (_, lower) in passed.iter().filter(|p| p.0) {
-        if !splits_into_two_arcs(&ring, |x| lower(pts.val[x as usize])) {
+        let below = |x: u8| lower(pts.val[x as usize]);
+        if !splits_into_two_arcs(&ring, below) && !parts_a_lone_pair(&ring, below, lower(value)) {
             return next;
         }
     }
@@ -343,6 +344,29 @@ fn dip(g: impl Fn(f64) -> f64, v0: f64, alpha: f64, beta: f64) -> Option<(f64, f
         .flatten()
         .max_by(|x, y| x.0.total_cmp(&y.0))
         .map(|(_, s)| s)
+}
+
+/// Whether the diagonal's ring is the six other corners of the cell (the 6-fold split, which
+/// a cell whose corners 0 and 7 are alone on one side of a level gets only with no saddle at
+/// all) and every one of them lies on the side of the split point (`below(x) == side`). The
+/// point is then no regular vertex: it parts the ends, where the 6-fold split joins them
+/// through a tube along the diagonal. The trilinear field parts them too: two components of
+/// one side of a level meet in a cell only at a critical point of the cell, corners, face
+/// saddles and body saddles, of a value between theirs and the level; here every other
+/// corner is beyond the level, a face holds one of the two ends and three corners beyond
+/// the level, so its saddle is beyond them, and a body saddle would have made the cell's
+/// split another (4.1.1 of the paper's case table against 4.1.2).
+fn parts_a_lone_pair(ring: &[[u8; 2]], below: impl Fn(u8) -> bool, side: bool) -> bool {
+    let mut seen = 0u8;
+    for &[x, y] in ring {
+        for v in [x, y] {
+            if !(1..7).contains(&v) || below(v) != side {
+                return false;
+            }
+            seen |= 1 << v;
+        }
+    }
+    seen == 0b0111_1110
 }
 
 /// Whether the cycle given by its edges `ring` splits into one non-empty arc of vertices
