@@ -263,8 +263,11 @@ const DIP_SAMPLES: usize = 16;
 /// layer the field has between them), at the deepest sample, with the trilinear value there.
 /// That value lies outside the ends' range, so the point keeps the topology only where it is
 /// a regular vertex at every level it passes: the diagonal's ring (the other corners of its
-/// tets) must split into one arc below the level and one above. Returns the next free local
-/// id.
+/// tets) must split into one arc below the level and one above. Or where it mends it: a ring
+/// of the six other corners all on the point's side is a cell whose corners 0 and 7 are
+/// alone on their side, which the 6-fold split joins and the trilinear field parts
+/// ([`parts_a_lone_pair`]). Runs before the face diagonals are split, whose points would
+/// stand in the ring. Returns the next free local id.
 pub fn split_dipping_diagonal(
     levels: [f64; 2],
     pts: &mut CellPoints,
@@ -507,6 +510,89 @@ mod tests {
         assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
         let (next, _, tets) = run([151.0, 155.0, 155.0, 140.0, 155.0, 140.0, 140.0, 151.0]);
         assert_eq!((next, tets.len()), (SPLIT0 as usize, 6));
+    }
+
+    /// The 6-fold split of `v` with [`split_dipping_diagonal`] applied.
+    fn dipped(v: [f64; 8], levels: [f64; 2]) -> (usize, CellPoints, Vec<[u8; 4]>) {
+        let mut pts = CellPoints::from_corners(&v);
+        let mut tets = Vec::new();
+        super::super::six::decompose_six(&mut tets);
+        let next = split_dipping_diagonal(levels, &mut pts, &mut tets);
+        (next, pts, tets)
+    }
+
+    /// A cell of a field rough at the voxel scale: corners 0 and 7 just under beta = 0 (inside
+    /// the band) and the main diagonal rising to 0.82 between them. The 6-fold split joined
+    /// the two corners under the level along the diagonal, with triangles 0.66 voxel from the
+    /// level set; the diagonal is split at its peak, above the level, whose ring (1, 3, 2 above,
+    /// 6, 4 below, 5 above) makes it a regular vertex.
+    #[test]
+    fn a_diagonal_rising_through_beta_from_inside_the_band_is_split() {
+        let v = [-0.291, 3.076, 0.754, 1.579, -0.202, 2.121, -0.335, -0.106];
+        let (next, pts, tets) = dipped(v, [f64::NEG_INFINITY, 0.0]);
+        assert_eq!(next, SPLIT0 as usize + 1);
+        let p = SPLIT0 as usize;
+        assert!((pts.pos[p][0] - 0.5).abs() < 0.1 && pts.val[p] > 0.8, "{:?}", pts.val[p]);
+        assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
+        // the same cell seen through alpha from above: the diagonal sinks through it
+        let w = v.map(|x| -x);
+        let (next, pts, _) = dipped(w, [0.0, f64::INFINITY]);
+        assert_eq!(next, SPLIT0 as usize + 1);
+        assert!(pts.val[SPLIT0 as usize] < -0.8);
+    }
+
+    /// A cell of the MNI T1: corners 0 and 7 at 201, just under beta = 201.0135, the other six
+    /// at 202 to 206, no saddle. The trilinear field keeps two caps around the corners (the
+    /// diagonal peaks at 203.1), the 6-fold split joined them by a tube along the diagonal,
+    /// 0.86 voxel from the level set. Split at the peak, the caps part.
+    #[test]
+    fn a_lone_diagonal_pair_with_no_saddle_is_parted() {
+        use crate::geom::signed_volume;
+        let v = [201.0, 206.0, 204.0, 205.0, 202.0, 204.0, 202.0, 201.0];
+        assert_eq!(crate::trilinear::body_saddles(&v).1, 0);
+        let (next, pts, tets) = dipped(v, [151.0135, 201.0135]);
+        assert_eq!(next, SPLIT0 as usize + 1);
+        let p = SPLIT0 as usize;
+        assert!((pts.pos[p][0] - 0.5).abs() < 1e-12 && pts.val[p] > 203.0);
+        // no tet holds both corners: nothing under beta joins them
+        assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
+        let vol = |t: &[u8; 4]| {
+            let q = t.map(|i| pts.pos[i as usize]);
+            signed_volume(q[0], q[1], q[2], q[3])
+        };
+        assert!(tets.iter().all(|t| vol(t) > 0.0));
+        // with one of the six on the pair's side, the ring has two arcs and the point is
+        // regular; with two apart (1 and 6 under beta), it would be a saddle: no split
+        let mut w = v;
+        w[1] = 200.0;
+        w[6] = 200.0;
+        let (next, _, tets) = dipped(w, [151.0135, 201.0135]);
+        assert_eq!((next, tets.len()), (SPLIT0 as usize, 6));
+    }
+
+    /// A cell of a noisy field: corners 0 and 7 above alpha = 0, the diagonal sinking to
+    /// -0.23 between them, and the diagonal of face 5 sagging. Its split point, a tenth of the
+    /// way above alpha, took corner 4's place in the main diagonal's ring (1, 3 above, 2, 6
+    /// below, 4 below, 5 below) and broke its two arcs: the dip stayed, with triangles 0.43
+    /// voxel from the level set. The main diagonal is split first.
+    #[test]
+    fn the_main_diagonal_is_split_before_the_face_diagonals() {
+        use super::super::plan::{plan_cell, Method, Planner};
+        let v = [0.391, 0.112, -1.557, 0.581, -0.479, -0.375, -0.807, 0.306];
+        let grid = crate::grid::ScalarGrid::new([2; 3], v.to_vec()).unwrap();
+        let planner = Planner {
+            grid: &grid,
+            method: Method::Ctd,
+            alpha: 0.0,
+            beta: f64::INFINITY,
+            split_sags: true,
+        };
+        let plan = plan_cell(&planner, [0; 3], &v);
+        assert_eq!((plan.used(), plan.extra), (0, 1 << 5));
+        let mut tets = Vec::new();
+        let (_, pts) = super::super::decompose_cell(&plan, &v, &mut tets);
+        assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
+        super::super::test_util::assert_tiles_cube(&tets, &pts, plan.extra);
     }
 
     #[test]
