@@ -532,7 +532,11 @@ mod tests {
         let (next, pts, tets) = dipped(v, [f64::NEG_INFINITY, 0.0]);
         assert_eq!(next, SPLIT0 as usize + 1);
         let p = SPLIT0 as usize;
-        assert!((pts.pos[p][0] - 0.5).abs() < 0.1 && pts.val[p] > 0.8, "{:?}", pts.val[p]);
+        assert!(
+            (pts.pos[p][0] - 0.5).abs() < 0.1 && pts.val[p] > 0.8,
+            "{:?}",
+            pts.val[p]
+        );
         assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
         // the same cell seen through alpha from above: the diagonal sinks through it
         let w = v.map(|x| -x);
