@@ -523,9 +523,9 @@ mod tests {
 
     /// A cell of a field rough at the voxel scale: corners 0 and 7 just under beta = 0 (inside
     /// the band) and the main diagonal rising to 0.82 between them. The 6-fold split joined
-    /// the two corners under the level along the diagonal, with triangles 0.66 voxel from the
-    /// level set; the diagonal is split at its peak, above the level, whose ring (1, 3, 2 above,
-    /// 6, 4 below, 5 above) makes it a regular vertex.
+    /// the two corners under the level along the diagonal, with triangles whose edge midpoints
+    /// lay up to 0.55 voxel from the level set; the diagonal is split at its peak, above the
+    /// level, whose ring (1, 3, 2 above, 6, 4 below, 5 above) makes it a regular vertex.
     #[test]
     fn a_diagonal_rising_through_beta_from_inside_the_band_is_split() {
         let v = [-0.291, 3.076, 0.754, 1.579, -0.202, 2.121, -0.335, -0.106];
