@@ -134,6 +134,24 @@ fn mc33_ctd_matches_reference() {
     assert_all_correct(Method::Ctd);
 }
 
+/// A cell of the MNI152 T1 whose corners 0 and 7 lie alone under beta with no face or body
+/// saddle: the trilinear field keeps a cap around each corner (the diagonal peaks at 203.1),
+/// the 6-fold split joined them by a tube along the diagonal (the MC33 family above has no
+/// such cell).
+#[test]
+fn a_lone_diagonal_pair_with_no_saddle_keeps_two_caps() {
+    let f = Field::cell([201.0, 206.0, 204.0, 205.0, 202.0, 204.0, 202.0, 201.0]);
+    for beta in [201.3, 201.6] {
+        let want = sampled_betti(&f, 128, f64::NEG_INFINITY, beta);
+        assert_eq!(want, [2, 0, 0]);
+        for method in [Method::Tptd, Method::Ctd] {
+            let mesh = run_mesh(&f, f64::NEG_INFINITY, beta, method, None).unwrap();
+            let errs = verify(&f, f64::NEG_INFINITY, beta, &mesh, Some(want));
+            assert!(errs.is_empty(), "{method:?} at {beta}: {errs:?}");
+        }
+    }
+}
+
 #[test]
 fn six_fold_gets_some_wrong_and_five_fold_is_reported() {
     let (fails6, compared, _) = run_all(Method::Six);

@@ -159,10 +159,17 @@ pub fn decompose_cell(
     (case, pts)
 }
 
-/// Bisects the sagging face diagonals the plan names, then the sagging edges inside the cell
-/// (see [`sag`]).
+/// Splits the main diagonal where it dips through a level, then bisects the sagging face
+/// diagonals the plan names, then the sagging edges inside the cell (see [`sag`]). The
+/// diagonal goes first: whether its split keeps the topology is read off the corners around
+/// it, and a face diagonal's split point, a tenth of the band from a level, would stand among
+/// them on the wrong side of it.
 #[inline]
 fn split_sagging_edges(plan: &CellPlan, pts: &mut CellPoints, out: &mut Vec<[u8; 4]>) {
+    let first = match plan.split_levels {
+        Some(levels) => sag::split_dipping_diagonal(levels, pts, out),
+        None => SPLIT0 as usize,
+    };
     for f in 0..6 {
         if plan.extra & (1 << f) == 0 {
             continue;
@@ -174,7 +181,6 @@ fn split_sagging_edges(plan: &CellPlan, pts: &mut CellPoints, out: &mut Vec<[u8;
         sag::bisect(out, fc[0] as u8, fc[2] as u8, face_id(f));
     }
     if let Some(levels) = plan.split_levels {
-        let first = sag::split_dipping_diagonal(levels, pts, out);
         sag::split_inner_edges(levels, pts, out, first);
     }
 }

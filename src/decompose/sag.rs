@@ -263,8 +263,11 @@ const DIP_SAMPLES: usize = 16;
 /// layer the field has between them), at the deepest sample, with the trilinear value there.
 /// That value lies outside the ends' range, so the point keeps the topology only where it is
 /// a regular vertex at every level it passes: the diagonal's ring (the other corners of its
-/// tets) must split into one arc below the level and one above. Returns the next free local
-/// id.
+/// tets) must split into one arc below the level and one above. Or where it mends it: a ring
+/// of the six other corners all on the point's side is a cell whose corners 0 and 7 are
+/// alone on their side, which the 6-fold split joins and the trilinear field parts
+/// ([`parts_a_lone_pair`]). Runs before the face diagonals are split, whose points would
+/// stand in the ring. Returns the next free local id.
 pub fn split_dipping_diagonal(
     levels: [f64; 2],
     pts: &mut CellPoints,
@@ -278,17 +281,9 @@ pub fn split_dipping_diagonal(
         return next;
     }
     let corners: [f64; 8] = std::array::from_fn(|c| pts.val[c]);
-    let g = |t: f64| eval(&corners, [t; 3]);
-    // The sample farthest from the ends' side.
-    let away = if v0 <= alpha { -1.0 } else { 1.0 };
-    let (t, value) = (1..DIP_SAMPLES)
-        .map(|k| k as f64 / DIP_SAMPLES as f64)
-        .map(|t| (t, g(t)))
-        .max_by(|x, y| (away * (v0 - x.1)).total_cmp(&(away * (v0 - y.1))))
-        .expect("samples");
-    if class(value) == class(v0) || value == alpha || value == beta {
+    let Some((t, value)) = dip(|t| eval(&corners, [t; 3]), v0, alpha, beta) else {
         return next;
-    }
+    };
     // The levels the value passes from the ends' side, each with its lower side as the
     // classes have it (at or below alpha; below beta).
     let lower_alpha = |x: f64| x <= alpha;
@@ -306,7 +301,8 @@ pub fn split_dipping_diagonal(
         })
         .collect();
     for (_, lower) in passed.iter().filter(|p| p.0) {
-        if !splits_into_two_arcs(&ring, |x| lower(pts.val[x as usize])) {
+        let below = |x: u8| lower(pts.val[x as usize]);
+        if !splits_into_two_arcs(&ring, below) && !parts_a_lone_pair(&ring, below, lower(value)) {
             return next;
         }
     }
@@ -314,6 +310,66 @@ pub fn split_dipping_diagonal(
     pts.val[next] = value;
     bisect(tets, 0, 7, next as u8);
     next + 1
+}
+
+/// The sample of the main diagonal (field `g`, ends in the class of `v0`) farthest beyond a
+/// level from the ends' side, if one lies in another class and on no level: the highest
+/// sample when the ends are below, the lowest when above, and from ends inside the band
+/// whichever of the two leaves it by more (a diagonal between two corners just under beta
+/// that rises through it in the middle of the cell dips as much as one that sinks).
+fn dip(g: impl Fn(f64) -> f64, v0: f64, alpha: f64, beta: f64) -> Option<(f64, f64)> {
+    let class = |v: f64| super::plan::class(v, alpha, beta);
+    let samples = (1..DIP_SAMPLES).map(|k| k as f64 / DIP_SAMPLES as f64);
+    let (mut low, mut high) = ((0.0, f64::INFINITY), (0.0, f64::NEG_INFINITY));
+    for t in samples {
+        let v = g(t);
+        if v < low.1 {
+            low = (t, v);
+        }
+        if v > high.1 {
+            high = (t, v);
+        }
+    }
+    let beyond = |(_, v): (f64, f64)| {
+        let passes = class(v) != class(v0) && v != alpha && v != beta;
+        passes.then_some((alpha - v).max(v - beta))
+    };
+    let candidates = match class(v0) {
+        1 => [None, beyond(high).map(|d| (d, high))],
+        2 => [beyond(low).map(|d| (d, low)), None],
+        _ => [
+            beyond(low).map(|d| (d, low)),
+            beyond(high).map(|d| (d, high)),
+        ],
+    };
+    candidates
+        .into_iter()
+        .flatten()
+        .max_by(|x, y| x.0.total_cmp(&y.0))
+        .map(|(_, s)| s)
+}
+
+/// Whether the diagonal's ring is the six other corners of the cell (the 6-fold split, which
+/// a cell whose corners 0 and 7 are alone on one side of a level gets only with no saddle at
+/// all) and every one of them lies on the side of the split point (`below(x) == side`). The
+/// point is then no regular vertex: it parts the ends, where the 6-fold split joins them
+/// through a tube along the diagonal. The trilinear field parts them too: two components of
+/// one side of a level meet in a cell only at a critical point of the cell, corners, face
+/// saddles and body saddles, of a value between theirs and the level; here every other
+/// corner is beyond the level, a face holds one of the two ends and three corners beyond
+/// the level, so its saddle is beyond them, and a body saddle would have made the cell's
+/// split another (4.1.1 of the paper's case table against 4.1.2).
+fn parts_a_lone_pair(ring: &[[u8; 2]], below: impl Fn(u8) -> bool, side: bool) -> bool {
+    let mut seen = 0u8;
+    for &[x, y] in ring {
+        for v in [x, y] {
+            if !(1..7).contains(&v) || below(v) != side {
+                return false;
+            }
+            seen |= 1 << v;
+        }
+    }
+    seen == 0b0111_1110
 }
 
 /// Whether the cycle given by its edges `ring` splits into one non-empty arc of vertices
@@ -454,6 +510,93 @@ mod tests {
         assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
         let (next, _, tets) = run([151.0, 155.0, 155.0, 140.0, 155.0, 140.0, 140.0, 151.0]);
         assert_eq!((next, tets.len()), (SPLIT0 as usize, 6));
+    }
+
+    /// The 6-fold split of `v` with [`split_dipping_diagonal`] applied.
+    fn dipped(v: [f64; 8], levels: [f64; 2]) -> (usize, CellPoints, Vec<[u8; 4]>) {
+        let mut pts = CellPoints::from_corners(&v);
+        let mut tets = Vec::new();
+        super::super::six::decompose_six(&mut tets);
+        let next = split_dipping_diagonal(levels, &mut pts, &mut tets);
+        (next, pts, tets)
+    }
+
+    /// A cell of a field rough at the voxel scale: corners 0 and 7 just under beta = 0 (inside
+    /// the band) and the main diagonal rising to 0.82 between them. The 6-fold split joined
+    /// the two corners under the level along the diagonal, with triangles whose edge midpoints
+    /// lay up to 0.55 voxel from the level set; the diagonal is split at its peak, above the
+    /// level, whose ring (1, 3, 2 above, 6, 4 below, 5 above) makes it a regular vertex.
+    #[test]
+    fn a_diagonal_rising_through_beta_from_inside_the_band_is_split() {
+        let v = [-0.291, 3.076, 0.754, 1.579, -0.202, 2.121, -0.335, -0.106];
+        let (next, pts, tets) = dipped(v, [f64::NEG_INFINITY, 0.0]);
+        assert_eq!(next, SPLIT0 as usize + 1);
+        let p = SPLIT0 as usize;
+        assert!(
+            (pts.pos[p][0] - 0.5).abs() < 0.1 && pts.val[p] > 0.8,
+            "{:?}",
+            pts.val[p]
+        );
+        assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
+        // the same cell seen through alpha from above: the diagonal sinks through it
+        let w = v.map(|x| -x);
+        let (next, pts, _) = dipped(w, [0.0, f64::INFINITY]);
+        assert_eq!(next, SPLIT0 as usize + 1);
+        assert!(pts.val[SPLIT0 as usize] < -0.8);
+    }
+
+    /// A cell of the MNI T1: corners 0 and 7 at 201, just under beta = 201.0135, the other six
+    /// at 202 to 206, no saddle. The trilinear field keeps two caps around the corners (the
+    /// diagonal peaks at 203.1), the 6-fold split joined them by a tube along the diagonal,
+    /// 0.86 voxel from the level set. Split at the peak, the caps part.
+    #[test]
+    fn a_lone_diagonal_pair_with_no_saddle_is_parted() {
+        use crate::geom::signed_volume;
+        let v = [201.0, 206.0, 204.0, 205.0, 202.0, 204.0, 202.0, 201.0];
+        assert_eq!(crate::trilinear::body_saddles(&v).1, 0);
+        let (next, pts, tets) = dipped(v, [151.0135, 201.0135]);
+        assert_eq!(next, SPLIT0 as usize + 1);
+        let p = SPLIT0 as usize;
+        assert!((pts.pos[p][0] - 0.5).abs() < 1e-12 && pts.val[p] > 203.0);
+        // no tet holds both corners: nothing under beta joins them
+        assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
+        let vol = |t: &[u8; 4]| {
+            let q = t.map(|i| pts.pos[i as usize]);
+            signed_volume(q[0], q[1], q[2], q[3])
+        };
+        assert!(tets.iter().all(|t| vol(t) > 0.0));
+        // with one of the six on the pair's side, the ring has two arcs and the point is
+        // regular; with two apart (1 and 6 under beta), it would be a saddle: no split
+        let mut w = v;
+        w[1] = 200.0;
+        w[6] = 200.0;
+        let (next, _, tets) = dipped(w, [151.0135, 201.0135]);
+        assert_eq!((next, tets.len()), (SPLIT0 as usize, 6));
+    }
+
+    /// A cell of a noisy field: corners 0 and 7 above alpha = 0, the diagonal sinking to
+    /// -0.23 between them, and the diagonal of face 5 sagging. Its split point, a tenth of the
+    /// way above alpha, took corner 4's place in the main diagonal's ring (1, 3 above, 2, 6
+    /// below, 4 below, 5 below) and broke its two arcs: the dip stayed, with triangles 0.43
+    /// voxel from the level set. The main diagonal is split first.
+    #[test]
+    fn the_main_diagonal_is_split_before_the_face_diagonals() {
+        use super::super::plan::{plan_cell, Method, Planner};
+        let v = [0.391, 0.112, -1.557, 0.581, -0.479, -0.375, -0.807, 0.306];
+        let grid = crate::grid::ScalarGrid::new([2; 3], v.to_vec()).unwrap();
+        let planner = Planner {
+            grid: &grid,
+            method: Method::Ctd,
+            alpha: 0.0,
+            beta: f64::INFINITY,
+            split_sags: true,
+        };
+        let plan = plan_cell(&planner, [0; 3], &v);
+        assert_eq!((plan.used(), plan.extra), (0, 1 << 5));
+        let mut tets = Vec::new();
+        let (_, pts) = super::super::decompose_cell(&plan, &v, &mut tets);
+        assert!(!tets.iter().any(|t| t.contains(&0) && t.contains(&7)));
+        super::super::test_util::assert_tiles_cube(&tets, &pts, plan.extra);
     }
 
     #[test]
