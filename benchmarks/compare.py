@@ -15,7 +15,8 @@ shell, seeded random field, MNI152 white-matter crop) at --size (default 48^3; t
 
 Tools, each a fresh child process under a time limit (a crash, failure or timeout is a row,
 never an exception; runs that would start after --budget seconds are recorded `skipped`):
-  ctd            `tptd-mesh VOL [--alpha A] [--beta B] -o ctd.msh`
+  ctd            `tptd-mesh VOL [--alpha A] [--beta B] -o ctd.msh --msh-version 4.1-binary -j 1`
+                 (one thread, like every peer here)
   ctd --quality  the same with --quality
   TetGen         PyPI `tetgen`, switches `pq1.2`, on the boundary of our ctd --quality mesh
                  (the worker of tests/py/compare_peers.py)
@@ -132,28 +133,26 @@ def cgal_worker(vol, prefix, alpha, beta):
 
 
 def write_medit(path, P, T):
-    """Medit ASCII .mesh with vertices and tets only (1-based; MMG builds the boundary)."""
+    """Medit ASCII .mesh with vertices and tets only (1-based; MMG builds the boundary). The
+    format is free (blanks or line ends between numbers): each table is written in one go."""
     with open(path, "w") as f:
         f.write(f"MeshVersionFormatted 2\nDimension 3\nVertices\n{len(P)}\n")
-        np.savetxt(f, np.column_stack([P, np.zeros(len(P))]), fmt="%.17g %.17g %.17g %d")
-        f.write(f"Tetrahedra\n{len(T)}\n")
-        np.savetxt(f, np.column_stack([T + 1, np.ones(len(T), dtype=np.int64)]), fmt="%d")
-        f.write("End\n")
+        np.column_stack([P, np.zeros(len(P))]).tofile(f, sep=" ", format="%.17g")
+        f.write(f"\nTetrahedra\n{len(T)}\n")
+        np.column_stack([T + 1, np.ones(len(T), dtype=np.int64)]).tofile(f, sep=" ", format="%d")
+        f.write("\nEnd\n")
 
 
-def mmg_worker(msh, prefix):
-    """Our mesh as prefix_in.mesh, then mmg3d_O3 on it (timed) -> prefix.mesh, prefix.seconds."""
-    P, T = q.read_msh_tets(msh)
-    write_medit(prefix + "_in.mesh", P, T)
-    exe = shutil.which(MMG_BIN) or MMG_BIN
-    t0 = time.perf_counter()
-    p = subprocess.run([exe, *MMG_ARGS, "-in", prefix + "_in.mesh", "-out", prefix + ".mesh"])
-    seconds = time.perf_counter() - t0
-    os.remove(prefix + "_in.mesh")
-    if p.returncode != 0 or not os.path.exists(prefix + ".mesh"):
-        sys.exit(f"mmg3d_O3 exit {p.returncode}")
-    with open(prefix + ".seconds", "w") as fs:
-        fs.write(repr(seconds))
+def mmg_binary():
+    """mmgpy's mmg3d_O3 executable (its console script is a Python wrapper: skip that)."""
+    try:
+        import mmgpy
+        exe = os.path.join(os.path.dirname(mmgpy.__file__), "bin", MMG_BIN)
+        if os.path.exists(exe):
+            return exe
+    except ImportError:
+        pass
+    return shutil.which(MMG_BIN) or MMG_BIN
 
 
 # ----------------------------------------------------------------------------
@@ -173,7 +172,7 @@ def run_ours(args, dom):
     del f
     for tool, extra, name in (("ctd", [], "ctd.msh"), ("ctd --quality", ["--quality"], "ctd_quality.msh")):
         out = os.path.join(d, name)
-        cmd = [args.bin, vol, *b, "-o", out, "-q", *extra]
+        cmd = [args.bin, vol, *b, "-o", out, "--msh-version", "4.1-binary", "-j", "1", "-q", *extra]
         r = q.run_child(cmd, out[:-4], args.ours_timeout)
         row = {"tool": tool, "command": " ".join(cmd), **r}
         dom["rows"].append(row)
@@ -210,8 +209,9 @@ def run_ours(args, dom):
                         "-" if alpha is None else repr(alpha), "-" if beta is None else repr(beta)],
         os.path.join(d, "cgal"), ".node")
     if "ctd" in ok:
-        job("MMG3D -optim", [sys.executable, me, "--worker", "mmg", ok["ctd"], os.path.join(d, "mmg")],
-            os.path.join(d, "mmg"), ".mesh")
+        write_medit(os.path.join(d, "ctd.mesh"), *q.read_msh_tets(ok["ctd"]))
+        job("MMG3D -optim", [mmg_binary(), *MMG_ARGS, "-in", os.path.join(d, "ctd.mesh"),
+                             "-out", os.path.join(d, "mmg.mesh")], os.path.join(d, "mmg"), ".mesh")
     else:
         job("MMG3D -optim", [], None, None, pending="no plain ctd mesh to optimise")
     print(f"[compare] {dom['name']}: ours done ({', '.join(r['status'] for r in dom['rows'][:2])})", flush=True)
@@ -229,11 +229,29 @@ def run_peer(args, job, t_start):
             os.remove(old)
     row.update(q.run_child(cmd, prefix, limit, cwd=d))
     row["limit"] = limit
+    if row["status"] in ("failed", "crash"):
+        row["detail"] = last_error(prefix) or row["detail"]
     if row["status"] == "ok":
-        with open(prefix + ".seconds") as fs:
-            row["process_wall"], row["wall"] = row["wall"], float(fs.read())
+        if os.path.exists(prefix + ".seconds"):     # the library call's own time (workers)
+            with open(prefix + ".seconds") as fs:
+                row["process_wall"], row["wall"] = row["wall"], float(fs.read())
         row["mesh"] = prefix + ext
     print(f"[compare] {os.path.basename(d)}: {row['tool']} {row['status']} {row['wall']:.1f} s", flush=True)
+
+
+def last_error(prefix):
+    """The last meaningful line a failed child wrote (a Python exception's message, TetGen's
+    or MMG's last words)."""
+    for ext in (".stderr", ".stdout"):
+        try:
+            with open(prefix + ext, errors="replace") as f:
+                lines = [l.strip() for l in f.read()[-20000:].splitlines() if l.strip()]
+        except OSError:
+            continue
+        lines = [l for l in lines if not l.startswith(("File ", "^", "~"))]
+        if lines:
+            return lines[-1][:200]
+    return None
 
 
 def finish(args, dom):
@@ -285,7 +303,7 @@ def fmt_dist(x):
 
 def savefig(fig, folder, name):
     import matplotlib.pyplot as plt
-    fig.savefig(os.path.join(folder, name), dpi=72)
+    fig.savefig(os.path.join(folder, name), dpi=90)
     plt.close(fig)
     return name
 
@@ -303,9 +321,9 @@ def plot_dihedral(folder, dom):
         ax.set_xlim(0, 180)
         ax.set_xticks([0, 60, 120, 180])
         ax.set_title(f"{r['tool']}\nmin {r['min']:.1f}°, max {r['max']:.1f}°", fontsize=7)
-        ax.tick_params(labelsize=6)
-        ax.set_xlabel("dihedral (°)", fontsize=6)
-    axes[0][0].set_ylabel("% of angles", fontsize=6)
+        ax.tick_params(labelsize=7)
+        ax.set_xlabel("dihedral (°)", fontsize=7)
+    axes[0][0].set_ylabel("% of angles", fontsize=7)
     fig.suptitle(dom["name"], fontsize=8)
     fig.tight_layout()
     return savefig(fig, folder, f"dihedral_{dom['name']}.png")
@@ -328,8 +346,8 @@ def grouped_bars(ax, doms, value, log=False, hline=None):
         if miss:
             ax.plot(miss, [ax.get_ylim()[0] if not log else 1.0] * len(miss), "x", color=COLORS[tool], ms=4)
     ax.set_xticks(range(len(doms)))
-    ax.set_xticklabels([d["name"] for d in doms], rotation=30, ha="right", fontsize=6)
-    ax.tick_params(axis="y", labelsize=6)
+    ax.set_xticklabels([d["name"] for d in doms], rotation=30, ha="right", fontsize=7)
+    ax.tick_params(axis="y", labelsize=7)
     if log:
         ax.set_yscale("log")
     if hline is not None:
@@ -341,7 +359,7 @@ def plot_counts_times(folder, doms):
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 5.2))
     grouped_bars(a1, doms, lambda r, d: r.get("tets") if r.get("status") == "ok" else None, log=True)
     a1.set_ylabel("tets", fontsize=7)
-    a1.legend(fontsize=6, ncol=6, loc="upper left")
+    a1.legend(fontsize=7, ncol=6, loc="upper left")
     grouped_bars(a2, doms, lambda r, d: r.get("wall") if r.get("status") == "ok" else None, log=True)
     a2.set_ylabel("time (s; x = no mesh)", fontsize=7)
     fig.tight_layout()
@@ -361,14 +379,16 @@ def plot_betti(folder, doms):
                                           {"ok": "n/m"}.get(r.get("status"), r.get("status", "?")[:7]))
             if e is not None:
                 m[i, j] = e
-            ax.text(j, i, txt, ha="center", va="center", fontsize=6)
-    ax.imshow(np.log1p(m), cmap="Reds", vmin=0, vmax=np.log1p(50), aspect="auto")
+            ax.text(j, i, txt, ha="center", va="center", fontsize=7)
+    cmap = plt.get_cmap("Reds").copy()
+    cmap.set_bad("#dddddd")
+    ax.imshow(np.ma.masked_invalid(np.log1p(m)), cmap=cmap, vmin=0, vmax=np.log1p(50), aspect="auto")
     ax.set_xticks(range(len(TOOLS)))
-    ax.set_xticklabels(TOOLS, fontsize=6, rotation=20, ha="right")
+    ax.set_xticklabels(TOOLS, fontsize=7, rotation=20, ha="right")
     ax.set_yticks(range(len(doms)))
-    ax.set_yticklabels([d["name"] for d in doms], fontsize=6)
-    ax.set_title("Betti-number error sum |b_i - b_i(trilinear)|  (n/m: boundary not a closed "
-                 "manifold; timeout/failed/skipped: no mesh)", fontsize=6)
+    ax.set_yticklabels([d["name"] for d in doms], fontsize=7)
+    ax.set_title("Betti-number error: sum |b_i - b_i(trilinear)|  (grey: no Betti numbers; n/m: "
+                 "boundary not a closed manifold)", fontsize=7)
     fig.tight_layout()
     return savefig(fig, folder, "betti_errors.png")
 
@@ -380,7 +400,7 @@ def plot_level(folder, doms):
                  hline=0.5)
     ax.set_ylabel("max boundary distance\nto the level set (voxels)", fontsize=7)
     ax.set_ylim(0, 2.6)
-    ax.legend(fontsize=6, ncol=6, loc="upper left")
+    ax.legend(fontsize=7, ncol=6, loc="upper left")
     fig.tight_layout()
     return savefig(fig, folder, "level_distance.png")
 
@@ -419,11 +439,13 @@ def table(dom):
     lines = ["| tool | status | tets | time (s) | min ° | max ° | valid | Betti (ref " +
              ("–" if ref is None else ",".join(map(str, ref))) + ") | max level dist. (vox) | problems |",
              "|---|---|---:|---:|---:|---:|---|---|---:|---|"]
+    # n/m: the boundary is not a closed manifold, so the checker gives no Betti numbers
     for r in dom["rows"]:
         st = r.get("status", "?")
         if st not in ("ok",):
             st = f"**{st}**" + (f" ({r['detail'][:80]})" if r.get("detail") else "")
-        betti = "–" if r.get("betti") is None else ",".join(map(str, r["betti"]))
+        betti = ("n/m" if r.get("valid") is not None else "–") if r.get("betti") is None else \
+            ",".join(map(str, r["betti"]))
         if r.get("matches_reference") is True:
             betti += " ✓"
         elif r.get("matches_reference") is False:
@@ -501,7 +523,7 @@ def render(args, payload, plots):
          f"{'' if payload['loadavg_start'][0] > 1.5 or payload['loadavg_end'][0] > 2.5 else ' at times'}). "
          "Compare times only as ratios within this run.",
          f"- Versions: tetgen (PyPI) {m['tetgen']}, pytetwild {m['pytetwild']}, mmgpy {m['mmgpy']} (mmg3d_O3), "
-         f"pygalmesh {m['pygalmesh']} (Debian python3-pygalmesh {m['python3_pygalmesh']}, CGAL statically inside), Python {m['python']}.",
+         f"pygalmesh {m['pygalmesh']} (Debian 12 python3-pygalmesh {m['python3_pygalmesh']}, built with CGAL 5.5 headers), Python {m['python']}.",
          f"- Sizes: the analytic domains at {args.size}³ and the MNI crops at {args.mni_crop}³ (the test "
          "tests/py/compare_peers.py uses 20³–24³); the whole MNI volumes at 197×233×189. "
          f"Per-run limits: ours {args.ours_timeout:g} s, peers {args.peer_timeout:g} s on the grids and "
@@ -509,7 +531,8 @@ def render(args, payload, plots):
          f"{args.budget:g} s are `skipped`. The sizes and limits keep the whole run near 30 minutes on "
          "this machine; at these limits TetGen and fTetWild finish the grids and crops, "
          "and most peers do not finish the whole volumes (see the tables).",
-         "- Tools: `ctd` and `ctd --quality` (`tptd-mesh VOL [--alpha A] [--beta B] -o M.msh [--quality]`); "
+         "- Tools: `ctd` and `ctd --quality` (`tptd-mesh VOL [--alpha A] [--beta B] -o M.msh --msh-version "
+         "4.1-binary -j 1 [--quality]`: one thread, like every peer here); "
          f"TetGen `-{TETGEN_SWITCHES}` and fTetWild (`edge_length_abs={cp.FTETWILD_EDGE:g}`, "
          f"`epsilon={cp.FTETWILD_EPSILON:g}`, optimize) on the boundary surface of our `ctd --quality` "
          "mesh (with a hole point per cavity), so their topology starts from ours; CGAL Mesh_3 "
@@ -571,6 +594,17 @@ def notes(doms):
                    "the quality pass brings them back.")
     else:
         out.append("- Plain `ctd` stayed within 0.5 voxel of the level sets on every domain of this run.")
+    cg_out = [d["name"] for d in doms for r in d["rows"] if r["tool"] == "CGAL Mesh_3"
+              and any(p.startswith("outside_grid") for p in r.get("problems") or [])]
+    if cg_out:
+        out.append(f"- CGAL closes the domain where it meets the image border about half a voxel outside the "
+                   f"grid box (it pads the label image with label 0), so the checker reports `outside_grid` "
+                   f"on {', '.join(cg_out)}; ours ends at the grid box. Its level distance is then not "
+                   "measured (–).")
+    nm = sorted({d["name"] for d in doms for r in d["rows"] if r.get("valid") is False and r.get("betti") is None})
+    if nm:
+        out.append(f"- `n/m` in the Betti column: the boundary is not a closed manifold (non-manifold edges or "
+                   f"vertices), so the mesh has no Betti numbers to compare; measured on {', '.join(nm)}.")
     out += ["- TetGen and fTetWild mesh our own boundary surface, so their Betti numbers mostly inherit "
             "ours; a marching-cubes surface instead (tests/py/compare_peers.py runs both) changes the "
             "topology on the near-touching and thin domains.",
@@ -615,7 +649,7 @@ def main():
     args = parse_args()
     if args.worker:
         kind, *rest = args.worker
-        return {"cgal": cgal_worker, "mmg": mmg_worker}[kind](*rest)
+        return {"cgal": cgal_worker}[kind](*rest)
     command = "python3 benchmarks/compare.py" + "".join(f" {a}" for a in sys.argv[1:])
     if args.quick:
         args.size, args.mni_crop, args.no_full = 24, 24, True
