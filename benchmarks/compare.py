@@ -176,6 +176,21 @@ def boundary_from_file(msh):
 
 
 def run_ours(args, dom):
+    """run_domain, with a Python error in this script recorded in the domain's rows (the
+    other domains go on)."""
+    try:
+        return run_domain(args, dom)
+    except Exception as e:      # noqa: BLE001  (one domain's error must not end the report)
+        dom.setdefault("rows", []).append({"tool": "compare.py", "status": "error", "wall": 0.0,
+                                           "detail": f"{type(e).__name__}: {e}"[:300]})
+        for k, v in (("shape", []), ("dtype", "?"), ("alpha", None), ("beta", None), ("note", "error"),
+                     ("bounds", []), ("meshes", []), ("jobs", []), ("vol", os.path.join(args.work, dom["name"]))):
+            dom.setdefault(k, v)
+        print(f"[compare] {dom['name']}: ERROR {e}", flush=True)
+        return dom
+
+
+def run_domain(args, dom):
     """ctd and ctd --quality on one domain; then the surface and the peer jobs."""
     f, alpha, beta, note = dom["build"]()
     d = os.path.join(args.work, dom["name"])
@@ -274,7 +289,9 @@ def finish(args, dom):
     """Runs our checker on every mesh of the domain (compare_peers.inspect)."""
     meshes = dom.pop("meshes") + [(row, row["mesh"]) for row, *_ in dom.pop("jobs") if row.get("status") == "ok"]
     t0 = time.perf_counter()
-    dom["reference_betti"] = cp.inspect(args, os.path.dirname(dom["vol"]), dom["vol"], dom["bounds"], meshes)
+    dom["reference_betti"] = None
+    if meshes:
+        dom["reference_betti"] = cp.inspect(args, os.path.dirname(dom["vol"]), dom["vol"], dom["bounds"], meshes)
     dom["inspect_seconds"] = time.perf_counter() - t0
     for r in dom["rows"]:
         r.pop("mesh", None)
@@ -645,7 +662,7 @@ def parse_args():
     ap.add_argument("--peer-timeout", type=float, default=120.0, help="per peer run on grids and crops (s)")
     ap.add_argument("--full-peer-timeout", type=float, default=90.0, help="per peer run on whole volumes (s)")
     ap.add_argument("--ours-timeout", type=float, default=600.0, help="per tptd-mesh run (s)")
-    ap.add_argument("--budget", type=float, default=1500.0,
+    ap.add_argument("--budget", type=float, default=1800.0,
                     help="peer runs that would start later than this (s from the start) are skipped")
     ap.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2)")
     ap.add_argument("--report-dir", default=None, help="report folder (default benchmarks/report)")
