@@ -497,54 +497,86 @@ def md(s):
 
 
 def per_tool_summary(doms):
-    """Per tool: meshes made, Betti errors, invalid meshes, min-angle range, timeouts."""
+    """Per tool: runs, meshes made, meshes valid with the reference Betti numbers, Betti
+    numbers wrong, none (boundary not a closed manifold), invalid, boundary beyond 0.5 voxel,
+    the range of the per-domain smallest angle, and the domains without a mesh by status."""
     out = []
     for tool in TOOLS:
         rows = [(d, r) for d in doms for r in d["rows"] if r["tool"] == tool]
         ok = [(d, r) for d, r in rows if r.get("status") == "ok" and r.get("tets") is not None]
-        wrong = [d["name"] for d, r in ok if r.get("matches_reference") is False]
-        invalid = [d["name"] for d, r in ok if r.get("valid") is False]
-        far = [d["name"] for d, r in ok if (level_distance(r) or 0) > 0.5]
         mins = [r["min"] for _, r in ok if r.get("min") is not None]
         bad = {}
         for d, r in rows:
             if r.get("status") != "ok":
                 bad.setdefault(r.get("status", "?"), []).append(d["name"])
-        out.append({"tool": tool, "runs": len(rows), "meshes": len(ok), "betti_wrong": wrong, "invalid": invalid,
-                    "level_over_half": far, "min_lo": min(mins) if mins else None,
-                    "min_hi": max(mins) if mins else None, "not_ok": bad})
+        out.append({"tool": tool, "runs": len(rows), "meshes": len(ok),
+                    "good": [d["name"] for d, r in ok if r.get("valid") and r.get("matches_reference")],
+                    "betti_wrong": [d["name"] for d, r in ok if r.get("betti") is not None
+                                    and r.get("matches_reference") is False],
+                    "no_betti": [d["name"] for d, r in ok if r.get("betti") is None],
+                    "invalid": [d["name"] for d, r in ok if r.get("valid") is False],
+                    "level_over_half": [d["name"] for d, r in ok if (level_distance(r) or 0) > 0.5],
+                    "min_lo": min(mins) if mins else None, "min_hi": max(mins) if mins else None,
+                    "not_ok": bad})
     return out
 
 
+def summary_table(summary):
+    def names(v):
+        return f"{len(v)}" + (f" ({', '.join(v)})" if v else "")
+    lines = ["| tool | meshes / runs | valid, reference Betti | Betti wrong | no Betti (n/m) | invalid | "
+             "beyond 0.5 vox | smallest angle per domain | no mesh |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for s in summary:
+        rng = "–" if s["min_lo"] is None else f"{s['min_lo']:.1f}°–{s['min_hi']:.1f}°"
+        nots = "; ".join(f"{k}: {', '.join(v)}" for k, v in s["not_ok"].items()) or "–"
+        lines.append(f"| {s['tool']} | {s['meshes']} / {s['runs']} | {len(s['good'])} | {names(s['betti_wrong'])} | "
+                     f"{names(s['no_betti'])} | {names(s['invalid'])} | {names(s['level_over_half'])} | {rng} | "
+                     f"{nots} |")
+    return lines
+
+
 def comparisons(doms):
-    """Where a peer beats ctd --quality on the smallest angle or on the element count (same
-    domain, both meshes made); where ours has the reference topology and the peer not."""
+    """Per peer against ctd --quality on the domains where both made a mesh: where the peer
+    has the larger smallest angle, fewer tets, the right topology where ours is wrong (and
+    the reverse), and its time as a multiple of ours (same run, same machine)."""
     lines = []
     for tool in TOOLS[2:]:
-        angle, fewer, topo_ours, topo_theirs = [], [], [], []
+        angle, fewer, topo_ours, topo_theirs, ratios, both = [], [], [], [], [], 0
         for d in doms:
             ours = next((r for r in d["rows"] if r["tool"] == "ctd --quality"), {})
             r = next((r for r in d["rows"] if r["tool"] == tool), {})
             if ours.get("tets") is None or r.get("tets") is None:
                 continue
+            both += 1
             if r["min"] > ours["min"]:
                 angle.append(f"{d['name']} ({r['min']:.1f}° vs {ours['min']:.1f}°)")
             if r["tets"] < ours["tets"]:
                 fewer.append(f"{d['name']} ({r['tets']:,} vs {ours['tets']:,})")
-            if ours.get("matches_reference") and r.get("matches_reference") is False:
+            good = lambda x: x.get("matches_reference") is True and x.get("valid") is True  # noqa: E731
+            if good(ours) and not good(r):
                 topo_ours.append(d["name"])
-            if r.get("matches_reference") and ours.get("matches_reference") is False:
+            if good(r) and not good(ours):
                 topo_theirs.append(d["name"])
-        lines.append(f"- **{tool}** vs ctd --quality — larger smallest angle on: "
-                     f"{', '.join(angle) or 'none'}; fewer tets on: {', '.join(fewer) or 'none'}; "
-                     f"wrong topology where ours is right: {', '.join(topo_ours) or 'none'}; "
-                     f"right topology where ours is wrong: {', '.join(topo_theirs) or 'none'}.")
+            if ours.get("wall") and r.get("wall"):
+                ratios.append(r["wall"] / ours["wall"])
+        if not both:
+            lines.append(f"- **{tool}**: no domain where both it and ctd --quality made a mesh.")
+            continue
+        rt = (f"time {np.median(ratios):.1f}× ours (median; {min(ratios):.1f}×–{max(ratios):.1f}×)"
+              if ratios else "no times")
+        lines.append(f"- **{tool}** ({both} domains): larger smallest angle on {len(angle)} "
+                     f"({', '.join(angle) or '–'}); fewer tets on {len(fewer)} ({', '.join(fewer) or '–'}); "
+                     f"valid with the reference Betti numbers where ours is not: {', '.join(topo_theirs) or 'none'}; "
+                     f"ours valid with the reference Betti numbers where it is not: {', '.join(topo_ours) or 'none'}; "
+                     f"{rt}.")
     return lines
 
 
-def render(args, payload, plots):
+def render(payload, plots):
     doms = payload["domains"]
     m = payload["machine"]
+    st = payload["settings"]
     L = ["# Peer comparison: tptd-mesh against TetGen, fTetWild, CGAL Mesh_3 and MMG3D", "",
          f"Generated by `{payload['command']}` in {payload['total_seconds'] / 60:.1f} min "
          f"({m['date']}, {m['tptd_mesh']}, commit {m['git_head']}). Do not edit by hand: "
@@ -552,16 +584,16 @@ def render(args, payload, plots):
          "## Setup", "",
          f"- Machine: {m['nproc']}-core {m['cpu']} VM, {m['mem_total']} RAM, {m['uname']}. "
          f"Load average at start {payload['loadavg_start'][0]:.2f}, at the end {payload['loadavg_end'][0]:.2f} "
-         f"(this run used {args.jobs} runs at a time; other work shared the machine"
+         f"(this run used {st['jobs']} runs at a time; other work shared the machine"
          f"{'' if payload['loadavg_start'][0] > 1.5 or payload['loadavg_end'][0] > 2.5 else ' at times'}). "
          "Compare times only as ratios within this run.",
          f"- Versions: tetgen (PyPI) {m['tetgen']}, pytetwild {m['pytetwild']}, mmgpy {m['mmgpy']} (mmg3d_O3), "
          f"pygalmesh {m['pygalmesh']} (Debian 12 python3-pygalmesh {m['python3_pygalmesh']}, built with CGAL 5.5 headers), Python {m['python']}.",
-         f"- Sizes: the analytic domains at {args.size}³ and the MNI crops at {args.mni_crop}³ (the test "
+         f"- Sizes: the analytic domains at {st['size']}³ and the MNI crops at {st['mni_crop']}³ (the test "
          "tests/py/compare_peers.py uses 20³–24³); the whole MNI volumes at 197×233×189. "
-         f"Per-run limits: ours {args.ours_timeout:g} s, peers {args.peer_timeout:g} s on the grids and "
-         f"crops, {args.full_peer_timeout:g} s on the whole volumes; runs that would start after "
-         f"{args.budget:g} s are `skipped`. The sizes and limits keep the whole run near 30 minutes on "
+         f"Per-run limits: ours {st['ours_timeout']:g} s, peers {st['peer_timeout']:g} s on the grids and "
+         f"crops, {st['full_peer_timeout']:g} s on the whole volumes; runs that would start after "
+         f"{st['budget']:g} s are `skipped`. The sizes and limits keep the whole run near 30 minutes on "
          "this machine; at these limits TetGen and fTetWild finish the grids and crops, "
          "and most peers do not finish the whole volumes (see the tables).",
          "- Tools: `ctd` and `ctd --quality` (`tptd-mesh VOL [--alpha A] [--beta B] -o M.msh --msh-version "
@@ -583,15 +615,8 @@ def render(args, payload, plots):
          "labelled by its nearest level). The checker's bound is 0.5 voxel; a distance above it is a "
          "problem (`off_level`), and a point with no level found within 2 voxels shows as \"> 2\".",
          "", "## Summary", ""]
-    for s in payload["summary"]:
-        rng = "–" if s["min_lo"] is None else f"{s['min_lo']:.1f}°–{s['min_hi']:.1f}°"
-        nots = "; ".join(f"{k}: {', '.join(v)}" for k, v in s["not_ok"].items()) or "none"
-        L.append(f"- **{s['tool']}**: {s['meshes']}/{s['runs']} meshes; smallest dihedral angle per domain "
-                 f"{rng}; topology (Betti) wrong on {len(s['betti_wrong'])} "
-                 f"({', '.join(s['betti_wrong']) or '–'}); invalid (checker problems) on {len(s['invalid'])} "
-                 f"({', '.join(s['invalid']) or '–'}); boundary beyond 0.5 voxel of the level set on "
-                 f"{len(s['level_over_half'])} ({', '.join(s['level_over_half']) or '–'}); no mesh: {nots}.")
-    L += ["", "Peers against `ctd --quality`, domain by domain:", ""] + comparisons(doms)
+    L += summary_table(payload["summary"])
+    L += ["", "Peers against `ctd --quality`, domain by domain (both meshes made):", ""] + comparisons(doms)
     L += ["", *payload["notes"], "", "## Plots", ""]
     for title, p in (("Element count and time per tool (log scales)", plots.get("tets_time")),
                      ("Betti-number errors", plots.get("betti")),
@@ -669,6 +694,8 @@ def parse_args():
     ap.add_argument("--work", default=OUT, help="volumes, meshes, logs (default benchmarks/out/compare)")
     ap.add_argument("--quick", action="store_true", help="smoke run: 24^3, torus + two_spheres, no full MNI, "
                     "report to benchmarks/out/compare_quick/report")
+    ap.add_argument("--render-only", action="store_true",
+                    help="rewrite report.md and the plots from --work's results.json, without running")
     ap.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
     return ap.parse_args()
 
@@ -683,6 +710,9 @@ def main():
     if args.worker:
         kind, *rest = args.worker
         return {"cgal": cgal_worker}[kind](*rest)
+    if args.render_only:
+        with open(os.path.join(args.work, "results.json")) as fj:
+            return write_report(json.load(fj), args.report_dir or REPORT)
     command = "python3 benchmarks/compare.py" + "".join(f" {a}" for a in sys.argv[1:])
     if args.quick:
         args.size, args.mni_crop, args.no_full = 24, 24, True
@@ -714,18 +744,24 @@ def main():
                             "budget": args.budget, "jobs": args.jobs, "cgal": CGAL, "mmg": MMG_ARGS,
                             "tetgen": TETGEN_SWITCHES, "ftetwild_edge": cp.FTETWILD_EDGE,
                             "ftetwild_epsilon": cp.FTETWILD_EPSILON}}
-    payload["summary"] = per_tool_summary(doms)
-    payload["notes"] = notes(doms)
-    import matplotlib
-    matplotlib.use("Agg")
-    rd = args.report_dir
-    plots = {d["name"]: plot_dihedral(rd, d) for d in doms}
-    plots.update(tets_time=plot_counts_times(rd, doms), betti=plot_betti(rd, doms), level=plot_level(rd, doms))
     with open(os.path.join(args.work, "results.json"), "w") as fj:
         json.dump(payload, fj, indent=1, default=str)
+    write_report(payload, args.report_dir)
+
+
+def write_report(payload, rd):
+    """report.md and the plots from the measured payload (also --render-only)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    doms = payload["domains"]
+    payload["summary"] = per_tool_summary(doms)
+    payload["notes"] = notes(doms)
+    os.makedirs(rd, exist_ok=True)
+    plots = {d["name"]: plot_dihedral(rd, d) for d in doms}
+    plots.update(tets_time=plot_counts_times(rd, doms), betti=plot_betti(rd, doms), level=plot_level(rd, doms))
     with open(os.path.join(rd, "report.md"), "w") as fm:
-        fm.write(render(args, payload, plots))
-    print(f"[compare] wrote {rd}/report.md in {payload['total_seconds']:.0f} s")
+        fm.write(render(payload, plots))
+    print(f"[compare] wrote {rd}/report.md (run of {payload['total_seconds']:.0f} s)")
 
 
 if __name__ == "__main__":
