@@ -224,7 +224,7 @@ def run_domain(args, dom):
     me = os.path.abspath(__file__)
     if src:
         V, F = boundary_from_file(src)
-        holes = q.cavity_hole_points(V, F)[0]
+        holes = q.cavity_hole_points(V, F, local=True)[0]
         npz = os.path.join(d, "surf_ours.npz")
         np.savez(npz, V=V, F=F, holes=holes)
         dom["surface"] = {"from": os.path.basename(src), "triangles": int(len(F)), "holes": int(len(holes))}
@@ -685,7 +685,7 @@ def parse_args():
     ap.add_argument("--no-full", action="store_true", help="leave out the whole MNI volumes")
     ap.add_argument("--domains", default=None, help="comma-separated subset of the domain names")
     ap.add_argument("--peer-timeout", type=float, default=120.0, help="per peer run on grids and crops (s)")
-    ap.add_argument("--full-peer-timeout", type=float, default=90.0, help="per peer run on whole volumes (s)")
+    ap.add_argument("--full-peer-timeout", type=float, default=60.0, help="per peer run on whole volumes (s)")
     ap.add_argument("--ours-timeout", type=float, default=600.0, help="per tptd-mesh run (s)")
     ap.add_argument("--budget", type=float, default=1800.0,
                     help="peer runs that would start later than this (s from the start) are skipped")
@@ -728,7 +728,10 @@ def main():
     t0 = time.perf_counter()
     doms = [{"name": n, "build": b, "full": full} for n, b, full in domains(args)]
     with ThreadPoolExecutor(args.jobs) as pool:
-        doms = list(pool.map(lambda d: run_ours(args, d), doms))
+        # the whole volumes first: their --quality runs are the longest, the grids fill the other slot
+        first = sorted(range(len(doms)), key=lambda i: not doms[i]["full"])
+        done = dict(zip(first, pool.map(lambda i: run_ours(args, doms[i]), first)))
+        doms = [done[i] for i in range(len(doms))]
         print(f"[compare] ours on {len(doms)} domains: {time.perf_counter() - t0:.0f} s", flush=True)
         jobs = [j for d in doms if not d["full"] for j in d["jobs"]] + \
                [j for d in doms if d["full"] for j in d["jobs"]]
