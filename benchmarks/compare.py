@@ -159,6 +159,16 @@ def mmg_binary():
 # runs
 # ----------------------------------------------------------------------------
 
+def ours_warnings(prefix):
+    """tptd-mesh's warnings of one run (stderr lines), the file path cut out, each shortened."""
+    try:
+        with open(prefix + ".stderr", errors="replace") as f:
+            lines = [l.strip() for l in f if "warning:" in l]
+    except OSError:
+        return []
+    return [l.split(".npy: ", 1)[-1][:260] for l in lines]
+
+
 def boundary_from_file(msh):
     """Our mesh's boundary surface, outward: the labelled boundary triangles our .msh carries
     (alpha, beta and box groups: the checker requires them to be exactly the boundary faces);
@@ -205,7 +215,7 @@ def run_domain(args, dom):
         out = os.path.join(d, name)
         cmd = [args.bin, vol, *b, "-o", out, "--msh-version", "4.1-binary", "-j", "1", "-q", *extra]
         r = q.run_child(cmd, out[:-4], args.ours_timeout)
-        row = {"tool": tool, "command": " ".join(cmd), **r}
+        row = {"tool": tool, "command": " ".join(cmd), **r, "warnings": ours_warnings(out[:-4])}
         dom["rows"].append(row)
         if r["status"] == "ok":
             dom["meshes"].append((row, out))
@@ -593,9 +603,9 @@ def render(payload, plots):
          "tests/py/compare_peers.py uses 20³–24³); the whole MNI volumes at 197×233×189. "
          f"Per-run limits: ours {st['ours_timeout']:g} s, peers {st['peer_timeout']:g} s on the grids and "
          f"crops, {st['full_peer_timeout']:g} s on the whole volumes; runs that would start after "
-         f"{st['budget']:g} s are `skipped`. The sizes and limits keep the whole run near 30 minutes on "
-         "this machine; at these limits TetGen and fTetWild finish the grids and crops, "
-         "and most peers do not finish the whole volumes (see the tables).",
+         f"{st['budget']:g} s are `skipped`. The sizes and limits are chosen to keep the whole run near half an "
+         f"hour on this machine; this run took {payload['total_seconds'] / 60:.0f} min (see the tables for what "
+         "finished within the limits).",
          "- Tools: `ctd` and `ctd --quality` (`tptd-mesh VOL [--alpha A] [--beta B] -o M.msh --msh-version "
          "4.1-binary -j 1 [--quality]`: one thread, like every peer here); "
          f"TetGen `-{TETGEN_SWITCHES}` and fTetWild (`edge_length_abs={cp.FTETWILD_EDGE:g}`, "
@@ -648,10 +658,32 @@ def notes(doms):
     if far:
         out.append(f"- Known limit, measured here: plain `ctd` puts boundary points more than 0.5 voxel off "
                    f"the level set on {', '.join(far)} (fields rough at the voxel scale; a fix is in progress). "
-                   "The checker flags these meshes `off_level`; `ctd --quality` rows show whether "
-                   "the quality pass brings them back.")
+                   "The checker flags these meshes `off_level`.")
+        q_far = [d["name"] for d in doms for r in d["rows"] if r["tool"] == "ctd --quality"
+                 and (level_distance(r) or 0) > 0.5]
+        out.append("- `ctd --quality` keeps such points off the level set too, on "
+                   f"{', '.join(q_far) or 'none of these'} (the pass keeps the boundary where plain ctd put it).")
     else:
         out.append("- Plain `ctd` stayed within 0.5 voxel of the level sets on every domain of this run.")
+    broken = [(d["name"], r) for d in doms for r in d["rows"] if r["tool"].startswith("ctd")
+              and any(not p.startswith("off_level") for p in r.get("problems") or [])]
+    for name, r in broken:
+        out.append(f"- **Defect of ours, measured here:** `{r['tool']}` on {name} wrote a mesh the checker "
+                   f"rejects for more than the level distance: {'; '.join(r['problems'])}. The runs here have "
+                   "no `--check` (the checker judges every mesh afterwards), so it was written. Command: "
+                   f"`{r['command'].replace(REPO + '/', '')}`.")
+    warned = [(d["name"], r) for d in doms for r in d["rows"] if r["tool"] == "ctd"
+              and any("critical value" in w or "saddle" in w for w in r.get("warnings") or [])]
+    for name, r in warned:
+        w = next((w for w in r["warnings"] if "critical value" in w), None) or \
+            next(w for w in r["warnings"] if "saddle" in w)
+        out.append(f"- tptd-mesh warned on {name} that the bound is near critical values: \"{w}\"")
+    slow = [(d["name"], r) for d in doms for r in d["rows"] if r["tool"].startswith("ctd") and r.get("status") != "ok"]
+    for name, r in slow:
+        out.append(f"- `{r['tool']}` made no mesh on {name}: {r.get('status')} ({r.get('detail') or ''}). "
+                   "It ran on one thread on a shared machine; the `--quality` pass has no time limit unless "
+                   "`--quality-time` is given. TetGen and fTetWild then mesh the boundary of the plain `ctd` "
+                   "mesh there.")
     cg_out = [d["name"] for d in doms for r in d["rows"] if r["tool"] == "CGAL Mesh_3"
               and any(p.startswith("outside_grid") for p in r.get("problems") or [])]
     if cg_out:
