@@ -373,26 +373,27 @@ def plot_dihedral(folder, dom):
 
 
 def grouped_bars(ax, doms, value, log=False, hline=None):
-    """One group of bars per domain, one bar per tool; a missing value is an 'x' at the
-    axis (status written in the table)."""
+    """One group of bars per domain, one bar per tool; a missing value (no mesh: see the
+    table) is an 'x' just below the smallest bar."""
     width = 0.8 / len(TOOLS)
+    cells = []                      # (x, tool, value or None)
     for k, tool in enumerate(TOOLS):
-        xs, ys, miss = [], [], []
         for i, dom in enumerate(doms):
             r = next((r for r in dom["rows"] if r["tool"] == tool), None)
-            v = value(r, dom) if r else None
-            x = i - 0.4 + (k + 0.5) * width
-            (miss if v is None else xs).append(x)
-            if v is not None:
-                ys.append(v)
-        ax.bar(xs, ys, width=width, color=COLORS[tool], label=tool)
-        if miss:
-            ax.plot(miss, [ax.get_ylim()[0] if not log else 1.0] * len(miss), "x", color=COLORS[tool], ms=4)
+            cells.append((i - 0.4 + (k + 0.5) * width, tool, value(r, dom) if r else None))
+    vals = [v for _, _, v in cells if v is not None and (v > 0 or not log)]
+    floor = (min(vals) / 2.0 if vals else 1.0) if log else 0.0
+    for tool in TOOLS:
+        have = [(x, v) for x, t, v in cells if t == tool and v is not None]
+        miss = [x for x, t, v in cells if t == tool and v is None]
+        ax.bar([x for x, _ in have], [v for _, v in have], width=width, color=COLORS[tool], label=tool)
+        ax.plot(miss, [floor] * len(miss), "x", color=COLORS[tool], ms=4)
     ax.set_xticks(range(len(doms)))
     ax.set_xticklabels([d["name"] for d in doms], rotation=30, ha="right", fontsize=7)
     ax.tick_params(axis="y", labelsize=7)
     if log:
         ax.set_yscale("log")
+        ax.set_ylim(bottom=floor / 1.5)
     if hline is not None:
         ax.axhline(hline, color="k", lw=0.6, ls="--")
 
@@ -402,7 +403,7 @@ def plot_counts_times(folder, doms):
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 5.2))
     grouped_bars(a1, doms, lambda r, d: r.get("tets") if r.get("status") == "ok" else None, log=True)
     a1.set_ylabel("tets", fontsize=7)
-    a1.legend(fontsize=7, ncol=6, loc="upper left")
+    a1.legend(fontsize=7, ncol=6, loc="lower left", bbox_to_anchor=(0.0, 1.0), frameon=False)
     grouped_bars(a2, doms, lambda r, d: r.get("wall") if r.get("status") == "ok" else None, log=True)
     a2.set_ylabel("time (s; x = no mesh)", fontsize=7)
     fig.tight_layout()
@@ -443,7 +444,7 @@ def plot_level(folder, doms):
                  hline=0.5)
     ax.set_ylabel("max boundary distance\nto the level set (voxels)", fontsize=7)
     ax.set_ylim(0, 2.6)
-    ax.legend(fontsize=7, ncol=6, loc="upper left")
+    ax.legend(fontsize=7, ncol=6, loc="lower left", bbox_to_anchor=(0.0, 1.0), frameon=False)
     fig.tight_layout()
     return savefig(fig, folder, "level_distance.png")
 
