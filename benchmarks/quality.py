@@ -297,13 +297,16 @@ def winding_number(V, F, q):
     return float(np.sum(2.0 * np.arctan2(num, den)) / (4.0 * math.pi))
 
 
-def cavity_hole_points(V, F):
+def cavity_hole_points(V, F, local=False):
     """One point inside every enclosed cavity of the domain bounded by (V, F).
 
     A connected component of the surface with negative enclosed (signed) volume is an
     inner shell: the region just across it is a cavity.  The hole point is the centroid
     of a large triangle of that shell moved 0.1 x its inradius along the outward normal,
-    accepted when the winding number there is ~0 (outside the domain)."""
+    accepted when the winding number there is ~0 (outside the domain).  With `local`, the
+    winding number is that of the shell alone, ~-1 in its cavity: the same test for a point
+    that close to its shell, and linear instead of quadratic time on surfaces with
+    thousands of cavities (whole MRI volumes)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     nv = len(V)
@@ -319,11 +322,14 @@ def cavity_hole_points(V, F):
     perim = np.linalg.norm(b - a, axis=1) + np.linalg.norm(c - b, axis=1) + np.linalg.norm(a - c, axis=1)
     inradius = area2 / np.maximum(perim, 1e-300)
     holes = []
+    order = np.argsort(tlabel, kind="stable")
+    start = np.concatenate([[0], np.cumsum(np.bincount(tlabel, minlength=ncomp))])
     for comp in np.flatnonzero(comp_vol < 0):
-        cand = np.flatnonzero(tlabel == comp)
+        cand = order[start[comp]:start[comp + 1]]
         for t in cand[np.argsort(-inradius[cand])][:5]:
             q = (a[t] + b[t] + c[t]) / 3.0 + 0.1 * inradius[t] * cr[t] / area2[t]
-            if abs(winding_number(V, F, q)) < 0.25:
+            if (abs(winding_number(V, F[cand], q) + 1.0) < 0.25 if local
+                    else abs(winding_number(V, F, q)) < 0.25):
                 holes.append(q)
                 break
     return np.array(holes).reshape(-1, 3), int(ncomp), int((comp_vol < 0).sum())

@@ -56,35 +56,37 @@ FTETWILD_EPSILON = 3e-3  # envelope / bbox diagonal (default 1e-3): about 3x fas
 
 
 # ----------------------------------------------------------------------------
-# domains: (volume, alpha, beta, note); None = unbounded
+# domains: (volume, alpha, beta, note); None = unbounded. Each takes the grid size (the
+# crop's for the MNI template); the defaults are the test's sizes (benchmarks/compare.py
+# calls them at larger ones).
 # ----------------------------------------------------------------------------
 
-def dom_torus():
-    f, _, note = q.dom_torus(20)
+def dom_torus(n=20):
+    f, _, note = q.dom_torus(n)
     return f, None, LEVEL, note
 
 
-def dom_genus3():
-    f, _, note = q.dom_genus3(24)
+def dom_genus3(n=24):
+    f, _, note = q.dom_genus3(n)
     return f, None, LEVEL, note
 
 
-def dom_two_spheres():
-    f, _, note = q.dom_two_spheres(20, gap=0.3)
+def dom_two_spheres(n=20):
+    f, _, note = q.dom_two_spheres(n, gap=0.3)
     return f, None, LEVEL, note
 
 
-def dom_shell():
-    f, [(a, b)], note = q.dom_shell(20, t=0.6)
+def dom_shell(n=20):
+    f, [(a, b)], note = q.dom_shell(n, t=0.6)
     return f, a + LEVEL, b + LEVEL, note
 
 
-def dom_random():
+def dom_random(n=20):
     """Band-limited Gaussian noise, correlation 3 voxels: smooth at the voxel scale. Plain ctd
     on fields rough at the voxel scale can put boundary triangles more than half a voxel off
     the level set, which `--check` rejects; this field keeps our meshes checkable."""
     from make_data import band_limited_noise
-    n, corr = 20, 3.0
+    corr = 3.0
     g = band_limited_noise(n, corr, np.random.default_rng(SEED)).astype(np.float64)
     x, y, z = q.grid(n)
     r = np.sqrt(x ** 2 + y ** 2 + z ** 2)
@@ -92,9 +94,9 @@ def dom_random():
     return f, None, LEVEL, f"Gaussian noise, correlation {corr:g} voxel, seed {SEED}, + max(0, r - 0.38 N)"
 
 
-def dom_mni():
-    a, lo = q.mri_crop(q.WM_NAME, MNI_CROP)
-    return a, MNI_LEVEL, None, f"MNI152 2009a white-matter probability (uint8), {MNI_CROP}^3 crop at {lo}"
+def dom_mni(n=MNI_CROP):
+    a, lo = q.mri_crop(q.WM_NAME, n)
+    return a, MNI_LEVEL, None, f"MNI152 2009a white-matter probability (uint8), {n}^3 crop at {lo}"
 
 
 DOMAINS = {"torus": dom_torus, "genus3": dom_genus3, "two_spheres": dom_two_spheres,
@@ -290,7 +292,8 @@ def inspect(args, d, vol, b, meshes):
                            valid=i["valid"], problems=[f"{p['kind']}: {p['count']}" for p in i["problems"]],
                            betti=i["betti"], reference_betti=i["reference_betti"],
                            matches_reference=i["matches_reference"], volume_error=i.get("volume_error"),
-                           level_max_distance=level.get("max_distance"))
+                           level_max_distance=level.get("max_distance"), level=level or None,
+                           histogram=i["quality"]["histogram"])
                 ref = i["reference_betti"]
     return ref
 
