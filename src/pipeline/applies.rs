@@ -143,24 +143,9 @@ impl Inapplicable {
             Inapplicable::NotWith { param, mode, why } => {
                 format!("{} does not apply with {} ({why})", n(*param), n(*mode))
             }
-            Inapplicable::InspectInput => format!(
-                "{} takes the meshes, not an {} volume: give the volume with {}",
-                n(Param::Inspect),
-                n(Param::Input),
-                n(Param::Volume)
-            ),
-            Inapplicable::NeedsVolume(p) => format!(
-                "{} applies with {} only together with {}",
-                n(*p),
-                n(Param::Inspect),
-                n(Param::Volume)
-            ),
-            Inapplicable::VolumeNeedsInterval => format!(
-                "{} needs the interval: {} A and/or {} B",
-                n(Param::Volume),
-                n(Param::Alpha),
-                n(Param::Beta)
-            ),
+            Inapplicable::InspectInput
+            | Inapplicable::NeedsVolume(_)
+            | Inapplicable::VolumeNeedsInterval => self.render_inspect(names),
             Inapplicable::NothingWith { param, other } => {
                 format!("{} does nothing with {}", n(*param), n(*other))
             }
@@ -214,6 +199,33 @@ impl Inapplicable {
                 n(Param::Threads)
             ),
             Inapplicable::Output(e) => e.to_string(),
+        }
+    }
+
+    /// [`Inapplicable::render`] of the refusals about `--inspect` and its volume.
+    fn render_inspect(&self, names: ParamNames) -> String {
+        let n = |p: Param| names.of(p);
+        match self {
+            Inapplicable::InspectInput => format!(
+                "{} takes the meshes, not an {} volume: give the volume with {}",
+                n(Param::Inspect),
+                n(Param::Input),
+                n(Param::Volume)
+            ),
+            Inapplicable::NeedsVolume(p) => format!(
+                "{} applies with {} only together with {}",
+                n(*p),
+                n(Param::Inspect),
+                n(Param::Volume)
+            ),
+            Inapplicable::VolumeNeedsInterval => format!(
+                "{} needs the interval: {} A and/or {} B",
+                n(Param::Volume),
+                n(Param::Alpha),
+                n(Param::Beta)
+            ),
+            // the other refusals are rendered by `render`
+            _ => String::new(),
         }
     }
 }
