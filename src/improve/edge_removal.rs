@@ -52,8 +52,7 @@ pub fn try_remove_edge(
     let Some(tris) = best_triangulation(lm, ctx, [a, b], &ring, floor) else {
         return false;
     };
-    // A diagonal of the ring that is an edge already would be doubled (and one between two
-    // frozen vertices may be an edge outside the region). Tested after the
+    // A diagonal of the ring that is an edge already would be doubled. Tested after the
     // triangulation, which fails far more often (the same result, less work).
     if diagonal_is_edge(lm, &ring) {
         return false;
@@ -120,13 +119,11 @@ fn diagonal_is_edge(lm: &LocalMesh, ring: &[u32]) -> bool {
     (0..k).any(|i| (i + 2..k).any(|j| (i, j) != (0, k - 1) && has_edge(lm, ring[i], ring[j])))
 }
 
-/// Whether some tet of the region has the edge `(v, w)`, or may have it: with both ends
-/// frozen, the edge may be one of tets outside the region, which it cannot see.
+/// Whether some tet of the region has the edge `(v, w)`.
 fn has_edge(lm: &LocalMesh, v: u32, w: u32) -> bool {
-    (!lm.is_free(v) && !lm.is_free(w))
-        || lm.star[v as usize]
-            .iter()
-            .any(|&u| lm.tets[u as usize].contains(&w))
+    lm.star[v as usize]
+        .iter()
+        .any(|&u| lm.tets[u as usize].contains(&w))
 }
 
 /// The triangulation of `ring` whose cones from `a` and `b` ([`cone`]) have the best worst
