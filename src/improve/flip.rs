@@ -85,6 +85,11 @@ pub fn try_flip32(
     let (b, c) = even_completion(lm.tets[t as usize], p, q);
     let d = ring.into_iter().find(|&v| v != b && v != c).unwrap_or(b);
     let new = [[p, b, c, d], [q, b, d, c]];
+    // A face with no free corner may be a face of a tet outside the region, which the region
+    // cannot see: the flip would make it a face of three tets (or more).
+    if ![b, c, d].iter().any(|&v| lm.is_free(v)) {
+        return false;
+    }
     replace_if_better(lm, ctx, &around, &new, |lm| !face_exists(lm, [b, c, d]))
 }
 
@@ -210,6 +215,42 @@ mod tests {
             }
         }
         assert!(inner > 1000 && outer > 100, "{inner} {outer}");
+    }
+
+    /// A 3-2 flip never makes a face whose corners are all frozen: a tet outside the region may
+    /// have it already, unseen (a 3-2 flip made a face of three tets that way on the whole
+    /// MNI152 T1 at 127.0135). Every 3-2 flip of the fixture's regions is tried on a copy; some
+    /// must meet a ring of frozen corners.
+    #[test]
+    fn flip32_makes_no_face_of_frozen_corners_only() {
+        let grid = wavy_torus();
+        let (ctx, regions) = wavy_torus_regions(&grid, &[0, 1]);
+        let mut frozen_rings = 0;
+        for lm in &regions {
+            for t in 0..lm.tets.len() as u32 {
+                let tet = lm.tets[t as usize];
+                let around = lm.tet_edge_tets(tet);
+                for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+                    let (p, q) = (tet[i], tet[j]);
+                    let edge = &around[tet_edge(i, j)];
+                    if edge.len() != 3 || !(lm.is_free(p) || lm.is_free(q)) {
+                        continue;
+                    }
+                    let ring: Vec<u32> = edge
+                        .iter()
+                        .flat_map(|&u| lm.tets[u as usize])
+                        .filter(|&w| w != p && w != q)
+                        .collect();
+                    let all_frozen = ring.iter().all(|&w| !lm.is_free(w));
+                    frozen_rings += usize::from(all_frozen);
+                    let mut copy = lm.clone();
+                    if try_flip32(&mut copy, &ctx, (t, p, q), edge) {
+                        assert!(!all_frozen, "a 3-2 flip made a face of frozen corners");
+                    }
+                }
+            }
+        }
+        assert!(frozen_rings > 0, "no 3-2 flip met a ring of frozen corners");
     }
 
     #[test]
