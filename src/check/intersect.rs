@@ -15,7 +15,7 @@ type P = [f64; 3];
 
 /// How two boundary triangles meet where they must not.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Contact {
+pub(crate) enum Contact {
     /// Coplanar, overlapping in area (a fold, or two tets glued without a common face).
     Overlap,
     /// Crossing or touching.
@@ -82,15 +82,14 @@ fn boxes_apart(s: &[P; 3], t: &[P; 3]) -> bool {
     })
 }
 
-/// Tests every pair of triangles of `tris` (corner ids and positions) that share a bucket;
-/// `tet[i]` is the tet of triangle `i`, used to name the pair.
-pub(crate) fn self_intersections(
+/// Every pair of triangles of `tris` (corner ids and positions) sharing a bucket that meet
+/// where they must not ([`triangles_cross`]), each pair once, `i < j`, sorted; flat triangles
+/// take no part.
+pub(crate) fn contacts(
     ids: &[[u32; 3]],
     tris: &[[P; 3]],
-    tet: &[u32],
     buckets: &Buckets,
-    problems: &mut Problems,
-) {
+) -> Vec<(u32, u32, Contact)> {
     let boxes: Vec<[P; 2]> = tris.par_iter().map(bbox).collect();
     let flat: Vec<bool> = tris
         .par_iter()
@@ -131,7 +130,19 @@ pub(crate) fn self_intersections(
         .collect();
     let mut hits: Vec<(u32, u32, Contact)> = found.into_iter().flatten().collect();
     hits.sort_unstable_by_key(|h| (h.0, h.1));
-    for (i, j, c) in hits {
+    hits
+}
+
+/// Tests every pair of triangles of `tris` (corner ids and positions) that share a bucket;
+/// `tet[i]` is the tet of triangle `i`, used to name the pair.
+pub(crate) fn self_intersections(
+    ids: &[[u32; 3]],
+    tris: &[[P; 3]],
+    tet: &[u32],
+    buckets: &Buckets,
+    problems: &mut Problems,
+) {
+    for (i, j, c) in contacts(ids, tris, buckets) {
         let kind = match c {
             Contact::Overlap => ProblemKind::BoundaryOverlap,
             Contact::Crossing => ProblemKind::BoundarySelfIntersection,

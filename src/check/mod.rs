@@ -40,6 +40,18 @@ use crate::mesh::TetMesh;
 use crate::Method;
 
 pub(crate) use intersect::triangles_cross;
+
+/// The number of pairs of triangles of a surface (`points`, `triangles`) that cross or
+/// overlap each other, by the checker's bucketed search with exact predicates (flat
+/// triangles take no part): a surface that intersects itself has some.
+pub fn crossing_pairs(points: &[[f64; 3]], triangles: &[[u32; 3]]) -> usize {
+    let tris: Vec<[[f64; 3]; 3]> = triangles
+        .iter()
+        .map(|t| t.map(|i| points[i as usize]))
+        .collect();
+    let buckets = buckets::Buckets::new(&tris);
+    intersect::contacts(triangles, &tris, &buckets).len()
+}
 pub use level::LevelSummary;
 pub use winding::{WindingSummary, WINDING_TOLERANCE};
 

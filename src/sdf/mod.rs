@@ -4,14 +4,13 @@
 //!
 //! One algorithm per file: `bvh.rs` (bounding-volume hierarchy, closest points),
 //! `winding.rs` (generalised winding number with the far-field expansion), `surface_check.rs`
-//! (holes, non-manifold edges, degenerate triangles, pieces), `self_cross.rs` (triangles that
-//! cross each other), `grid.rs` (the grid and the parallel
+//! (holes, non-manifold edges, degenerate triangles, pieces, crossing triangles by the
+//! checker's search), `grid.rs` (the grid and the parallel
 //! sampling). The surface comes as plain points and triangles; reading it from a file is
 //! `io::read_surface`, and both together are [`crate::surface_volume::volume_from_surface`].
 
 pub mod bvh;
 pub mod grid;
-pub mod self_cross;
 pub mod surface_check;
 pub mod winding;
 

@@ -41,8 +41,8 @@ pub struct SurfaceFacts {
     pub bounds: [[f64; 3]; 2],
     /// Connected pieces of the surface (triangles joined through shared corners).
     pub components: usize,
-    /// Pairs of triangles that cross or overlap each other ([`super::self_cross`]): the
-    /// surface intersects itself.
+    /// Pairs of triangles that cross or overlap each other ([`crate::check::crossing_pairs`]):
+    /// the surface intersects itself.
     pub crossing_pairs: usize,
 }
 
@@ -184,7 +184,7 @@ pub fn check_surface(
         triangles: triangles.len(),
         ..SurfaceFacts::default()
     };
-    let degenerate = measure(points, triangles, &mut facts);
+    measure(points, triangles, &mut facts);
     if facts.degenerate_triangles == triangles.len() {
         return Err(SdfError::Surface(
             "every triangle of the surface has zero area".into(),
@@ -192,15 +192,14 @@ pub fn check_surface(
     }
     edges(points, triangles, &mut facts);
     facts.components = components(points.len(), triangles);
-    facts.crossing_pairs = super::self_cross::crossing_pairs(points, triangles, &degenerate);
+    facts.crossing_pairs = crate::check::crossing_pairs(points, triangles);
     Ok(facts)
 }
 
-/// Area, volume, bounds and degenerate triangles; per triangle, whether it is degenerate.
-fn measure(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) -> Vec<bool> {
-    let mut degenerate = vec![false; triangles.len()];
+/// Area, volume, bounds and degenerate triangles.
+fn measure(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) {
     let mut bounds = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
-    for (t, flag) in triangles.iter().zip(&mut degenerate) {
+    for t in triangles {
         let [a, b, c] = t.map(|i| points[i as usize]);
         for p in [a, b, c] {
             for k in 0..3 {
@@ -214,13 +213,11 @@ fn measure(points: &[[f64; 3]], triangles: &[[u32; 3]], f: &mut SurfaceFacts) ->
         let longest2 = dot(ab, ab).max(dot(ac, ac)).max(dot(sub(c, b), sub(c, b)));
         if twice_area <= 1e-12 * longest2 || t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
             f.degenerate_triangles += 1;
-            *flag = true;
         }
         f.area += 0.5 * twice_area;
         f.volume += dot(a, cross(b, c)) / 6.0;
     }
     f.bounds = bounds;
-    degenerate
 }
 
 /// Connected pieces of the triangles, through shared corners.
@@ -311,6 +308,26 @@ mod tests {
         );
         let broke = f.sampling_warning([2, 0, 0], 0.1).unwrap();
         assert!(broke.contains("broke apart"), "{broke}");
+    }
+
+    /// Two closed tetrahedra as one surface, the second shifted by `o`.
+    fn two(o: [f64; 3]) -> SurfaceFacts {
+        let (mut p, mut t) = tet();
+        let (q, u) = tet();
+        p.extend(q.iter().map(|x| [x[0] + o[0], x[1] + o[1], x[2] + o[2]]));
+        t.extend(u.iter().map(|x| x.map(|i| i + 4)));
+        check_surface(&p, &t).unwrap()
+    }
+
+    #[test]
+    fn pieces_and_crossings_of_two_tetrahedra() {
+        let apart = two([1.5, 0.0, 0.0]);
+        assert_eq!((apart.components, apart.crossing_pairs), (2, 0));
+        let overlapping = two([0.2, 0.2, 0.2]);
+        assert!(overlapping.crossing_pairs > 0, "{overlapping:?}");
+        assert!(overlapping.warnings()[0].contains("intersects itself"));
+        // touching at a corner counts: the surface meets itself there
+        assert!(two([1.0, 0.0, 0.0]).crossing_pairs > 0);
     }
 
     #[test]
