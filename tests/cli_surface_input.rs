@@ -36,6 +36,13 @@ fn refused(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
     (o.status.code(), err)
 }
 
+/// The warning line of `err` that contains `needle`.
+fn warning_line<'a>(err: &'a str, needle: &str) -> &'a str {
+    err.lines()
+        .find(|l| l.contains(needle))
+        .unwrap_or_else(|| panic!("no warning with {needle:?}: {err}"))
+}
+
 #[test]
 fn a_torus_is_a_solid_ring() {
     let dir = tempfile::tempdir().unwrap();
@@ -51,7 +58,7 @@ fn a_torus_is_a_solid_ring() {
     assert_eq!(r["dims"][0], 64 + 2 + 6, "{}", r["dims"]);
 }
 
-/// Two unit spheres 0.2 apart (along x), as one soup.
+/// Two unit spheres `gap` apart along x (overlapping when negative), as one soup.
 fn two_spheres(gap: f64) -> common::soup::Soup {
     let c = 1.0 + 0.5 * gap;
     let (mut p, mut t) = sphere([-c, 0.0, 0.0], 1.0, 4);
@@ -79,10 +86,7 @@ fn spheres_closer_than_a_voxel_merge_with_a_warning_that_says_why() {
     // 4.2 long in 12 voxels of 0.35: the gap of 0.2 is less than one
     let (r, err) = mesh_checked(dir.path(), "pair.stl", &["--resolution", "12"]);
     assert_eq!(r["betti"], serde_json::json!([1, 0, 0]), "{r}");
-    let line = err
-        .lines()
-        .find(|l| l.contains("closed piece"))
-        .unwrap_or_else(|| panic!("no warning: {err}"));
+    let line = warning_line(&err, "closed piece");
     assert!(
         line.starts_with("tptd-mesh: warning: pair.stl: the surface has 2 closed pieces but the mesh has 1 component and 0 cavities"),
         "{line}"
@@ -118,10 +122,7 @@ fn a_self_intersecting_surface_is_meshed_as_the_union_with_a_warning() {
     write_obj(&dir.path().join("overlap.obj"), &two_spheres(-1.0));
     let (r, err) = mesh_checked(dir.path(), "overlap.obj", &["--resolution", "32"]);
     assert_eq!(r["betti"], serde_json::json!([1, 0, 0]), "{r}");
-    let line = err
-        .lines()
-        .find(|l| l.contains("intersects itself"))
-        .unwrap_or_else(|| panic!("no warning: {err}"));
+    let line = warning_line(&err, "intersects itself");
     assert!(
         line.starts_with("tptd-mesh: warning: overlap.obj: the surface intersects itself ("),
         "{line}"
@@ -158,10 +159,7 @@ fn an_open_surface_is_meshed_with_a_warning_naming_the_hole() {
         .collect();
     write_obj(&dir.path().join("cup.obj"), &(p, t));
     let (r, err) = mesh_checked(dir.path(), "cup.obj", &["--resolution", "32"]);
-    let warning = err
-        .lines()
-        .find(|l| l.contains("open"))
-        .unwrap_or_else(|| panic!("no warning: {err}"));
+    let warning = warning_line(&err, "open");
     assert!(
         warning.starts_with("tptd-mesh: warning: cup.obj: the surface is open: 1 hole"),
         "{warning}"
