@@ -51,7 +51,7 @@ pub const fn vertex_point(k: VertexKey) -> PointKey {
 }
 
 /// Bits of a cut's point key that hold the index of its level.
-pub const LEVEL_BITS: u32 = 1;
+pub const LEVEL_BITS: u32 = 4;
 
 /// Mask of the level bits of a point key.
 const LEVEL_MASK: u64 = (1 << LEVEL_BITS) - 1;

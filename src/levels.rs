@@ -1,18 +1,25 @@
 //! The levels a run meshes between ([`Levels`]): their values, sorted, how values tied with
 //! a level are handled, and the preparation of the data that keeps near ties out of the mesh.
 //!
-//! Levels pair up into intervals: level 0 is the lower bound of the first interval, level 1
-//! its upper bound. The meshed set is the closure of the open intervals, so a value equal to
-//! a lower bound (an even level) counts as below it and one equal to an upper bound (an odd
-//! level) as above it. One interval `{alpha <= f <= beta}` is the case of two levels
-//! ([`Levels::interval`]), with `-inf` or `+inf` standing for a missing bound.
+//! `n` sorted levels bound `n - 1` regions: region `k` is the interval between levels `k`
+//! and `k + 1`. One interval `{alpha <= f <= beta}` is the case of two levels
+//! ([`Levels::interval`]), with `-inf` or `+inf` standing for a missing bound. The meshed set
+//! of a region is the closure of its open interval; a value equal to a level is given to one
+//! side of it, the same for every region: equal to the last level counts as above it, equal
+//! to any other level as below it. So a value equal to the lower bound of the meshed set
+//! counts as outside, and one equal to the upper bound too, and a value equal to a level
+//! between two regions belongs to the region below it.
+//!
+//! A region's clipper sees its two levels as a [`Levels`] of its own ([`Levels::region`]),
+//! which keeps their indices in the run ([`Levels::global`]): cut points and boundary labels
+//! name a level by its index in the run.
 
 use crate::grid::ScalarGrid;
 use crate::samples::Samples;
 
-/// Number of levels a [`Levels`] holds: the two bounds of one interval. Point keys reserve
+/// Most levels a run may have (so at most `MAX_LEVELS - 1` regions). Point keys reserve
 /// enough bits for a level index to name this many (`keys::LEVEL_BITS`).
-pub const MAX_LEVELS: usize = 2;
+pub const MAX_LEVELS: usize = 16;
 
 /// Fraction of the smallest gap between a level and the data values by which tied values are
 /// moved outward when cuts are placed.
@@ -25,43 +32,152 @@ pub const NEAR_TIE: f64 = 1e-9;
 /// Which side of a level a value lies on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Side {
-    /// Below the level, or equal to it when the level is a lower bound.
+    /// Below the level, or equal to it when ties count as below.
     Below,
-    /// Above the level, or equal to it when the level is an upper bound.
+    /// Above the level, or equal to it when ties count as above.
     Above,
 }
 
-/// The sorted levels of a run (finite or infinite) and the values that data tied with each
-/// level is moved to when cuts are placed.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Levels {
-    /// The levels, sorted (`-inf` / `+inf` for a missing bound).
-    values: [f64; MAX_LEVELS],
-    /// Per level, the value used for cut placement at vertices whose value equals the level:
-    /// moved outward of the interval it bounds (the level itself until [`Levels::with_ties`]).
-    ties: [f64; MAX_LEVELS],
+/// Why a list of levels is refused ([`Levels::new`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum LevelsError {
+    /// Fewer than two levels, or more than [`MAX_LEVELS`].
+    Count(usize),
+    /// A level is NaN.
+    NotANumber(usize),
+    /// Level `i` is not above level `i - 1`.
+    NotIncreasing(usize),
+    /// An infinite level other than `-inf` first or `+inf` last.
+    Infinite(usize),
 }
 
+impl std::fmt::Display for LevelsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LevelsError::Count(n) => {
+                write!(
+                    f,
+                    "{n} level(s) given; between 2 and {MAX_LEVELS} are needed"
+                )
+            }
+            LevelsError::NotANumber(i) => write!(f, "level {} is not a number", i + 1),
+            LevelsError::NotIncreasing(i) => {
+                write!(
+                    f,
+                    "level {} is not above level {}: levels must increase",
+                    i + 1,
+                    i
+                )
+            }
+            LevelsError::Infinite(i) => write!(
+                f,
+                "level {} is infinite: only the first may be -inf and the last +inf",
+                i + 1
+            ),
+        }
+    }
+}
+
+impl std::error::Error for LevelsError {}
+
+/// The sorted levels of a run (finite or infinite) and the values that data tied with each
+/// level is moved to when cuts are placed; or one region's two levels, with their indices in
+/// the run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Levels {
+    /// The levels, sorted (`-inf` / `+inf` for a missing bound); the first `len` are used,
+    /// the rest are 0.
+    values: [f64; MAX_LEVELS],
+    /// Per level, the value used for cut placement at vertices whose value equals the level:
+    /// moved to the side ties count on (the level itself until [`Levels::with_ties`]).
+    ties: [f64; MAX_LEVELS],
+    /// Number of levels.
+    len: u8,
+    /// Index in the run of level 0 (non-zero for a region's view, [`Levels::region`]).
+    first: u8,
+    /// Bit `i` set: a value equal to level `i` counts as above it (the run's last level).
+    ties_above: u16,
+}
 impl Levels {
     /// The two levels of the interval `(alpha, beta)` (`alpha < beta`; `-inf` / `+inf` for a
     /// missing bound), ties not moved yet ([`Levels::with_ties`]).
     pub fn interval(alpha: f64, beta: f64) -> Self {
+        Self::sorted(&[alpha, beta])
+    }
+
+    /// The levels `values` (2 to [`MAX_LEVELS`], strictly increasing, `-inf` only first and
+    /// `+inf` only last), ties not moved yet ([`Levels::with_ties`]).
+    pub fn new(values: &[f64]) -> Result<Self, LevelsError> {
+        let n = values.len();
+        if !(2..=MAX_LEVELS).contains(&n) {
+            return Err(LevelsError::Count(n));
+        }
+        for (i, &v) in values.iter().enumerate() {
+            if v.is_nan() {
+                return Err(LevelsError::NotANumber(i));
+            }
+            let end_ok = (i == 0 && v == f64::NEG_INFINITY) || (i + 1 == n && v == f64::INFINITY);
+            if v.is_infinite() && !end_ok {
+                return Err(LevelsError::Infinite(i));
+            }
+            if i > 0 && v <= values[i - 1] {
+                return Err(LevelsError::NotIncreasing(i));
+            }
+        }
+        Ok(Self::sorted(values))
+    }
+
+    /// Levels from a list already checked ([`Levels::new`]).
+    fn sorted(list: &[f64]) -> Self {
+        let mut values = [0.0; MAX_LEVELS];
+        values[..list.len()].copy_from_slice(list);
         Levels {
-            values: [alpha, beta],
-            ties: [alpha, beta],
+            values,
+            ties: values,
+            len: list.len() as u8,
+            first: 0,
+            ties_above: 1 << (list.len() - 1),
         }
     }
 
     /// Number of levels.
     #[inline]
     pub const fn len(&self) -> usize {
-        MAX_LEVELS
+        self.len as usize
     }
 
-    /// Whether there are no levels (never: an interval has two, possibly infinite).
+    /// Whether there are no levels (never: there are at least two, possibly infinite).
     #[inline]
     pub const fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// Number of regions (`len() - 1`).
+    #[inline]
+    pub const fn regions(&self) -> usize {
+        self.len() - 1
+    }
+
+    /// Region `k`'s two levels (`k < regions()`), with their ties, as the clipper sees
+    /// them; [`Levels::global`] gives their indices in the run.
+    pub fn region(&self, k: usize) -> Levels {
+        let mut values = [0.0; MAX_LEVELS];
+        let mut ties = [0.0; MAX_LEVELS];
+        values[..2].copy_from_slice(&self.values[k..k + 2]);
+        ties[..2].copy_from_slice(&self.ties[k..k + 2]);
+        Levels {
+            values,
+            ties,
+            len: 2,
+            first: self.first + k as u8,
+            ties_above: (self.ties_above >> k) & 0b11,
+        }
+    }
+
+    /// Index in the run of level `i` of these levels (`i` itself unless a region's view).
+    #[inline]
+    pub const fn global(&self, i: usize) -> u8 {
+        self.first + i as u8
     }
 
     /// Level `i` (`i < len()`).
@@ -73,13 +189,13 @@ impl Levels {
     /// The levels, in increasing order.
     #[inline]
     pub fn iter(&self) -> std::iter::Copied<std::slice::Iter<'_, f64>> {
-        self.values.iter().copied()
+        self.values().iter().copied()
     }
 
-    /// The levels as an array, in increasing order.
+    /// The levels, in increasing order.
     #[inline]
-    pub fn values(&self) -> [f64; MAX_LEVELS] {
-        self.values
+    pub fn values(&self) -> &[f64] {
+        &self.values[..self.len()]
     }
 
     /// The value that data equal to level `i` takes when cuts are placed.
@@ -88,28 +204,29 @@ impl Levels {
         self.ties[i]
     }
 
-    /// Whether level `i` is a lower bound (a value equal to it counts as below).
+    /// Whether a value equal to level `i` counts as below it (every level but the run's
+    /// last).
     #[inline]
-    pub const fn is_lower(i: usize) -> bool {
-        i.is_multiple_of(2)
+    pub const fn ties_below(&self, i: usize) -> bool {
+        self.ties_above & (1 << i) == 0
     }
 
-    /// Whether `v` lies below level `i` (equal counts as below for a lower bound). False for
-    /// NaN.
+    /// Whether `v` lies below level `i` (equal counts as below unless `i` is the run's last
+    /// level). False for NaN.
     #[inline]
     pub fn below(&self, i: usize, v: f64) -> bool {
-        if Self::is_lower(i) {
+        if self.ties_below(i) {
             v <= self.values[i]
         } else {
             v < self.values[i]
         }
     }
 
-    /// Whether `v` lies above level `i` (equal counts as above for an upper bound). False for
-    /// NaN.
+    /// Whether `v` lies above level `i` (equal counts as above only for the run's last
+    /// level). False for NaN.
     #[inline]
     pub fn above(&self, i: usize, v: f64) -> bool {
-        if Self::is_lower(i) {
+        if self.ties_below(i) {
             v > self.values[i]
         } else {
             v >= self.values[i]
@@ -126,17 +243,18 @@ impl Levels {
         }
     }
 
-    /// Whether `v` lies strictly between the first two levels (inside the interval).
+    /// Whether `v` lies strictly between the first and the last level (inside the meshed
+    /// set, away from its bounds).
     #[inline]
     pub fn inside(&self, v: f64) -> bool {
-        v > self.values[0] && v < self.values[1]
+        v > self.values[0] && v < self.values[self.len() - 1]
     }
 
     /// Value of a (not snapped) vertex for cut placement: a value tied with a level moved to
     /// [`Levels::tie`].
     #[inline]
     pub fn effective(&self, v: f64) -> f64 {
-        for i in 0..MAX_LEVELS {
+        for i in 0..self.len() {
             if v == self.values[i] {
                 return self.ties[i];
             }
@@ -164,7 +282,7 @@ impl Levels {
             }
         };
         let below = if i > 0 { gap(i - 1) } else { f64::INFINITY };
-        let above = if i + 1 < MAX_LEVELS {
+        let above = if i + 1 < self.len() {
             gap(i + 1)
         } else {
             f64::INFINITY
@@ -172,8 +290,8 @@ impl Levels {
         below.min(above)
     }
 
-    /// These levels with their tie values for data `values`: a tied value is moved outward
-    /// (below a lower bound, above an upper one) by [`TIE_FRACTION`] of the smallest non-zero
+    /// These levels with their tie values for data `values`: a tied value is moved to the
+    /// side ties count on (below every level but the last, above the last) by [`TIE_FRACTION`] of the smallest non-zero
     /// distance between the level and a data value (so, with integer data, by 10⁻³), at most
     /// a quarter of the distance to the next level.
     pub fn with_ties(self, values: &Samples) -> Self {
@@ -200,12 +318,12 @@ impl Levels {
             }
         };
         let mut ties = self.values;
-        for (i, tie) in ties.iter_mut().enumerate() {
+        for (i, tie) in ties.iter_mut().enumerate().take(self.len()) {
             let l = self.values[i];
             let d = (TIE_FRACTION * gap(l))
                 .min(0.25 * self.width(i))
                 .max(l.abs() * 4.0 * f64::EPSILON);
-            *tie = if Self::is_lower(i) { l - d } else { l + d };
+            *tie = if self.ties_below(i) { l - d } else { l + d };
         }
         Levels { ties, ..self }
     }
@@ -230,14 +348,15 @@ impl Levels {
             return (None, self);
         }
         if grid.values.storage().is_integer() && tol < 0.5 {
-            let moved = self
-                .values
+            let moved: Vec<f64> = self
+                .iter()
                 .map(|l| match grid.values.par_any(|v| near(v, l)) {
                     true => l.round(),
                     false => l,
-                });
+                })
+                .collect();
             if moved.windows(2).all(|w| w[0] < w[1]) {
-                return (None, Levels::interval(moved[0], moved[1]));
+                return (None, Levels::sorted(&moved));
             }
         }
         let written = self.iter().filter(|l| l.is_finite());
@@ -263,7 +382,7 @@ impl std::ops::Index<usize> for Levels {
     /// Level `i` ([`Levels::get`]).
     #[inline]
     fn index(&self, i: usize) -> &f64 {
-        &self.values[i]
+        &self.values()[i]
     }
 }
 
@@ -293,5 +412,43 @@ mod tests {
         assert_eq!(lv.tie(0), f64::NEG_INFINITY);
         assert_eq!(lv.onto_near(0.5 + 1e-12, 1e-9), 0.5);
         assert_eq!(lv.onto_near(-1e300, 1e-9), -1e300);
+    }
+
+    #[test]
+    fn several_levels_give_ties_to_the_region_below_but_the_last() {
+        let data = Samples::from(vec![0.0, 1.0, 2.0, 3.0, 4.0]);
+        let lv = Levels::new(&[1.0, 2.0, 3.0]).unwrap().with_ties(&data);
+        assert_eq!((lv.len(), lv.regions()), (3, 2));
+        // A value equal to 2 counts below it: inside region 0, outside region 1.
+        assert!(lv.below(1, 2.0) && !lv.above(1, 2.0) && lv.tie(1) < 2.0);
+        assert!(lv.above(2, 3.0) && lv.tie(2) > 3.0);
+        assert!(lv.inside(2.5) && !lv.inside(3.0));
+        let r1 = lv.region(1);
+        assert_eq!((r1.len(), r1.get(0), r1.get(1)), (2, 2.0, 3.0));
+        assert_eq!((r1.global(0), r1.global(1)), (1, 2));
+        assert!(r1.below(0, 2.0) && r1.above(1, 3.0) && r1.tie(0) == lv.tie(1));
+        let r0 = lv.region(0);
+        assert!(!r0.above(1, 2.0) && r0.ties_below(1) && r0.effective(2.0) == lv.tie(1));
+        assert_eq!(
+            Levels::new(&[1.0, 3.0]).unwrap(),
+            Levels::interval(1.0, 3.0)
+        );
+    }
+
+    #[test]
+    fn bad_level_lists_are_refused() {
+        let (inf, nan) = (f64::INFINITY, f64::NAN);
+        assert_eq!(Levels::new(&[1.0]), Err(LevelsError::Count(1)));
+        assert_eq!(Levels::new(&[0.0; 17]), Err(LevelsError::Count(17)));
+        assert_eq!(Levels::new(&[1.0, nan]), Err(LevelsError::NotANumber(1)));
+        assert_eq!(Levels::new(&[1.0, 1.0]), Err(LevelsError::NotIncreasing(1)));
+        assert_eq!(Levels::new(&[inf, 2.0]), Err(LevelsError::Infinite(0)));
+        assert_eq!(
+            Levels::new(&[0.0, -inf, 1.0]),
+            Err(LevelsError::Infinite(1))
+        );
+        assert!(Levels::new(&[-inf, 0.0, inf]).is_ok());
+        let e = Levels::new(&[2.0, 1.0]).unwrap_err().to_string();
+        assert!(e.contains("level 2 is not above level 1"), "{e}");
     }
 }

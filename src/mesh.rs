@@ -6,7 +6,6 @@ use std::io;
 use serde::Serialize;
 
 use crate::geom::signed_volume;
-use crate::levels::MAX_LEVELS;
 
 /// Which surface a boundary triangle lies on: the level set of one of the run's levels
 /// ([`crate::levels::Levels`]), or the grid box.
@@ -19,8 +18,11 @@ pub enum BoundaryLabel {
     Box,
 }
 
+/// Number of levels a boundary label can name: the two bounds of one interval.
+pub const LABEL_LEVELS: usize = 2;
+
 /// Number of boundary labels: one per level, then the box.
-pub const NUM_LABELS: usize = MAX_LEVELS + 1;
+pub const NUM_LABELS: usize = LABEL_LEVELS + 1;
 
 impl BoundaryLabel {
     /// The level set f = alpha (level 0, the lower bound of an interval).
@@ -35,20 +37,20 @@ impl BoundaryLabel {
         BoundaryLabel::Box,
     ];
 
-    /// The label's number: the level index, or [`MAX_LEVELS`] for the box. Writers emit it
+    /// The label's number: the level index, or [`LABEL_LEVELS`] for the box. Writers emit it
     /// (as is or plus one) as the label's tag; per-label tables are indexed by it.
     #[inline]
     pub const fn index(self) -> usize {
         match self {
             BoundaryLabel::Level(i) => i as usize,
-            BoundaryLabel::Box => MAX_LEVELS,
+            BoundaryLabel::Box => LABEL_LEVELS,
         }
     }
 
-    /// The label numbered `i` ([`BoundaryLabel::index`]); `i <= MAX_LEVELS`.
+    /// The label numbered `i` ([`BoundaryLabel::index`]); `i <= LABEL_LEVELS`.
     #[inline]
     pub const fn from_index(i: usize) -> BoundaryLabel {
-        if i < MAX_LEVELS {
+        if i < LABEL_LEVELS {
             BoundaryLabel::Level(i as u8)
         } else {
             BoundaryLabel::Box

@@ -1,4 +1,6 @@
-//! One linear tetrahedron clipped to the open interval `alpha < f < beta`.
+//! One linear tetrahedron clipped to the open interval `alpha < f < beta` between two levels
+//! (one interval, or one region of several: the levels' indices in the run name the cuts and
+//! the boundary labels).
 //!
 //! The clipped piece is a convex polytope whose vertices are the tet's inside vertices and the
 //! cuts of its edges by the two levels. It is split into tets by coning from its first point
@@ -155,7 +157,7 @@ pub fn clip_tet(tv: &[ClipVertex; 4], lv: &Levels, box_planes: u8, sink: &mut im
     let cuts = cut_points(tv, &cls, lv);
     // Only snapped vertices make a piece with every point on one level.
     if tv.iter().any(|v| v.snap != SNAP_NONE) && flat(&cuts.pts[..cuts.np], lv) {
-        snapped_face(tv, &cls, &cuts, sink);
+        snapped_face(tv, &cls, &cuts, lv, sink);
         return;
     }
     let mut faces = Faces {
@@ -163,7 +165,7 @@ pub fn clip_tet(tv: &[ClipVertex; 4], lv: &Levels, box_planes: u8, sink: &mut im
         polys: [Poly::new(None); 6],
     };
     tet_faces(&cls, box_face, &cuts, &mut faces);
-    level_faces(&cls, &cuts, &mut faces);
+    level_faces(&cls, &cuts, lv, &mut faces);
     cone_and_fan(&cuts.pts[..cuts.np], &faces.polys[..faces.n], lv, sink);
 }
 
@@ -174,18 +176,20 @@ pub fn clip_tet(tv: &[ClipVertex; 4], lv: &Levels, box_planes: u8, sink: &mut im
 /// the face as an inner face of its piece, which is whole, or cut only by the other level
 /// away from the face. Any other flat piece (fewer points) emits nothing.
 #[inline]
-fn snapped_face(tv: &[ClipVertex; 4], cls: &[u8; 4], cuts: &CutPoints, sink: &mut impl ClipSink) {
+fn snapped_face(
+    tv: &[ClipVertex; 4],
+    cls: &[u8; 4],
+    cuts: &CutPoints,
+    lv: &Levels,
+    sink: &mut impl ClipSink,
+) {
     let Some(out) = (0..4).find(|&i| cls[i] != INSIDE) else {
         return;
     };
     if cuts.np != 3 {
         return;
     }
-    let label = if cls[out] == BELOW {
-        BoundaryLabel::Level(0)
-    } else {
-        BoundaryLabel::Level(1)
-    };
+    let label = BoundaryLabel::Level(lv.global(usize::from(cls[out] != BELOW)));
     let p = &cuts.pts[..3];
     let normal = cross(sub(p[1].pos, p[0].pos), sub(p[2].pos, p[0].pos));
     // Outward: the domain (the tet across) on the side away from the outside corner.

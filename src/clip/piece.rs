@@ -10,8 +10,8 @@ use crate::keys::cut_point;
 use crate::levels::Levels;
 use crate::mesh::BoundaryLabel;
 
-/// Cut of edge (a, b) by `level`, computed from the key-ordered ends so that every tet
-/// sharing the edge gets the bit-identical point.
+/// Cut of edge (a, b) by `level` (index `which` in the run), computed from the key-ordered
+/// ends so that every tet sharing the edge gets the bit-identical point.
 #[inline]
 fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, lv: &Levels) -> ClipPoint {
     let (p, q) = if a.key < b.key { (a, b) } else { (b, a) };
@@ -124,7 +124,7 @@ pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], lv: &Levels) -> Cu
             } else if tv[j].snap == snap {
                 c.vid[j]
             } else {
-                c.pts[c.np] = cut(&tv[i], &tv[j], level, which as u8, lv);
+                c.pts[c.np] = cut(&tv[i], &tv[j], level, lv.global(which), lv);
                 c.np += 1;
                 c.np - 1
             };
@@ -165,13 +165,12 @@ pub(super) fn tet_faces(cls: &[u8; 4], box_face: [bool; 4], cuts: &CutPoints, fa
     }
 }
 
-/// The level faces: alpha separates BELOW from the rest, beta ABOVE from the rest.
+/// The level faces: level 0 separates BELOW from the rest, level 1 ABOVE from the rest
+/// (labelled by their indices in the run).
 #[inline]
-pub(super) fn level_faces(cls: &[u8; 4], cuts: &CutPoints, faces: &mut Faces) {
-    for (which, side, label) in [
-        (0usize, BELOW, BoundaryLabel::Level(0)),
-        (1, ABOVE, BoundaryLabel::Level(1)),
-    ] {
+pub(super) fn level_faces(cls: &[u8; 4], cuts: &CutPoints, lv: &Levels, faces: &mut Faces) {
+    for (which, side) in [(0usize, BELOW), (1, ABOVE)] {
+        let label = BoundaryLabel::Level(lv.global(which));
         let mut ins = [0usize; 4];
         let mut outs = [0usize; 4];
         let (mut ni, mut no) = (0, 0);

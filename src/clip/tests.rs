@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::geom::signed_volume;
+use crate::samples::Samples;
 
 struct Collect {
     vol: f64,
@@ -412,4 +413,82 @@ fn random_tet(seed: &mut u64, cls: [usize; 4], alpha: f64, beta: f64) -> [ClipVe
             _ => SNAP_NONE,
         },
     })
+}
+
+/// Collects a region's tets (volume) and its boundary triangles by label, as point keys.
+#[derive(Default)]
+struct Region {
+    vol: f64,
+    tris: Vec<(BoundaryLabel, [PointKey; 3])>,
+}
+impl ClipSink for Region {
+    fn tet(&mut self, p: &[ClipPoint], t: [usize; 4]) {
+        let v = signed_volume(p[t[0]].pos, p[t[1]].pos, p[t[2]].pos, p[t[3]].pos);
+        assert!(v > 0.0);
+        self.vol += v;
+    }
+    fn triangle(&mut self, p: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
+        self.tris.push((label, t.map(|i| p[i].key)));
+    }
+}
+
+/// A triangle's keys rotated to start at the smallest (orientation kept).
+fn canonical(t: [PointKey; 3]) -> [PointKey; 3] {
+    let r = (0..3).min_by_key(|&i| t[i]).unwrap();
+    [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
+}
+
+/// Three levels, two regions: each tet clipped to each region's levels. The two sides of
+/// the level between the regions are the same triangles (same keys, opposite orientation,
+/// both labelled with the middle level's index), also where a corner equals that level
+/// (it belongs to the region below); the regions' volumes add up to the clip of the union
+/// when no corner is tied.
+#[test]
+fn two_regions_meet_in_the_same_triangles() {
+    let pos = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.1, 0.0],
+        [0.2, 1.0, 0.1],
+        [0.1, 0.3, 1.0],
+    ];
+    let choices = [0.2, 0.9, 1.5, 1.7, 2.1, 2.8, 1.5, 0.6];
+    let data = Samples::from(choices.to_vec());
+    let run = Levels::new(&[0.5, 1.5, 2.5]).unwrap().with_ties(&data);
+    let union = Levels::interval(0.5, 2.5).with_ties(&data);
+    let mut seed = 12345u64;
+    for _ in 0..2000 {
+        let vals: [f64; 4] = std::array::from_fn(|_| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            choices[(seed >> 33) as usize % choices.len()]
+        });
+        let tv: [ClipVertex; 4] = std::array::from_fn(|i| ClipVertex {
+            key: ((i as u64 + 1) * 7 % 5) << 5,
+            pos: pos[i],
+            val: vals[i],
+            box_mask: 0,
+            snap: SNAP_NONE,
+        });
+        let mut r: [Region; 2] = Default::default();
+        for (k, sink) in r.iter_mut().enumerate() {
+            clip_tet(&tv, &run.region(k), 0, sink);
+        }
+        let side = |reg: &Region, level: u8, flip: bool| {
+            let mut v: Vec<[PointKey; 3]> = (reg.tris.iter())
+                .filter(|(l, _)| *l == BoundaryLabel::Level(level))
+                .map(|&(_, [a, b, c])| canonical(if flip { [a, c, b] } else { [a, b, c] }))
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        assert_eq!(side(&r[0], 1, false), side(&r[1], 1, true), "{vals:?}");
+        assert!(side(&r[0], 2, false).is_empty() && side(&r[1], 0, false).is_empty());
+        if !vals.contains(&1.5) {
+            let mut u = Region::default();
+            clip_tet(&tv, &union, 0, &mut u);
+            let sum = r[0].vol + r[1].vol;
+            assert!((sum - u.vol).abs() <= 1e-13, "{vals:?}: {sum} vs {}", u.vol);
+        }
+    }
 }

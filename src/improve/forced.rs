@@ -352,7 +352,7 @@ impl Classifier<'_> {
             })
             .flat_map(|c| self.cell_critical_points(c))
             .map(|(v, hess, pos)| {
-                let [da, db] = self.levels.values().map(|l| (v - l).abs());
+                let (da, db) = ((v - self.levels[0]).abs(), (v - self.levels[1]).abs());
                 if da <= db {
                     (da, self.levels[0], hess, pos)
                 } else {
