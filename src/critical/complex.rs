@@ -42,8 +42,7 @@ pub fn cell_tets(grid: &ScalarGrid, c: [usize; 3], out: &mut Vec<([u64; 4], [f64
     let planner = Planner {
         grid,
         method: Method::Tptd,
-        alpha: f64::NEG_INFINITY,
-        beta: f64::INFINITY,
+        levels: crate::levels::Levels::interval(f64::NEG_INFINITY, f64::INFINITY),
         split_sags: false,
     };
     let v = grid.cell_values(c[0], c[1], c[2]);

@@ -17,6 +17,7 @@
 
 use super::sag::face_diagonal_split;
 use crate::grid::{ScalarGrid, LOW_FACES};
+use crate::levels::Levels;
 use crate::trilinear::{body_saddles, face_saddle, BodySaddle, FaceSaddle};
 
 /// Decomposition method.
@@ -281,16 +282,46 @@ pub struct Planner<'a> {
     pub grid: &'a ScalarGrid,
     /// Decomposition method.
     pub method: Method,
-    /// Lower level (may be `-inf`).
-    pub alpha: f64,
-    /// Upper level (may be `+inf`).
-    pub beta: f64,
+    /// The run's levels (their values; the ties rule of [`Levels`] decides the classes).
+    /// Each cell, and each face diagonal, is planned for the two of them that matter there
+    /// ([`Planner::pair`]).
+    pub levels: Levels,
     /// Whether edges that sag from the level set are split ([`super::sag`]). Warping decides
     /// its snaps on the split complex (`warp`).
     pub split_sags: bool,
 }
 
 impl Planner<'_> {
+    /// The two levels, as `(alpha, beta)` for [`class`], that a cell or face with values `v`
+    /// is planned for: the interval's two levels; with more levels, the lowest level that
+    /// crosses `v` and the next one (the last two when it is the last), or, when none
+    /// crosses, the bounds of the region holding `v`. A function of `v` alone, so the cells
+    /// on both sides of a face agree on it. A level that is not the run's last is passed as
+    /// beta one step above itself, so that a value equal to it counts below it as for alpha
+    /// ([`Levels::below`]).
+    #[inline]
+    pub fn pair(&self, v: &[f64]) -> (f64, f64) {
+        let lv = &self.levels;
+        let n = lv.len();
+        if n == 2 {
+            return (lv[0], lv[1]);
+        }
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let k = match (0..n).find(|&i| lv.below(i, lo)) {
+            None => n - 2,
+            Some(0) => 0,
+            Some(i) if lv.below(i, hi) => i - 1,
+            Some(i) => i.min(n - 2),
+        };
+        let beta = if k + 2 == n {
+            lv[k + 1]
+        } else {
+            lv[k + 1].next_up()
+        };
+        (lv[k], beta)
+    }
+
     /// Whether the cell at `c` is full (uses every saddle), computed from its values when
     /// asked: only cells with a face saddle ask about the neighbour across it, which is far
     /// cheaper than a pass over all cells.
@@ -300,7 +331,8 @@ impl Planner<'_> {
             Method::Tptd => true,
             Method::Ctd | Method::Std => {
                 let v = self.grid.cell_values(c[0], c[1], c[2]);
-                let cls = CellClasses::new(&v, self.alpha, self.beta);
+                let (alpha, beta) = self.pair(&v);
+                let cls = CellClasses::new(&v, alpha, beta);
                 if !(cls.crosses_alpha() || cls.crosses_beta()) {
                     return false;
                 }
@@ -328,7 +360,8 @@ impl Planner<'_> {
 /// body saddles it uses (looking at the neighbours across its saddle faces when needed).
 #[inline]
 pub fn plan_cell(p: &Planner, c: [usize; 3], v: &[f64; 8]) -> CellPlan {
-    let cls = CellClasses::new(v, p.alpha, p.beta);
+    let pair = p.pair(v);
+    let cls = CellClasses::new(v, pair.0, pair.1);
     if cls.all_outside() {
         return CellPlan::bare(Layout::Outside, cls);
     }
@@ -340,13 +373,19 @@ pub fn plan_cell(p: &Planner, c: [usize; 3], v: &[f64; 8]) -> CellPlan {
             },
             cls,
         ),
-        Method::Tptd | Method::Std | Method::Ctd => plan_tptd(p, c, v, cls),
+        Method::Tptd | Method::Std | Method::Ctd => plan_tptd(p, c, v, cls, pair),
     }
 }
 
 /// [`plan_cell`] for the TPTD family.
 #[inline]
-fn plan_tptd(p: &Planner, c: [usize; 3], v: &[f64; 8], cls: CellClasses) -> CellPlan {
+fn plan_tptd(
+    p: &Planner,
+    c: [usize; 3],
+    v: &[f64; 8],
+    cls: CellClasses,
+    pair: (f64, f64),
+) -> CellPlan {
     let mut plan = CellPlan::bare(Layout::Tptd, cls);
     let crosses = cls.crosses_alpha() || cls.crosses_beta();
     if crosses || p.method == Method::Tptd {
@@ -374,27 +413,29 @@ fn plan_tptd(p: &Planner, c: [usize; 3], v: &[f64; 8], cls: CellClasses) -> Cell
         // fits, so one of them must be the apex. Safe are those on the side of the level
         // whose corners are edge-connected (the apex joins all of them).
         plan.apex = if crosses {
-            safe_apexes(p, cls, used, &plan.face_values())
+            safe_apexes(pair, cls, used, &plan.face_values())
         } else {
             used
         };
     }
     if crosses && p.split_sags {
-        plan_splits(p, v, &mut plan);
+        plan_splits(p, v, pair, &mut plan);
     }
     plan
 }
 
-/// The sagging diagonals of the faces of a cell crossing a level that use no saddle, and the
-/// levels for the edges inside it (see [`super::sag`]).
+/// The sagging diagonals of the faces of a cell crossing a level that use no saddle (each for
+/// its own [`Planner::pair`]), and the cell's levels `pair` for the edges inside it (see
+/// [`super::sag`]).
 #[inline]
-fn plan_splits(p: &Planner, v: &[f64; 8], plan: &mut CellPlan) {
+fn plan_splits(p: &Planner, v: &[f64; 8], pair: (f64, f64), plan: &mut CellPlan) {
     for f in 0..6 {
         if plan.used() & (1 << f) != 0 {
             continue;
         }
         let q = crate::grid::face_corners(f).map(|c| v[c]);
-        if let Some(s) = face_diagonal_split(q, p.alpha, p.beta) {
+        let (alpha, beta) = p.pair(&q);
+        if let Some(s) = face_diagonal_split(q, alpha, beta) {
             plan.extra |= 1 << f;
             plan.saddles[f] = FaceSaddle {
                 uv: [s.t, s.t],
@@ -402,24 +443,25 @@ fn plan_splits(p: &Planner, v: &[f64; 8], plan: &mut CellPlan) {
             };
         }
     }
-    plan.split_levels = Some([p.alpha, p.beta]);
+    plan.split_levels = Some([pair.0, pair.1]);
 }
 
 /// The used faces whose saddle lies on a side of the (single) level crossing the cell whose
 /// corners are edge-connected.
-fn safe_apexes(p: &Planner, cls: CellClasses, used: u8, fv: &[f64; 6]) -> u8 {
+fn safe_apexes(pair: (f64, f64), cls: CellClasses, used: u8, fv: &[f64; 6]) -> u8 {
+    let (alpha, beta) = pair;
     let mut safe = 0u8;
     for f in 0..6 {
         if used & (1 << f) == 0 {
             continue;
         }
         let m = if cls.crosses_alpha() {
-            if fv[f] <= p.alpha {
+            if fv[f] <= alpha {
                 cls.below
             } else {
                 !cls.below
             }
-        } else if fv[f] >= p.beta {
+        } else if fv[f] >= beta {
             cls.above
         } else {
             !cls.above
@@ -457,20 +499,33 @@ mod tests {
         ScalarGrid::new(dims, v).unwrap()
     }
 
-    /// The two cells of every interior face agree on whether its saddle is used; a forced
-    /// saddle has a full cell across; `own` and `forced` are disjoint.
+    /// The two cells of every interior face agree on whether its saddle is used and on the
+    /// split of its diagonal; a forced saddle has a full cell across; `own` and `forced` are
+    /// disjoint. One interval, several levels, and levels equal to grid values (ties).
     #[test]
     fn neighbours_agree_on_every_face() {
         let grid = noise_grid([9, 8, 7], 3);
         let cd = grid.cell_dims();
+        let mut sorted = grid.values.to_f64_vec();
+        sorted.sort_by(f64::total_cmp);
+        let q = |x: f64| sorted[(x * (sorted.len() - 1) as f64) as usize];
+        let inf = f64::INFINITY;
+        let lists: Vec<Vec<f64>> = vec![
+            vec![-0.2, 0.3],
+            vec![0.1, inf],
+            vec![-0.5, 0.6],
+            vec![-0.5, -0.1, 0.2, 0.6],
+            vec![-inf, -0.3, 0.0, 0.3],
+            vec![-0.6, -0.2, 0.1, 0.4, inf],
+            vec![q(0.2), q(0.4), q(0.6), q(0.8)],
+        ];
         let mut forced = 0;
         for method in [Method::Tptd, Method::Std, Method::Ctd] {
-            for (alpha, beta) in [(-0.2, 0.3), (0.1, f64::INFINITY), (-0.5, 0.6)] {
+            for list in &lists {
                 let p = Planner {
                     grid: &grid,
                     method,
-                    alpha,
-                    beta,
+                    levels: Levels::new(list).unwrap(),
                     split_sags: true,
                 };
                 let plan = |c: [usize; 3]| plan_cell(&p, c, &grid.cell_values(c[0], c[1], c[2]));
@@ -494,8 +549,12 @@ mod tests {
                         assert_eq!(
                             (a.used() >> fa) & 1,
                             (b.used() >> fb) & 1,
-                            "{method:?} {c:?} axis {axis}"
+                            "{method:?} {list:?} {c:?} axis {axis}"
                         );
+                        let split = |p: &CellPlan, f: usize| {
+                            ((p.extra >> f) & 1 == 1).then(|| p.saddles[f].value.to_bits())
+                        };
+                        assert_eq!(split(&a, fa), split(&b, fb), "{method:?} {list:?} {c:?}");
                         if (a.forced >> fa) & 1 == 1 {
                             assert!(b.full && p.cell_full(n));
                             forced += 1;

@@ -587,8 +587,7 @@ mod tests {
         let planner = Planner {
             grid: &grid,
             method: Method::Ctd,
-            alpha: 0.0,
-            beta: f64::INFINITY,
+            levels: crate::levels::Levels::interval(0.0, f64::INFINITY),
             split_sags: true,
         };
         let plan = plan_cell(&planner, [0; 3], &v);

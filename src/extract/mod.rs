@@ -274,8 +274,7 @@ fn run(
         planner: Planner {
             grid,
             method: opts.method,
-            alpha: levels.get(0),
-            beta: levels.get(1),
+            levels,
             split_sags: opts.split_sags,
         },
         snaps: Vec::new(),

@@ -203,8 +203,7 @@ fn vertices_whose_link_the_other_level_crosses_are_snapped() {
         let planner = crate::decompose::plan::Planner {
             grid: &g,
             method: o.method,
-            alpha: o.alpha,
-            beta: o.beta,
+            levels: Levels::interval(o.alpha, o.beta),
             split_sags: true,
         };
         let lv = Levels::interval(o.alpha, o.beta).with_ties(&g.values);
