@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# The module layering (scripts/check_layers.py), the full test suite, then the README's commands. Installs what the tests need when it is missing:
-# gmsh and CalculiX (Debian packages), numpy, meshio and VTK (PyPI), and for the comparison with
-# TetGen and fTetWild (tests/compare_peers.rs) tetgen, pytetwild, scikit-image, nilearn, nibabel
-# and pyvista (PyPI).
+# The module layering (scripts/check_layers.py), the full test suite, then the README's commands.
+# Installs what the tests need when it is missing: gmsh and CalculiX (Debian packages), numpy,
+# meshio and VTK (PyPI), and for the comparison with TetGen and fTetWild (tests/compare_peers.rs)
+# tetgen, pytetwild, scikit-image, nilearn, nibabel and pyvista (PyPI).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
