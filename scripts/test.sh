@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# The full test suite, then the README's commands. Installs what the tests need when it is missing:
-# gmsh and CalculiX (Debian packages), numpy, meshio and VTK (PyPI), and for the comparison with
-# TetGen and fTetWild (tests/compare_peers.rs) tetgen, pytetwild, scikit-image, nilearn, nibabel
-# and pyvista (PyPI).
+# The module layering (scripts/check_layers.py), the full test suite, then the README's commands.
+# Installs what the tests need when it is missing: gmsh and CalculiX (Debian packages), numpy,
+# meshio and VTK (PyPI), and for the comparison with TetGen and fTetWild (tests/compare_peers.rs)
+# tetgen, pytetwild, scikit-image, nilearn, nibabel and pyvista (PyPI).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -23,6 +23,9 @@ if ! python3 -c "import scipy, tetgen, pytetwild, skimage, nilearn, nibabel, pyv
   echo "installing scipy tetgen pytetwild scikit-image nilearn nibabel pyvista (pip)"
   python3 -m pip install -q scipy tetgen pytetwild scikit-image nilearn nibabel pyvista
 fi
+
+# No import circle between the top-level modules of src/, and the layer rules.
+python3 scripts/check_layers.py
 
 cargo test --all-targets "$@"
 

@@ -19,6 +19,11 @@ use crate::grid::ScalarGrid;
 use crate::keys::{grid_vertex, on_z_plane, vertex_key, vertex_point, PointKey, CORNER};
 use crate::mesh::{grow_box, BoundaryLabel, MeshChunk, EMPTY_BOX, NUM_LABELS};
 
+/// More points or tets (the field names which) than 32-bit numbers can number; the mesher
+/// reports it as its `MeshError::TooLarge`.
+#[derive(Debug)]
+pub(crate) struct TooLarge(pub(crate) &'static str);
+
 /// Points, tets and boundary triangles of one slab, numbered locally.
 pub(crate) struct Slab {
     /// Slab-local id of each grid vertex on the slab's two planes (`u32::MAX`: none yet).
@@ -192,8 +197,8 @@ impl Welder {
     /// Welds the next slabs (consecutive, starting at the next layer) into chunks.
     ///
     /// # Errors
-    /// [`crate::MeshError::TooLarge`] past 2^32 − 1 points or tets.
-    pub(crate) fn weld(&mut self, slabs: Vec<Slab>) -> Result<Vec<MeshChunk>, crate::MeshError> {
+    /// [`TooLarge`] past 2^32 − 1 points or tets.
+    pub(crate) fn weld(&mut self, slabs: Vec<Slab>) -> Result<Vec<MeshChunk>, TooLarge> {
         let mut numbers = Vec::with_capacity(slabs.len());
         for s in &slabs {
             numbers.push(self.number(s)?);
@@ -206,7 +211,7 @@ impl Welder {
     }
 
     /// Numbers the points of the next slab; remembers the points on its upper plane.
-    fn number(&mut self, s: &Slab) -> Result<SlabNumbers, crate::MeshError> {
+    fn number(&mut self, s: &Slab) -> Result<SlabNumbers, TooLarge> {
         let k = self.next_slab;
         let stride = self.stride;
         let first_point = self.next_point as usize;
@@ -219,8 +224,7 @@ impl Welder {
             let gid = match self.shared(key, corner, k) {
                 Some(g) => g,
                 None => {
-                    let g = u32::try_from(self.next_point)
-                        .map_err(|_| crate::MeshError::TooLarge("points"))?;
+                    let g = u32::try_from(self.next_point).map_err(|_| TooLarge("points"))?;
                     self.next_point += 1;
                     fresh.push(li as u32);
                     g
@@ -238,7 +242,7 @@ impl Welder {
         }
         self.next_tet += s.tets.len() as u64;
         if self.next_tet > u64::from(u32::MAX) {
-            return Err(crate::MeshError::TooLarge("tets"));
+            return Err(TooLarge("tets"));
         }
         std::mem::swap(&mut self.prev.corners, &mut self.top.corners);
         self.prev.others = std::mem::take(&mut self.top.others);

@@ -1,7 +1,8 @@
-//! Saddles of the trilinear interpolant inside cells (“Exploring scalar fields using critical isovalues” §3.4): always critical points
-//! of the whole field. Their index comes from the Hessian, whose diagonal is zero:
-//! `det H = 2 f_xy f_yz f_xz`. With `det H > 0` two eigenvalues are negative (index 2: the
-//! lower link is a ring, the upper link two pieces), with `det H < 0` one is (index 1).
+//! Saddles of the trilinear interpolant inside cells (“Exploring scalar fields using critical
+//! isovalues” §3.4): always critical points of the whole field. Their index comes from the Hessian,
+//! whose diagonal is zero: `det H = 2 f_xy f_yz f_xz`. With `det H > 0` two eigenvalues are
+//! negative (index 2: the lower link is a ring, the upper link two pieces), with `det H < 0` one is
+//! (index 1).
 
 use super::vertex::LinkClass;
 use crate::trilinear::{body_saddles, coefficients, hessian, BodySaddle};

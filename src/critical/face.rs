@@ -1,16 +1,18 @@
-//! Face saddles: saddles of the bilinear interpolant on grid faces that are critical points of
-//! the piecewise-trilinear field (Lemma 4 of “Exploring scalar fields using critical isovalues”), on interior faces and on the grid box.
+//! Face saddles: saddles of the bilinear interpolant on grid faces that are critical points of the
+//! piecewise-trilinear field (Lemma 4 of “Exploring scalar fields using critical isovalues”), on
+//! interior faces and on the grid box.
 //!
 //! Rotate the face so that its corners `A, C` (a diagonal) lie above the saddle value `s` and
 //! `B, D` below, and shift all values by `-s`. On the plane at distance `t` into one of the two
 //! cells the bilinear slice has corners `A_t = A + t (A' - A)` etc. (primes: the corners one step
 //! into that cell), its asymptotic-decider value `A_t C_t - B_t D_t` is 0 at `t = 0` and its
 //! derivative there is `d = C (A' - A) + A (C' - C) - D (B' - B) - B (D' - D)`. With `d > 0` the
-//! slices just inside that cell connect `A` and `C` (the upper corners), with `d < 0` they
-//! connect `B` and `D`. The saddle is a saddle of the whole field iff both cells connect the
-//! same pair; on the grid box, where only one cell exists, the pair the cell does *not* connect
-//! stays apart, which changes only one of the two filtrations. `d = 0` is degenerate (a curve of
-//! critical points crosses the cell, “Critical regions” §5.3): the point is reported as such.
+//! slices just inside that cell connect `A` and `C` (the upper corners), with `d < 0` they connect
+//! `B` and `D`. The saddle is a saddle of the whole field iff both cells connect the same pair; on
+//! the grid box, where only one cell exists, the pair the cell does *not* connect stays apart,
+//! which changes only one of the two filtrations. `d = 0` is degenerate (a curve of critical points
+//! crosses the cell, “Detecting critical regions in scalar fields” §5.3): the point is reported as
+//! such.
 
 use super::vertex::LinkClass;
 

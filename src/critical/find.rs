@@ -11,7 +11,8 @@ use crate::grid::{face_corners, ScalarGrid};
 use crate::keys::{vertex_key, BODY, CORNER, FACE};
 use crate::trilinear::{face_point, face_saddle_of};
 
-/// Every critical point and region of the field, sorted by value (see [`find_critical_with_options`]).
+/// Every critical point and region of the field, sorted by value (see
+/// [`find_critical_with_options`]).
 ///
 /// # Errors
 /// [`CriticalError::Constant`] for a constant volume.

@@ -8,14 +8,16 @@
 //! * [`body`]: saddles inside cells.
 //! * [`plateau`]: plateaus (edge-connected equal values) by flood fill, labels kept for their
 //!   vertices only.
-//! * [`region`]: which plateaus are critical: the neighbourhood graph of “Critical regions”.
+//! * [`region`]: which plateaus are critical: the neighbourhood graph of “Detecting critical
+//!   regions in scalar fields”.
 //! * [`complex`]: the second route, the TPTD tetrahedral complex of the grid (a
 //!   piecewise-linear field whose level sets have the trilinear topology): Betti numbers of
 //!   its superlevel and sublevel sets.
 //! * [`persistence`]: union–find over the superlevel and sublevel sets of that complex.
 //! * [`spectrum`]: Betti numbers between consecutive critical values.
 //! * [`safe`]: the critical values near a chosen bound and the nearest safe bounds.
-//! * [`transfer`]: colour/opacity transfer functions from the critical values (“Exploring scalar fields using critical isovalues” §5).
+//! * [`transfer`]: colour/opacity transfer functions from the critical values (“Exploring scalar
+//!   fields using critical isovalues” §5).
 //!
 //! Points on the grid box are classified with the part of their neighbourhood inside the box,
 //! so the box itself creates critical points (a box vertex whose inward neighbour is lower

@@ -1,13 +1,14 @@
-//! Critical regions on plateaus (“Critical regions”): vertices with an edge-connected neighbour of the
-//! same value cannot be classified locally. A flood fill collects each plateau `R` (maximal
-//! edge-connected set of equal values); every grid edge leaving `R` becomes a node, positive
-//! or negative by the sign of `f - f(R)` at its far end; nodes are joined when their edges lie
-//! in one connected part of `{f > f(R)}` (or `{f < f(R)}`) near `R` inside some cell
-//! ([`join_in_cell`]). With `n_p`, `n_n` components: `n_n = 0` is a region minimum, `n_p = 0` a
-//! region maximum, `n_p + n_n > 2` a region saddle (Definition 5 of “Critical regions”).
+//! Critical regions on plateaus (“Detecting critical regions in scalar fields”): vertices with an
+//! edge-connected neighbour of the same value cannot be classified locally. A flood fill collects
+//! each plateau `R` (maximal edge-connected set of equal values); every grid edge leaving `R`
+//! becomes a node, positive or negative by the sign of `f - f(R)` at its far end; nodes are joined
+//! when their edges lie in one connected part of `{f > f(R)}` (or `{f < f(R)}`) near `R` inside
+//! some cell ([`join_in_cell`]). With `n_p`, `n_n` components: `n_n = 0` is a region minimum,
+//! `n_p = 0` a region maximum, `n_p + n_n > 2` a region saddle (Definition 5 of “Detecting critical
+//! regions in scalar fields”).
 //!
-//! Inside one cell, near a cube-edge-connected piece `S` of `R` (“Critical regions” §5.2, the base cases
-//! grouped by what `S` is):
+//! Inside one cell, near a cube-edge-connected piece `S` of `R` (“Detecting critical regions in
+//! scalar fields” §5.2, the base cases grouped by what `S` is):
 //! * `S` one corner (C1): the cell is split like a linear tetrahedron, all exits of one sign
 //!   are joined.
 //! * `S` one cube edge (C2): on the slice at parameter `t` along the edge the two neighbours
@@ -236,10 +237,11 @@ struct Parts {
 /// The critical point of a plateau, `None` when it is regular.
 ///
 /// Inside the box the neighbourhood of a (contractible) plateau is a ball around it, so it is
-/// regular iff `np = nn = 1` (“Critical regions”). On the box it is a half-ball whose link is a disk:
-/// the upper part is contractible iff it is connected and no lower part is enclosed in it
-/// (every lower part reaches the box), and likewise for the lower part; a box plateau may thus
-/// change one filtration only (a lower pocket below a box plateau opens a hole in `{f >= w}`).
+/// regular iff `np = nn = 1` (“Detecting critical regions in scalar fields”). On the box it is a
+/// half-ball whose link is a disk: the upper part is contractible iff it is connected and no lower
+/// part is enclosed in it (every lower part reaches the box), and likewise for the lower part; a
+/// box plateau may thus change one filtration only (a lower pocket below a box plateau opens a hole
+/// in `{f >= w}`).
 fn region_point(
     grid: &ScalarGrid,
     labels: &Plateaus,

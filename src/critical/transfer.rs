@@ -1,5 +1,5 @@
-//! Transfer functions (colour and opacity over the value range) built from critical values,
-//! the two designs of “Exploring scalar fields using critical isovalues” §5 (after Fujishiro et al.):
+//! Transfer functions (colour and opacity over the value range) built from critical values, the two
+//! designs of “Exploring scalar fields using critical isovalues” §5 (after Fujishiro et al.):
 //!
 //! * [`TransferDesign::Intervals`] emphasises *topologically equivalent regions*: the hue
 //!   decreases uniformly with the value, except for a drop `δh` at each critical value `cv`, so
@@ -11,13 +11,14 @@
 //!   opacity is constant except for intervals of width `ωo` centred at each `cv` where it is
 //!   raised by `δo`.
 //!
-//! The domain is the data range `[lo, hi]`. Following §5, when critical values are so close
-//! that their intervals (`ωo`, and `ωh` for the second design) would overlap, only the first is
-//! kept; the ends of the range count as critical values (the global minimum and maximum), so a
-//! value closer than the width to either end is dropped too, and every interval lies inside the
-//! range. Jumps (the hue drops of the first design, the edges of the opacity boxes of the
-//! second) are steep linear ramps of width `2ε`, `ε = min(10⁻⁴ (hi − lo), ω / 8)`, because a
-//! piecewise-linear transfer function (ParaView, VTK) cannot hold two values at one abscissa.
+//! The domain is the data range `[lo, hi]`. Following “Exploring scalar fields using critical
+//! isovalues” §5, when critical values are so close that their intervals (`ωo`, and `ωh` for the
+//! second design) would overlap, only the first is kept; the ends of the range count as critical
+//! values (the global minimum and maximum), so a value closer than the width to either end is
+//! dropped too, and every interval lies inside the range. Jumps (the hue drops of the first design,
+//! the edges of the opacity boxes of the second) are steep linear ramps of width `2ε`,
+//! `ε = min(10⁻⁴ (hi − lo), ω / 8)`, because a piecewise-linear transfer function (ParaView, VTK)
+//! cannot hold two values at one abscissa.
 //!
 //! Colours are HSV with saturation [`SATURATION`] and value [`BRIGHTNESS`], converted to RGB;
 //! control points are added so that the hue changes by at most [`MAX_HUE_STEP`] degrees between
@@ -149,8 +150,9 @@ fn locate(xs: impl Iterator<Item = f64>, x: f64) -> (usize, f64) {
 }
 
 /// The sorted distinct `values` strictly inside `(lo, hi)` that are at least `width` away from
-/// the previously kept value and from both ends of the range (§5: of values closer than
-/// `width`, only the first is kept; `lo` and `hi` count as kept values).
+/// the previously kept value and from both ends of the range (“Exploring scalar fields using
+/// critical isovalues” §5: of values closer than `width`, only the first is kept; `lo` and
+/// `hi` count as kept values).
 pub fn thin_values(values: &[f64], lo: f64, hi: f64, width: f64) -> Vec<f64> {
     let mut sorted: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
     sorted.sort_by(f64::total_cmp);

@@ -1,11 +1,12 @@
-//! Criticality of a grid vertex from its (up to) six edge-connected neighbours (“Exploring scalar fields using critical isovalues” §3.2).
+//! Criticality of a grid vertex from its (up to) six edge-connected neighbours (“Exploring scalar
+//! fields using critical isovalues” §3.2).
 //!
 //! Near a vertex the trilinear field splits each incident cell (an octant) like a linear
-//! tetrahedron (Lemma 3 of “Exploring scalar fields using critical isovalues”), so the part of a small sphere around the vertex where
-//! `f > f(vertex)` (the *upper link*) is homotopy equivalent to the full subcomplex on the
-//! `+` neighbours of the link triangulation: the octahedron with the six neighbour directions
-//! as vertices and one triangle per incident cell. Inside the grid box the link is the whole
-//! octahedron; on the box it is the part made of the cells that exist (a disk).
+//! tetrahedron (Lemma 3 of “Exploring scalar fields using critical isovalues”), so the part of a
+//! small sphere around the vertex where `f > f(vertex)` (the *upper link*) is homotopy equivalent
+//! to the full subcomplex on the `+` neighbours of the link triangulation: the octahedron with the
+//! six neighbour directions as vertices and one triangle per incident cell. Inside the grid box the
+//! link is the whole octahedron; on the box it is the part made of the cells that exist (a disk).
 //!
 //! A vertex changes the topology of the superlevel sets `{f >= w}` when its upper link is not
 //! contractible, and of the sublevel sets `{f <= w}` when its lower link is not. Inside the box
@@ -61,7 +62,8 @@ pub const fn octant_dirs(o: usize) -> [usize; 3] {
 /// octants in `octants` (bit `o` = octant `o` present). Directions outside every present
 /// octant must not be in `set`.
 pub const fn subcomplex_betti(set: u8, octants: u8) -> [u8; 3] {
-    // union-find over 6 directions
+    // union-find over 6 directions, written out: this const fn builds `VERTEX_TABLE` at
+    // compile time, where `crate::union_find::UnionFind` (a `Vec`) cannot run
     let mut parent = [0usize, 1, 2, 3, 4, 5];
     let mut verts = 0i32;
     let mut d = 0;
@@ -160,8 +162,9 @@ pub const fn link_class(upper: u8, octants: u8) -> LinkClass {
     }
 }
 
-/// The 64-entry table of “Exploring scalar fields using critical isovalues” for interior vertices: entry `m` classifies a vertex whose
-/// neighbours in the directions with a bit in `m` are higher and the others lower.
+/// The 64-entry table of “Exploring scalar fields using critical isovalues” for interior vertices:
+/// entry `m` classifies a vertex whose neighbours in the directions with a bit in `m` are higher
+/// and the others lower.
 pub const VERTEX_TABLE: [LinkClass; 64] = vertex_table();
 
 const fn vertex_table() -> [LinkClass; 64] {
@@ -200,8 +203,9 @@ pub fn vertex_octants(p: [usize; 3], dims: [usize; 3]) -> u8 {
 mod tests {
     use super::*;
 
-    /// Gerstner–Pajarola's criterion over the octahedron's edge graph (“Exploring scalar fields using critical isovalues” §3.1):
-    /// components of `+` and of `-` neighbours after deleting mixed edges.
+    /// Gerstner–Pajarola's criterion over the octahedron's edge graph (“Exploring scalar fields
+    /// using critical isovalues” §3.1): components of `+` and of `-` neighbours after deleting
+    /// mixed edges.
     fn edge_graph_components(m: u8) -> (usize, usize) {
         let mut count = [0usize; 2];
         let mut seen = [false; 6];

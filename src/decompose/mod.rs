@@ -36,7 +36,7 @@ pub const fn face_id(f: usize) -> u8 {
     8 + f as u8
 }
 
-/// Which TPTD case (Table 2 of the paper) a cell was decomposed with.
+/// Which TPTD case (Table 2 of Sohn, ICCS 2007) a cell was decomposed with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[repr(u8)]
 pub enum CellCase {

@@ -28,11 +28,11 @@ pub enum Method {
     Five,
     /// 6-fold around the main diagonal (no saddles; topology not preserved).
     Six,
-    /// Topology-preserving decomposition for all isovalues (§4).
+    /// Topology-preserving decomposition for all isovalues (Sohn, ICCS 2007, §4).
     Tptd,
-    /// Simplified decomposition: topology kept for one isovalue per cell (§5.2).
+    /// Simplified decomposition: topology kept for one isovalue per cell (Sohn, ICCS 2007, §5.2).
     Std,
-    /// STD in cells with at most one boundary surface, TPTD elsewhere (§5.2).
+    /// STD in cells with at most one boundary surface, TPTD elsewhere (Sohn, ICCS 2007, §5.2).
     Ctd,
 }
 

@@ -358,7 +358,7 @@ fn dip(g: impl Fn(f64) -> f64, v0: f64, alpha: f64, beta: f64) -> Option<(f64, f
 /// saddles and body saddles, of a value between theirs and the level; here every other
 /// corner is beyond the level, a face holds one of the two ends and three corners beyond
 /// the level, so its saddle is beyond them, and a body saddle would have made the cell's
-/// split another (4.1.1 of the paper's case table against 4.1.2).
+/// split another (4.1.1 of the case table of Sohn, ICCS 2007, against 4.1.2).
 fn parts_a_lone_pair(ring: &[[u8; 2]], below: impl Fn(u8) -> bool, side: bool) -> bool {
     let mut seen = 0u8;
     for &[x, y] in ring {

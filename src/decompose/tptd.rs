@@ -1,4 +1,5 @@
-//! TPTD: the topology-preserving decomposition of §4 of the paper, cases (i)–(v).
+//! TPTD: the topology-preserving decomposition of §4 of B.-S. Sohn, “Topology preserving
+//! tetrahedral decomposition of trilinear cell” (ICCS 2007), cases (i)–(v).
 //!
 //! The decomposition is written for a *mask* of used face saddles (see
 //! [`crate::decompose::plan`]): pure TPTD uses every face saddle that exists, STD/CTD cells use
@@ -6,7 +7,7 @@
 //! used it is exactly the paper's rule:
 //! * (i) no saddle: 6-fold;
 //! * (ii) face saddles only: five pyramids around one face saddle — the *second biggest* one
-//!   when three or more are used (Appendix of the paper), pyramid bases split per face rule;
+//!   when three or more are used (the paper's Appendix), pyramid bases split per face rule;
 //! * (iii) one body saddle: six pyramids around it;
 //! * (iv) six face saddles, no body saddle: the diamond (8 corner tets, 12 edge tets, 4 tets
 //!   inside the octahedron of face saddles);

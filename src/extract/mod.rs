@@ -18,7 +18,7 @@ use crate::levels::Levels;
 use crate::mesh::TetMesh;
 use crate::mesh::{Gather, MeshSink};
 use crate::warp::{snap_vertices, Snapped};
-use crate::weld::{Slab, Welder};
+use crate::weld::{Slab, TooLarge, Welder};
 use cell::{process_slab, Ctx};
 
 pub use crate::decompose::plan::Method;
@@ -158,6 +158,12 @@ pub enum MeshError {
     /// The sink of [`mesh_interval_streamed`] failed (e.g. writing the output).
     #[error("{0}")]
     Output(#[source] std::io::Error),
+}
+
+impl From<TooLarge> for MeshError {
+    fn from(TooLarge(what): TooLarge) -> Self {
+        MeshError::TooLarge(what)
+    }
 }
 
 /// Counters of one run.

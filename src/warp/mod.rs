@@ -16,7 +16,8 @@
 //!    the closed set `S` where the field is at least the level (on the domain side) is a
 //!    disk. Then the domain's part in the star of `v` is a ball glued to the rest along `S`
 //!    both before the snap and after it (then it is the cone from `v` over `S`), so the
-//!    domain stays homeomorphic: the vertex test of “Exploring scalar fields using critical isovalues” §3.2 in the TPTD complex. On the
+//!    domain stays homeomorphic: the vertex test of “Exploring scalar fields using critical
+//!    isovalues” §3.2 in the TPTD complex. On the
 //!    link (a triangulated 2-sphere) with up / on-level / down nodes, `S` is a disk when up
 //!    and on-level nodes (joined through up ones) are one connected set and down nodes
 //!    another, every on-level node touches an up node, and around each on-level node the
