@@ -203,6 +203,8 @@ pub struct MeshChunk {
     /// Per label (in [`BoundaryLabel::ALL`] order) the bounding box `[min xyz, max xyz]` of the
     /// vertices of this chunk's triangles with that label (`±inf` when there are none).
     pub label_boxes: [[f64; 6]; NUM_LABELS],
+    /// With several regions, the region of each tet (empty for one interval).
+    pub regions: Vec<u8>,
 }
 
 /// Where [`crate::mesh_interval_streamed`] delivers the mesh, one slab at a time.
@@ -218,6 +220,8 @@ pub trait MeshSink {
 #[derive(Default)]
 pub(crate) struct Gather {
     pub(crate) mesh: TetMesh,
+    /// The chunks' regions, in tet order (empty for one interval).
+    pub(crate) regions: Vec<u8>,
 }
 
 impl MeshSink for Gather {
@@ -228,6 +232,7 @@ impl MeshSink for Gather {
         m.tets.extend_from_slice(&c.tets);
         m.boundary.extend_from_slice(&c.boundary);
         m.boundary_labels.extend_from_slice(&c.boundary_labels);
+        self.regions.extend_from_slice(&c.regions);
         Ok(())
     }
 }

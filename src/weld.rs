@@ -37,6 +37,12 @@ pub(crate) struct Slab {
     pos: Vec<[f64; 3]>,
     val: Vec<f64>,
     pub(crate) tets: Vec<[u32; 4]>,
+    /// With several regions ([`Slab::set_levels`]): the region of each tet.
+    pub(crate) regions: Vec<u8>,
+    /// The region the clipper is meshing now.
+    pub(crate) region: u8,
+    /// Index of the last level when there are several regions, else 0.
+    last_level: u8,
     tris: Vec<[u32; 3]>,
     labels: Vec<BoundaryLabel>,
     /// Cells meshed per case.
@@ -57,6 +63,9 @@ impl Slab {
             pos: Vec::new(),
             val: Vec::new(),
             tets: Vec::new(),
+            regions: Vec::new(),
+            region: 0,
+            last_level: 0,
             tris: Vec::new(),
             labels: Vec::new(),
             cases: [0; 6],
@@ -72,6 +81,20 @@ impl Slab {
         self.val.reserve(2 * meshed);
         self.tris.reserve(meshed);
         self.labels.reserve(meshed);
+    }
+
+    /// Meshes `levels` levels (more than two: every tet is tagged with
+    /// [`Slab::region`], and the level faces between regions are inner faces, not boundary).
+    pub(crate) fn set_levels(&mut self, levels: usize) {
+        if levels > 2 {
+            self.last_level = (levels - 1) as u8;
+        }
+    }
+
+    /// Whether the slab tags its tets with regions.
+    #[inline]
+    pub(crate) fn tags_regions(&self) -> bool {
+        self.last_level != 0
     }
 
     /// Drops the lookup structures once the slab's cells are done.
@@ -128,9 +151,19 @@ impl ClipSink for Slab {
     fn tet(&mut self, points: &[ClipPoint], t: [usize; 4]) {
         let ids = t.map(|i| self.id(&points[i]));
         self.tets.push(ids);
+        if self.tags_regions() {
+            self.regions.push(self.region);
+        }
     }
     #[inline]
     fn triangle(&mut self, points: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
+        let label = match label {
+            BoundaryLabel::Level(i) if self.tags_regions() && i == self.last_level => {
+                BoundaryLabel::BETA
+            }
+            BoundaryLabel::Level(i) if self.tags_regions() && i != 0 => return,
+            l => l,
+        };
         let ids = t.map(|i| self.id(&points[i]));
         self.tris.push(ids);
         self.labels.push(label);
@@ -329,6 +362,7 @@ impl Welder {
             boundary,
             boundary_labels: s.labels,
             label_boxes,
+            regions: s.regions,
         }
     }
 }

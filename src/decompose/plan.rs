@@ -306,20 +306,32 @@ impl Planner<'_> {
         if n == 2 {
             return (lv[0], lv[1]);
         }
-        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let k = match (0..n).find(|&i| lv.below(i, lo)) {
-            None => n - 2,
-            Some(0) => 0,
-            Some(i) if lv.below(i, hi) => i - 1,
-            Some(i) => i.min(n - 2),
-        };
+        let k = self.pair_index(v);
         let beta = if k + 2 == n {
             lv[k + 1]
         } else {
             lv[k + 1].next_up()
         };
         (lv[k], beta)
+    }
+
+    /// Index `k` of the first level of [`Planner::pair`] (levels `k` and `k + 1`): for values
+    /// inside the levels that no level crosses, their region.
+    #[inline]
+    pub fn pair_index(&self, v: &[f64]) -> usize {
+        let lv = &self.levels;
+        let n = lv.len();
+        if n == 2 {
+            return 0;
+        }
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        match (0..n).find(|&i| lv.below(i, lo)) {
+            None => n - 2,
+            Some(0) => 0,
+            Some(i) if lv.below(i, hi) => i - 1,
+            Some(i) => i.min(n - 2),
+        }
     }
 
     /// Whether the cell at `c` is full (uses every saddle), computed from its values when

@@ -20,6 +20,9 @@ pub(super) struct Ctx<'a> {
     /// The levels, with their ties.
     pub(super) levels: Levels,
     pub(super) planner: Planner<'a>,
+    /// With more than two levels, each region's two levels ([`Levels::region`]); empty for
+    /// one interval.
+    pub(super) regions: Vec<Levels>,
     /// Per grid vertex, the level it is snapped to (empty: no warping).
     pub(super) snaps: Vec<u8>,
 }
@@ -51,6 +54,7 @@ impl Ctx<'_> {
 pub(super) fn process_slab(ctx: &Ctx, k: usize) -> Slab {
     let [cx, cy, _] = ctx.grid.cell_dims();
     let mut slab = Slab::new(ctx.grid.dims[0] * ctx.grid.dims[1], k);
+    slab.set_levels(ctx.levels.len());
     let mut tets: Vec<[u8; 4]> = Vec::with_capacity(64);
     let words = ctx.grid.dims[0].div_ceil(64);
     let outside = outside_cells(ctx.grid, &ctx.levels, k);
@@ -79,6 +83,7 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
     let box_planes = cell_box_planes(c, ctx.grid.cell_dims());
     if plan.whole_six() && box_planes == 0 {
         // By far the most common cell: six whole tets over the eight corners.
+        slab.region = ctx.planner.pair_index(&v) as u8;
         emit_six_inside(ctx, c, &v, slab);
         slab.cases[CellCase::I as usize] += 1;
         return;
@@ -123,7 +128,13 @@ fn clip_cell(
                 }
             })
         });
-        clip_tet(&tv, &ctx.levels, box_planes, slab);
+        if ctx.regions.is_empty() {
+            clip_tet(&tv, &ctx.levels, box_planes, slab);
+        }
+        for (k, lv) in ctx.regions.iter().enumerate() {
+            slab.region = k as u8;
+            clip_tet(&tv, lv, box_planes, slab);
+        }
     }
 }
 
@@ -147,5 +158,8 @@ fn emit_six_inside(ctx: &Ctx, c: [usize; 3], v: &[f64; 8], slab: &mut Slab) {
     }
     for t in six::SIX {
         slab.tets.push(t.map(|l| ids[l as usize]));
+    }
+    if slab.tags_regions() {
+        slab.regions.extend([slab.region; 6]);
     }
 }

@@ -31,6 +31,12 @@ pub struct MeshOptions {
     pub alpha: f64,
     /// Upper bound (may be `+inf`); must exceed `alpha`.
     pub beta: f64,
+    /// Several levels (2 to [`MAX_LEVELS`](crate::levels::MAX_LEVELS), increasing), meshed
+    /// as the regions between consecutive ones in one conforming mesh, each tet tagged with
+    /// its region ([`MeshOutput::regions`]); when not empty, `alpha` and `beta` are not used.
+    /// The boundary is labelled alpha (the first level), beta (the last) and box; the level
+    /// faces between two regions are inner faces. Not with warping.
+    pub levels: Vec<f64>,
     /// Cell decomposition.
     pub method: Method,
     /// Worker threads; `None` uses rayon's global pool (all cores).
@@ -57,6 +63,7 @@ impl Default for MeshOptions {
         MeshOptions {
             alpha: f64::NEG_INFINITY,
             beta: f64::INFINITY,
+            levels: Vec::new(),
             method: Method::Ctd,
             threads: None,
             warp: 0.0,
@@ -89,6 +96,37 @@ impl MeshOptions {
     pub fn beta(mut self, beta: f64) -> Self {
         self.beta = beta;
         self
+    }
+
+    /// Sets the levels of several regions (see [`MeshOptions::levels`]).
+    #[must_use]
+    pub fn levels(mut self, levels: &[f64]) -> Self {
+        self.levels = levels.to_vec();
+        self
+    }
+
+    /// The run's levels: [`MeshOptions::levels`], or alpha and beta.
+    ///
+    /// # Errors
+    /// [`MeshError::InvalidInterval`] unless `alpha < beta`; [`MeshError::Levels`] for a bad
+    /// list of levels, or several regions with warping.
+    pub fn run_levels(&self) -> Result<Levels, MeshError> {
+        if self.levels.is_empty() {
+            if self.alpha.is_nan() || self.beta.is_nan() || self.alpha >= self.beta {
+                return Err(MeshError::InvalidInterval {
+                    alpha: self.alpha,
+                    beta: self.beta,
+                });
+            }
+            return Ok(Levels::interval(self.alpha, self.beta));
+        }
+        let levels = Levels::new(&self.levels).map_err(|e| MeshError::Levels(e.to_string()))?;
+        if levels.len() > 2 && self.warp > 0.0 {
+            return Err(MeshError::Levels(
+                "warping (the quality pass) takes one interval, not several regions".into(),
+            ));
+        }
+        Ok(levels)
     }
 
     /// Sets the decomposition method.
@@ -149,6 +187,9 @@ pub enum MeshError {
         /// Upper bound given.
         beta: f64,
     },
+    /// A bad list of levels ([`MeshOptions::levels`]).
+    #[error("invalid levels: {0}")]
+    Levels(String),
     /// The thread pool could not be built.
     #[error("could not start {0} worker threads: {1}")]
     Threads(usize, String),
@@ -185,6 +226,9 @@ pub struct MeshOutput {
     pub stats: MeshStats,
     /// The grid vertices that warping put on a level ([`MeshOptions::warp`]), by grid index.
     pub snapped: Vec<Snapped>,
+    /// With several regions ([`MeshOptions::levels`]), the region of each tet: `k` for the
+    /// interval between levels `k` and `k + 1`. Empty for one interval.
+    pub regions: Vec<u8>,
 }
 
 /// Meshes `{alpha < f < beta}` (its closure) of the piecewise-trilinear field on `grid`.
@@ -215,6 +259,7 @@ pub fn mesh_interval_with_progress(
         mesh: gather.mesh,
         stats,
         snapped,
+        regions: gather.regions,
     })
 }
 
@@ -242,12 +287,7 @@ fn mesh_in_pool(
     progress: &(dyn Fn(usize, usize) + Sync),
     sink: &mut (dyn MeshSink + Send),
 ) -> Result<(MeshStats, Vec<Snapped>), MeshError> {
-    if opts.alpha.is_nan() || opts.beta.is_nan() || opts.alpha >= opts.beta {
-        return Err(MeshError::InvalidInterval {
-            alpha: opts.alpha,
-            beta: opts.beta,
-        });
-    }
+    opts.run_levels()?;
     match opts.threads {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -269,7 +309,7 @@ fn run(
     progress: &(dyn Fn(usize, usize) + Sync),
     sink: &mut (dyn MeshSink + Send),
 ) -> Result<(MeshStats, Vec<Snapped>), MeshError> {
-    let (tied, levels) = Levels::interval(opts.alpha, opts.beta).without_near_ties(grid);
+    let (tied, levels) = opts.run_levels()?.without_near_ties(grid);
     let grid = tied.as_ref().unwrap_or(grid);
     let [_, _, cz] = grid.cell_dims();
     let (lo, hi) = grid.value_range();
@@ -283,8 +323,14 @@ fn run(
             levels,
             split_sags: opts.split_sags,
         },
+        regions: Vec::new(),
         snaps: Vec::new(),
     };
+    if ctx.levels.len() > 2 {
+        ctx.regions = (0..ctx.levels.regions())
+            .map(|k| ctx.levels.region(k))
+            .collect();
+    }
     let warp = snap_vertices(grid, &ctx.planner, &ctx.levels, opts.warp);
     ctx.snaps = warp.snaps;
     let window = opts.window();

@@ -1,4 +1,4 @@
-//! The cells of a layer entirely below alpha or entirely above beta, found 64 at a time from
+//! The cells of a layer entirely below the first level or entirely above the last, found 64 at a time from
 //! bit rows of the grid's vertex classes, so that the cell loop passes over them.
 
 use crate::grid::ScalarGrid;
@@ -37,13 +37,14 @@ fn plane_bits(grid: &ScalarGrid, lv: &Levels, z: usize) -> [Vec<u64>; 2] {
     let words = nx.div_ceil(64);
     let mut bits = [vec![0u64; ny * words], vec![0u64; ny * words]];
     let base = grid.index(0, 0, z);
+    let last = lv.len() - 1;
     for jj in 0..ny {
         let [below, above] = &mut bits;
         let (below, above) = (&mut below[jj * words..], &mut above[jj * words..]);
         let row = base + jj * nx..base + (jj + 1) * nx;
         grid.values.for_each_in(row, |i, v| {
             below[i / 64] |= (lv.below(0, v) as u64) << (i % 64);
-            above[i / 64] |= (lv.above(1, v) as u64) << (i % 64);
+            above[i / 64] |= (lv.above(last, v) as u64) << (i % 64);
         });
     }
     bits
