@@ -93,8 +93,6 @@ pub struct Levels {
     ties: [f64; MAX_LEVELS],
     /// Number of levels.
     len: u8,
-    /// Index in the run of level 0 (non-zero for a region's view, [`Levels::region`]).
-    first: u8,
     /// Bit `i` set: a value equal to level `i` counts as above it (the run's last level).
     ties_above: u16,
 }
@@ -135,7 +133,6 @@ impl Levels {
             values,
             ties: values,
             len: list.len() as u8,
-            first: 0,
             ties_above: 1 << (list.len() - 1),
         }
     }
@@ -159,25 +156,14 @@ impl Levels {
     }
 
     /// Region `k`'s two levels (`k < regions()`), with their ties, as the clipper sees
-    /// them; [`Levels::global`] gives their indices in the run.
-    pub fn region(&self, k: usize) -> Levels {
-        let mut values = [0.0; MAX_LEVELS];
-        let mut ties = [0.0; MAX_LEVELS];
-        values[..2].copy_from_slice(&self.values[k..k + 2]);
-        ties[..2].copy_from_slice(&self.ties[k..k + 2]);
-        Levels {
-            values,
-            ties,
-            len: 2,
-            first: self.first + k as u8,
-            ties_above: (self.ties_above >> k) & 0b11,
+    /// them; [`Bounds::global`] gives their indices in the run.
+    pub fn region(&self, k: usize) -> Bounds {
+        Bounds {
+            values: [self.values[k], self.values[k + 1]],
+            ties: [self.ties[k], self.ties[k + 1]],
+            first: k as u8,
+            ties_above: ((self.ties_above >> k) & 0b11) as u8,
         }
-    }
-
-    /// Index in the run of level `i` of these levels (`i` itself unless a region's view).
-    #[inline]
-    pub const fn global(&self, i: usize) -> u8 {
-        self.first + i as u8
     }
 
     /// Level `i` (`i < len()`).
@@ -376,13 +362,97 @@ impl Levels {
     }
 }
 
+/// One region's two levels as the clipper sees them ([`Levels::region`]): their values,
+/// their tie values and their indices in the run. Small, with the two levels fixed, because
+/// the clipper asks it for every vertex and cut.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    values: [f64; 2],
+    ties: [f64; 2],
+    /// Index in the run of level 0.
+    first: u8,
+    /// Bit `i` set: a value equal to level `i` counts as above it.
+    ties_above: u8,
+}
+
+impl Bounds {
+    /// Number of levels: two.
+    #[inline]
+    pub const fn len(&self) -> usize {
+        2
+    }
+
+    /// Never empty.
+    #[inline]
+    pub const fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Level `i` (`i < 2`).
+    #[inline]
+    pub fn get(&self, i: usize) -> f64 {
+        self.values[i]
+    }
+
+    /// The value that data equal to level `i` takes when cuts are placed.
+    #[inline]
+    pub fn tie(&self, i: usize) -> f64 {
+        self.ties[i]
+    }
+
+    /// Index in the run of level `i`.
+    #[inline]
+    pub const fn global(&self, i: usize) -> u8 {
+        self.first + i as u8
+    }
+
+    /// Whether a value equal to level `i` counts as below it ([`Levels::ties_below`]).
+    #[inline]
+    pub const fn ties_below(&self, i: usize) -> bool {
+        self.ties_above & (1 << i) == 0
+    }
+
+    /// Whether `v` lies below level `i` ([`Levels::below`]).
+    #[inline]
+    pub fn below(&self, i: usize, v: f64) -> bool {
+        if self.ties_below(i) {
+            v <= self.values[i]
+        } else {
+            v < self.values[i]
+        }
+    }
+
+    /// Whether `v` lies above level `i` ([`Levels::above`]).
+    #[inline]
+    pub fn above(&self, i: usize, v: f64) -> bool {
+        if self.ties_below(i) {
+            v > self.values[i]
+        } else {
+            v >= self.values[i]
+        }
+    }
+
+    /// Value of a (not snapped) vertex for cut placement ([`Levels::effective`]).
+    #[inline]
+    pub fn effective(&self, v: f64) -> f64 {
+        if v == self.values[0] {
+            self.ties[0]
+        } else if v == self.values[1] {
+            self.ties[1]
+        } else {
+            v
+        }
+    }
+}
+
 impl std::ops::Index<usize> for Levels {
     type Output = f64;
 
     /// Level `i` ([`Levels::get`]).
     #[inline]
     fn index(&self, i: usize) -> &f64 {
-        &self.values()[i]
+        debug_assert!(i < self.len());
+        &self.values[i]
     }
 }
 

@@ -7,7 +7,7 @@ use super::piece::Poly;
 use super::{ClipPoint, ClipSink};
 use crate::geom::signed_volume;
 use crate::keys::{split, PointKey};
-use crate::levels::Levels;
+use crate::levels::Bounds;
 
 /// Cones the piece from its first point in [`rank`] order over the faces not containing it,
 /// each face fanned from its own first point; boundary faces also go out as triangles.
@@ -15,7 +15,7 @@ use crate::levels::Levels;
 pub(super) fn cone_and_fan(
     pts: &[ClipPoint],
     faces: &[Poly],
-    lv: &Levels,
+    lv: &Bounds,
     sink: &mut impl ClipSink,
 ) {
     // Each point is ranked once (a piece has at most 12).
@@ -62,7 +62,7 @@ pub(super) fn cone_and_fan(
 /// level surface; it leaves about a quarter fewer tets below 15° than coning by key (noisy
 /// 256³ field, T1 band: docs/QUALITY-LOG.md, *Where the bad tets come from*).
 #[inline]
-fn rank(p: &ClipPoint, lv: &Levels) -> (bool, Reverse<u64>, PointKey) {
+fn rank(p: &ClipPoint, lv: &Bounds) -> (bool, Reverse<u64>, PointKey) {
     let is_cut = split(p.key).1.is_some();
     let mut depth = (p.val - lv.get(0)).abs();
     for i in 1..lv.len() {

@@ -12,7 +12,7 @@
 //!
 //! **Ties.** A value equal to alpha counts as below and one equal to beta as above (the mesh
 //! is the closure of the open interval). For placing cuts, a tied vertex's value is moved
-//! outward by a per-run constant ([`Levels::tie`]): the field stays linear on every tet, so each
+//! outward by a per-run constant ([`Bounds::tie`]): the field stays linear on every tet, so each
 //! clipped piece stays convex, no output point coincides with another and no tet is flat.
 
 mod cone;
@@ -20,7 +20,7 @@ mod piece;
 
 use crate::geom::{cross, dot, sub};
 use crate::keys::{vertex_point, PointKey, VertexKey};
-use crate::levels::Levels;
+use crate::levels::Bounds;
 use crate::mesh::BoundaryLabel;
 use cone::cone_and_fan;
 use piece::{cut_points, level_faces, tet_faces, CutPoints, Faces, Poly};
@@ -75,7 +75,7 @@ const ABOVE: u8 = 2;
 const INSIDE: u8 = 0;
 
 #[inline]
-fn classify(v: f64, lv: &Levels) -> u8 {
+fn classify(v: f64, lv: &Bounds) -> u8 {
     if lv.below(0, v) {
         BELOW
     } else if lv.above(1, v) {
@@ -88,7 +88,7 @@ fn classify(v: f64, lv: &Levels) -> u8 {
 /// Value of a tet vertex for cut placement: a snapped vertex is exactly on its level, a tied
 /// one is moved outward.
 #[inline]
-fn placed(v: &ClipVertex, lv: &Levels) -> f64 {
+fn placed(v: &ClipVertex, lv: &Bounds) -> f64 {
     if v.snap == SNAP_NONE {
         lv.effective(v.val)
     } else {
@@ -137,7 +137,7 @@ fn as_point(v: &ClipVertex) -> ClipPoint {
 /// Clips tet `tv` (positively oriented) to the interval between levels 0 and 1 of `lv`
 /// (`alpha < f < beta`) and sends the pieces to `sink`. `box_planes` selects which bits of
 /// [`ClipVertex::box_mask`] are grid-box planes. Level 0 may be `-inf` and level 1 `+inf`.
-pub fn clip_tet(tv: &[ClipVertex; 4], lv: &Levels, box_planes: u8, sink: &mut impl ClipSink) {
+pub fn clip_tet(tv: &[ClipVertex; 4], lv: &Bounds, box_planes: u8, sink: &mut impl ClipSink) {
     let cls: [u8; 4] = std::array::from_fn(|i| match tv[i].snap {
         SNAP_NONE => classify(tv[i].val, lv),
         _ => INSIDE,
@@ -180,7 +180,7 @@ fn snapped_face(
     tv: &[ClipVertex; 4],
     cls: &[u8; 4],
     cuts: &CutPoints,
-    lv: &Levels,
+    lv: &Bounds,
     sink: &mut impl ClipSink,
 ) {
     let Some(out) = (0..4).find(|&i| cls[i] != INSIDE) else {
@@ -221,7 +221,7 @@ fn emit_whole(tv: &[ClipVertex; 4], box_face: [bool; 4], sink: &mut impl ClipSin
 /// Whether every point of a piece lies on one level (a piece reduced to snapped vertices and
 /// their level's cuts: it has no volume and emits nothing).
 #[inline]
-fn flat(pts: &[ClipPoint], lv: &Levels) -> bool {
+fn flat(pts: &[ClipPoint], lv: &Bounds) -> bool {
     let on = |level: f64| pts.iter().all(|p| p.val == level);
     on(lv.get(0)) || on(lv.get(1))
 }

@@ -7,13 +7,13 @@ use super::{
     SNAP_BETA, TET_FACES,
 };
 use crate::keys::cut_point;
-use crate::levels::Levels;
+use crate::levels::Bounds;
 use crate::mesh::BoundaryLabel;
 
 /// Cut of edge (a, b) by `level` (index `which` in the run), computed from the key-ordered
 /// ends so that every tet sharing the edge gets the bit-identical point.
 #[inline]
-fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, lv: &Levels) -> ClipPoint {
+fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, lv: &Bounds) -> ClipPoint {
     let (p, q) = if a.key < b.key { (a, b) } else { (b, a) };
     let fp = placed(p, lv);
     let fq = placed(q, lv);
@@ -89,7 +89,7 @@ pub(super) struct CutPoints {
 /// The piece's points: inside vertices in vertex order, then per edge (in [`EDGES`] order)
 /// its alpha cut and its beta cut.
 #[inline]
-pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], lv: &Levels) -> CutPoints {
+pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], lv: &Bounds) -> CutPoints {
     let mut c = CutPoints {
         pts: [ClipPoint {
             key: 0,
@@ -168,7 +168,7 @@ pub(super) fn tet_faces(cls: &[u8; 4], box_face: [bool; 4], cuts: &CutPoints, fa
 /// The level faces: level 0 separates BELOW from the rest, level 1 ABOVE from the rest
 /// (labelled by their indices in the run).
 #[inline]
-pub(super) fn level_faces(cls: &[u8; 4], cuts: &CutPoints, lv: &Levels, faces: &mut Faces) {
+pub(super) fn level_faces(cls: &[u8; 4], cuts: &CutPoints, lv: &Bounds, faces: &mut Faces) {
     for (which, side) in [(0usize, BELOW), (1, ABOVE)] {
         let label = BoundaryLabel::Level(lv.global(which));
         let mut ins = [0usize; 4];

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::geom::signed_volume;
+use crate::levels::{Bounds, Levels};
 use crate::samples::Samples;
 
 struct Collect {
@@ -74,7 +75,9 @@ fn clip_of_linear_tet_has_exact_volume() {
         };
         clip_tet(
             &tv,
-            &Levels::interval(a, b).with_ties(&vec![0.0, 1.0].into()),
+            &Levels::interval(a, b)
+                .with_ties(&vec![0.0, 1.0].into())
+                .region(0),
             0,
             &mut c,
         );
@@ -96,7 +99,9 @@ impl ClipSink for Keys {
 /// the interval, whichever key is smaller: every tet has it as a corner.
 #[test]
 fn pieces_are_coned_from_their_deepest_vertex() {
-    let iv = Levels::interval(0.0, 1.0).with_ties(&vec![-1.0, 1.0].into());
+    let iv = Levels::interval(0.0, 1.0)
+        .with_ties(&vec![-1.0, 1.0].into())
+        .region(0);
     let pos = [
         [0.0, 0.0, 0.0],
         [1.0, 0.0, 0.0],
@@ -203,7 +208,7 @@ fn tri_key(t: [PointKey; 3]) -> [PointKey; 3] {
 /// Checks one clip: positive pieces, the closed-form volume, and a closed boundary (each
 /// tet face shared by two pieces or emitted as a boundary triangle lying on its level or
 /// on its tet face, and every boundary edge used twice).
-fn check_clip(tv: &[ClipVertex; 4], iv: &Levels, case: &str) {
+fn check_clip(tv: &[ClipVertex; 4], iv: &Bounds, case: &str) {
     let mut rec = Record::default();
     // each tet face f is on box plane f, so every boundary triangle is emitted
     clip_tet(tv, iv, 0b1111, &mut rec);
@@ -258,7 +263,7 @@ fn check_clip(tv: &[ClipVertex; 4], iv: &Levels, case: &str) {
 
 /// If three corners are snapped to one level and the fourth lies beyond it (the piece
 /// is their face, with no volume): the fourth.
-fn snapped_face_corner(tv: &[ClipVertex; 4], iv: &Levels) -> Option<usize> {
+fn snapped_face_corner(tv: &[ClipVertex; 4], iv: &Bounds) -> Option<usize> {
     [(SNAP_ALPHA, BELOW), (SNAP_BETA, ABOVE)]
         .into_iter()
         .find_map(|(snap, side)| {
@@ -315,7 +320,7 @@ fn pieces(rec: &Record, case: &str) -> (f64, std::collections::HashMap<[PointKey
 /// A boundary triangle lies on its level, or (box) within one face of the tet.
 fn check_on_boundary(
     tv: &[ClipVertex; 4],
-    iv: &Levels,
+    iv: &Bounds,
     t: &[ClipPoint; 3],
     label: BoundaryLabel,
     case: &str,
@@ -367,7 +372,7 @@ fn clip_every_class_pattern() {
             for _ in 0..4 {
                 let tv = random_tet(&mut seed, cls, alpha, beta);
                 let vals: Vec<f64> = tv.iter().map(|v| v.val).collect();
-                let iv = Levels::interval(a, b).with_ties(&vals.into());
+                let iv = Levels::interval(a, b).with_ties(&vals.into()).region(0);
                 check_clip(&tv, &iv, &format!("({a}, {b}) classes {cls:?}"));
             }
         }
@@ -454,7 +459,7 @@ fn two_regions_meet_in_the_same_triangles() {
     let choices = [0.2, 0.9, 1.5, 1.7, 2.1, 2.8, 1.5, 0.6];
     let data = Samples::from(choices.to_vec());
     let run = Levels::new(&[0.5, 1.5, 2.5]).unwrap().with_ties(&data);
-    let union = Levels::interval(0.5, 2.5).with_ties(&data);
+    let union = Levels::interval(0.5, 2.5).with_ties(&data).region(0);
     let mut seed = 12345u64;
     for _ in 0..2000 {
         let vals: [f64; 4] = std::array::from_fn(|_| {

@@ -304,7 +304,7 @@ impl Planner<'_> {
         let lv = &self.levels;
         let n = lv.len();
         if n == 2 {
-            return (lv[0], lv[1]);
+            return (lv.get(0), lv.get(1));
         }
         let k = self.pair_index(v);
         let beta = if k + 2 == n {

@@ -6,7 +6,7 @@ use crate::decompose::plan::{plan_cell, Layout, Planner};
 use crate::decompose::{decompose_cell, six, CellCase, CellPoints, LOCAL_BOX, NUM_LOCAL};
 use crate::grid::{cell_box_planes, corner_offset, ScalarGrid};
 use crate::keys::{key_index, local_key};
-use crate::levels::Levels;
+use crate::levels::{Bounds, Levels};
 use crate::weld::Slab;
 
 use super::outside::outside_cells;
@@ -20,9 +20,9 @@ pub(super) struct Ctx<'a> {
     /// The levels, with their ties.
     pub(super) levels: Levels,
     pub(super) planner: Planner<'a>,
-    /// With more than two levels, each region's two levels ([`Levels::region`]); empty for
-    /// one interval.
-    pub(super) regions: Vec<Levels>,
+    /// Each region's two levels as the clipper sees them ([`Levels::region`]; one for one
+    /// interval).
+    pub(super) regions: Vec<Bounds>,
     /// Per grid vertex, the level it is snapped to (empty: no warping).
     pub(super) snaps: Vec<u8>,
 }
@@ -83,7 +83,9 @@ fn process_cell(ctx: &Ctx, c: [usize; 3], tets: &mut Vec<[u8; 4]>, slab: &mut Sl
     let box_planes = cell_box_planes(c, ctx.grid.cell_dims());
     if plan.whole_six() && box_planes == 0 {
         // By far the most common cell: six whole tets over the eight corners.
-        slab.region = ctx.planner.pair_index(&v) as u8;
+        if slab.tags_regions() {
+            slab.region = ctx.planner.pair_index(&v) as u8;
+        }
         emit_six_inside(ctx, c, &v, slab);
         slab.cases[CellCase::I as usize] += 1;
         return;
@@ -128,12 +130,14 @@ fn clip_cell(
                 }
             })
         });
-        if ctx.regions.is_empty() {
-            clip_tet(&tv, &ctx.levels, box_planes, slab);
-        }
-        for (k, lv) in ctx.regions.iter().enumerate() {
-            slab.region = k as u8;
-            clip_tet(&tv, lv, box_planes, slab);
+        match ctx.regions.as_slice() {
+            [one] => clip_tet(&tv, one, box_planes, slab),
+            several => {
+                for (k, lv) in several.iter().enumerate() {
+                    slab.region = k as u8;
+                    clip_tet(&tv, lv, box_planes, slab);
+                }
+            }
         }
     }
 }

@@ -326,11 +326,9 @@ fn run(
         regions: Vec::new(),
         snaps: Vec::new(),
     };
-    if ctx.levels.len() > 2 {
-        ctx.regions = (0..ctx.levels.regions())
-            .map(|k| ctx.levels.region(k))
-            .collect();
-    }
+    ctx.regions = (0..ctx.levels.regions())
+        .map(|k| ctx.levels.region(k))
+        .collect();
     let warp = snap_vertices(grid, &ctx.planner, &ctx.levels, opts.warp);
     ctx.snaps = warp.snaps;
     let window = opts.window();

@@ -37,14 +37,15 @@ fn plane_bits(grid: &ScalarGrid, lv: &Levels, z: usize) -> [Vec<u64>; 2] {
     let words = nx.div_ceil(64);
     let mut bits = [vec![0u64; ny * words], vec![0u64; ny * words]];
     let base = grid.index(0, 0, z);
-    let last = lv.len() - 1;
+    // Level 0 counts ties below it, the last level above it (`Levels::below`, `above`).
+    let (lo, hi) = (lv.get(0), lv.get(lv.len() - 1));
     for jj in 0..ny {
         let [below, above] = &mut bits;
         let (below, above) = (&mut below[jj * words..], &mut above[jj * words..]);
         let row = base + jj * nx..base + (jj + 1) * nx;
         grid.values.for_each_in(row, |i, v| {
-            below[i / 64] |= (lv.below(0, v) as u64) << (i % 64);
-            above[i / 64] |= (lv.above(last, v) as u64) << (i % 64);
+            below[i / 64] |= ((v <= lo) as u64) << (i % 64);
+            above[i / 64] |= ((v >= hi) as u64) << (i % 64);
         });
     }
     bits
