@@ -29,6 +29,17 @@ pub const TIE_FRACTION: f64 = 1e-3;
 /// onto the level before meshing.
 pub const NEAR_TIE: f64 = 1e-9;
 
+/// Whether `v` lies below `level`, a value equal to it counting as below when `ties_below`.
+/// False for NaN. (Above is the same question with the two swapped and ties the other way.)
+#[inline]
+fn below(v: f64, level: f64, ties_below: bool) -> bool {
+    if ties_below {
+        v <= level
+    } else {
+        v < level
+    }
+}
+
 /// Which side of a level a value lies on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Side {
@@ -201,22 +212,14 @@ impl Levels {
     /// level). False for NaN.
     #[inline]
     pub fn below(&self, i: usize, v: f64) -> bool {
-        if self.ties_below(i) {
-            v <= self.values[i]
-        } else {
-            v < self.values[i]
-        }
+        below(v, self.values[i], self.ties_below(i))
     }
 
     /// Whether `v` lies above level `i` (equal counts as above only for the run's last
     /// level). False for NaN.
     #[inline]
     pub fn above(&self, i: usize, v: f64) -> bool {
-        if self.ties_below(i) {
-            v > self.values[i]
-        } else {
-            v >= self.values[i]
-        }
+        below(self.values[i], v, !self.ties_below(i))
     }
 
     /// Which side of level `i` the value `v` lies on (NaN counts as above).
@@ -415,21 +418,13 @@ impl Bounds {
     /// Whether `v` lies below level `i` ([`Levels::below`]).
     #[inline]
     pub fn below(&self, i: usize, v: f64) -> bool {
-        if self.ties_below(i) {
-            v <= self.values[i]
-        } else {
-            v < self.values[i]
-        }
+        below(v, self.values[i], self.ties_below(i))
     }
 
     /// Whether `v` lies above level `i` ([`Levels::above`]).
     #[inline]
     pub fn above(&self, i: usize, v: f64) -> bool {
-        if self.ties_below(i) {
-            v > self.values[i]
-        } else {
-            v >= self.values[i]
-        }
+        below(self.values[i], v, !self.ties_below(i))
     }
 
     /// Value of a (not snapped) vertex for cut placement ([`Levels::effective`]).
