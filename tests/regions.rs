@@ -4,7 +4,8 @@
 //! union passes the library checker as the mesh of `[L1, Ln]` (so it conforms across the
 //! levels between regions: no face there is open) and has the union's reference Betti
 //! numbers; the faces shared by tets of two regions lie on the level between them; one and two
-//! threads give identical meshes. Fields: nested spheres, a torus inside a shell, two balls
+//! threads give identical meshes. Fields: nested spheres (one with a region 0.15 voxel
+//! thin), a torus inside a shell, two balls
 //! touching the level between them at a saddle, a linear field (exact volumes), and seeded
 //! smooth random fields with 2–4 regions (cases the sampled reference cannot resolve at two
 //! resolutions are skipped and counted).
@@ -231,6 +232,13 @@ fn analytic_cases() -> Vec<Case> {
             field: sphere_distance(24, 11.3),
             levels: vec![3.3, 6.1, 9.2],
             truth: Truth::Sampled,
+        },
+        Case {
+            // A layer 0.15 voxel thin between two regions of normal thickness.
+            name: "thin shell between shells".into(),
+            field: sphere_distance(24, 11.3),
+            levels: vec![3.3, 3.45, 6.1],
+            truth: Truth::SingleInterval,
         },
         Case {
             name: "ball in shells".into(),
