@@ -1,14 +1,13 @@
 //! Several levels in one mesh (`MeshOptions::levels`): the regions between consecutive levels
 //! meshed in one pass. Each region's tets, taken alone, are a valid mesh with the Betti
-//! numbers of its trilinear interval (dense-sampling reference) and its sampled volume; the
-//! union passes the library checker as the mesh of `[L1, Ln]` (so it conforms across the
-//! levels between regions: no face there is open) and has the union's reference Betti
-//! numbers; the faces shared by tets of two regions lie on the level between them; one and two
-//! threads give identical meshes. Fields: nested spheres (one with a region 0.15 voxel
-//! thin), a torus inside a shell, two balls
-//! touching the level between them at a saddle, a linear field (exact volumes), and seeded
-//! smooth random fields with 2–4 regions (cases the sampled reference cannot resolve at two
-//! resolutions are skipped and counted).
+//! numbers of its interval and its sampled volume; the union passes the library checker as
+//! the mesh of `[L1, Ln]` (so it conforms across the levels between regions: no face there
+//! is open) and has the union's Betti numbers; the faces shared by tets of two regions lie on
+//! the level between them; one and two threads give identical meshes. Fields: nested
+//! spheres (one with a region 0.15 voxel thin), a torus inside a shell, two balls touching the
+//! level between them at a saddle (against the dense-sampling reference), a linear field
+//! (volumes), seeded smooth random fields with 2–4 regions (against the same interval meshed
+//! alone), and integer data tied with inner levels (conformity only).
 
 mod common;
 
