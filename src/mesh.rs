@@ -18,11 +18,14 @@ pub enum BoundaryLabel {
     Box,
 }
 
-/// Number of levels a boundary label can name: the two bounds of one interval.
-pub const LABEL_LEVELS: usize = 2;
+/// Number of levels a boundary label can name: every level of a run.
+pub const LABEL_LEVELS: usize = crate::levels::MAX_LEVELS;
 
 /// Number of boundary labels: one per level, then the box.
 pub const NUM_LABELS: usize = LABEL_LEVELS + 1;
+
+/// The levels of one interval (alpha and beta): what a mesh without regions has.
+pub const INTERVAL_LEVELS: usize = 2;
 
 impl BoundaryLabel {
     /// The level set f = alpha (level 0, the lower bound of an interval).
@@ -30,15 +33,26 @@ impl BoundaryLabel {
     /// The level set f = beta (level 1, the upper bound of an interval).
     pub const BETA: BoundaryLabel = BoundaryLabel::Level(1);
 
-    /// All labels, in tag order ([`BoundaryLabel::index`]).
-    pub const ALL: [BoundaryLabel; NUM_LABELS] = [
-        BoundaryLabel::Level(0),
-        BoundaryLabel::Level(1),
-        BoundaryLabel::Box,
-    ];
+    /// All labels, in tag order ([`BoundaryLabel::index`]): the levels, then the box.
+    pub const ALL: [BoundaryLabel; NUM_LABELS] = {
+        let mut all = [BoundaryLabel::Box; NUM_LABELS];
+        let mut i = 0;
+        while i < LABEL_LEVELS {
+            all[i] = BoundaryLabel::Level(i as u8);
+            i += 1;
+        }
+        all
+    };
 
-    /// The label's number: the level index, or [`LABEL_LEVELS`] for the box. Writers emit it
-    /// (as is or plus one) as the label's tag; per-label tables are indexed by it.
+    /// The labels of a run of `levels` levels, in tag order: its levels, then the box.
+    pub fn of_levels(levels: usize) -> impl Iterator<Item = BoundaryLabel> {
+        (0..levels.min(LABEL_LEVELS))
+            .map(|i| BoundaryLabel::Level(i as u8))
+            .chain(std::iter::once(BoundaryLabel::Box))
+    }
+
+    /// The label's slot in per-label tables: the level index, or [`LABEL_LEVELS`] for the
+    /// box.
     #[inline]
     pub const fn index(self) -> usize {
         match self {
@@ -47,11 +61,32 @@ impl BoundaryLabel {
         }
     }
 
+    /// The label's number in a run of `levels` levels: the level index, or `levels` for the
+    /// box (so 0, 1, 2 for alpha, beta and the box of one interval). Writers emit it (as is
+    /// or plus one) as the label's tag.
+    #[inline]
+    pub const fn code(self, levels: usize) -> usize {
+        match self {
+            BoundaryLabel::Level(i) => i as usize,
+            BoundaryLabel::Box => levels,
+        }
+    }
+
     /// The label numbered `i` ([`BoundaryLabel::index`]); `i <= LABEL_LEVELS`.
     #[inline]
     pub const fn from_index(i: usize) -> BoundaryLabel {
         if i < LABEL_LEVELS {
             BoundaryLabel::Level(i as u8)
+        } else {
+            BoundaryLabel::Box
+        }
+    }
+
+    /// The label numbered `code` in a run of `levels` levels ([`BoundaryLabel::code`]).
+    #[inline]
+    pub const fn from_code(code: usize, levels: usize) -> BoundaryLabel {
+        if code < levels {
+            BoundaryLabel::Level(code as u8)
         } else {
             BoundaryLabel::Box
         }
@@ -66,19 +101,35 @@ impl BoundaryLabel {
         }
     }
 
-    /// Bit `1 << index` of the label, for per-vertex label sets.
+    /// Bit of the label in a per-vertex label set of a one-interval mesh (the quality pass's):
+    /// 1 alpha, 2 beta, 4 box. Levels between regions have none (0).
     #[inline]
     pub const fn bit(self) -> u8 {
-        1 << self.index()
+        match self {
+            BoundaryLabel::Level(i) if (i as usize) < INTERVAL_LEVELS => 1 << i,
+            BoundaryLabel::Level(_) => 0,
+            BoundaryLabel::Box => 1 << INTERVAL_LEVELS,
+        }
     }
 
-    /// Lower-case name used by every writer (`alpha`, `beta`, `box`).
+    /// Lower-case name of a one-interval label used by every writer (`alpha`, `beta`,
+    /// `box`; `level` for the levels of several regions, named by [`BoundaryLabel::name_in`]).
     pub fn name(self) -> &'static str {
         match self {
             BoundaryLabel::Level(0) => "alpha",
             BoundaryLabel::Level(1) => "beta",
             BoundaryLabel::Level(_) => "level",
             BoundaryLabel::Box => "box",
+        }
+    }
+
+    /// The label's name in a run of `levels` levels: as [`BoundaryLabel::name`] for one
+    /// interval; `level1`, `level2`, … (counting from 1, as the levels are given) and `box`
+    /// for several regions.
+    pub fn name_in(self, levels: usize) -> String {
+        match self {
+            BoundaryLabel::Level(i) if levels > INTERVAL_LEVELS => format!("level{}", i + 1),
+            l => l.name().to_string(),
         }
     }
 }
@@ -115,6 +166,41 @@ pub struct TetMesh {
     pub boundary: Vec<[u32; 3]>,
     /// #B labels, one per boundary triangle.
     pub boundary_labels: Vec<BoundaryLabel>,
+    /// The regions of a mesh of several intervals; empty for one interval.
+    pub regions: Regions,
+}
+
+/// The regions of a mesh of several intervals (`--levels`): region `k` lies between levels
+/// `k` and `k + 1`. Empty ([`Regions::is_empty`]) for a mesh of one interval.
+///
+/// Invariants: `tets[t]` is the region of tet `t`; `boundary[b]` the region of the tet the
+/// boundary triangle `b` is a face of; each interface triangle is a face of two tets, one in
+/// the region below its level and one in the region above, oriented with its normal pointing
+/// out of the region below (towards increasing f), and is not a boundary triangle.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Regions {
+    /// Number of levels of the run (0 when empty).
+    pub levels: usize,
+    /// #T regions, one per tet.
+    pub tets: Vec<u8>,
+    /// #B regions, one per boundary triangle.
+    pub boundary: Vec<u8>,
+    /// Triangles on the levels between regions.
+    pub interfaces: Vec<[u32; 3]>,
+    /// Level label ([`BoundaryLabel::Level`]) of each interface triangle.
+    pub interface_labels: Vec<BoundaryLabel>,
+}
+
+impl Regions {
+    /// Whether the mesh has no regions (one interval).
+    pub fn is_empty(&self) -> bool {
+        self.levels == 0
+    }
+
+    /// Number of regions (0 for one interval).
+    pub fn count(&self) -> usize {
+        self.levels.saturating_sub(1)
+    }
 }
 
 /// Tets per block of [`TetMesh::volume`]'s sum (blocks are summed in order, so the volume
@@ -122,6 +208,16 @@ pub struct TetMesh {
 pub(crate) const VOLUME_BLOCK: usize = 1 << 14;
 
 impl TetMesh {
+    /// Number of levels the mesh's labels name: 2 for one interval, the run's for several
+    /// regions.
+    pub fn level_count(&self) -> usize {
+        if self.regions.is_empty() {
+            INTERVAL_LEVELS
+        } else {
+            self.regions.levels
+        }
+    }
+
     /// Per point: bit `1 << label` for each [`BoundaryLabel`] of the boundary triangles around
     /// it (0 for interior points).
     pub fn vertex_label_bits(&self) -> Vec<u8> {
@@ -196,7 +292,8 @@ pub struct MeshChunk {
     /// Tets, global point numbers, positively oriented.
     pub tets: Vec<[u32; 4]>,
     /// Boundary triangles, global point numbers, outward normals. Each is a face of a tet of
-    /// the same chunk.
+    /// the same chunk. With several regions the interface triangles (labelled with a level
+    /// between regions) are listed here too, with normals out of the region below.
     pub boundary: Vec<[u32; 3]>,
     /// Label of each boundary triangle.
     pub boundary_labels: Vec<BoundaryLabel>,
@@ -205,6 +302,9 @@ pub struct MeshChunk {
     pub label_boxes: [[f64; 6]; NUM_LABELS],
     /// With several regions, the region of each tet (empty for one interval).
     pub regions: Vec<u8>,
+    /// With several regions, the region of the tet of each triangle of `boundary` (for an
+    /// interface, the region below it); empty for one interval.
+    pub boundary_regions: Vec<u8>,
 }
 
 /// Where [`crate::mesh_interval_streamed`] delivers the mesh, one slab at a time.
@@ -216,12 +316,22 @@ pub trait MeshSink {
     fn chunk(&mut self, chunk: &MeshChunk) -> io::Result<()>;
 }
 
-/// A sink that gathers the chunks into one [`TetMesh`].
+/// A sink that gathers the chunks into one [`TetMesh`] (the interface triangles of several
+/// regions into [`Regions::interfaces`]).
 #[derive(Default)]
 pub(crate) struct Gather {
     pub(crate) mesh: TetMesh,
-    /// The chunks' regions, in tet order (empty for one interval).
-    pub(crate) regions: Vec<u8>,
+}
+
+impl Gather {
+    /// A gatherer for a run of `levels` levels.
+    pub(crate) fn new(levels: usize) -> Self {
+        let mut g = Gather::default();
+        if levels > INTERVAL_LEVELS {
+            g.mesh.regions.levels = levels;
+        }
+        g
+    }
 }
 
 impl MeshSink for Gather {
@@ -230,9 +340,32 @@ impl MeshSink for Gather {
         m.points.extend_from_slice(&c.points);
         m.values.extend_from_slice(&c.values);
         m.tets.extend_from_slice(&c.tets);
-        m.boundary.extend_from_slice(&c.boundary);
-        m.boundary_labels.extend_from_slice(&c.boundary_labels);
-        self.regions.extend_from_slice(&c.regions);
+        if c.boundary_regions.is_empty() {
+            m.boundary.extend_from_slice(&c.boundary);
+            m.boundary_labels.extend_from_slice(&c.boundary_labels);
+            return Ok(());
+        }
+        let r = &mut m.regions;
+        r.tets.extend_from_slice(&c.regions);
+        let last = r.levels - 1;
+        for ((&t, &l), &region) in c
+            .boundary
+            .iter()
+            .zip(&c.boundary_labels)
+            .zip(&c.boundary_regions)
+        {
+            match l.level() {
+                Some(i) if i != 0 && i != last => {
+                    r.interfaces.push(t);
+                    r.interface_labels.push(l);
+                }
+                _ => {
+                    m.boundary.push(t);
+                    m.boundary_labels.push(l);
+                    r.boundary.push(region);
+                }
+            }
+        }
         Ok(())
     }
 }

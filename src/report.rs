@@ -322,6 +322,7 @@ mod tests {
     #[test]
     fn infinite_bounds_serialize_as_strings() {
         let mesh = TetMesh {
+            regions: Default::default(),
             points: vec![
                 [0.0, 0.0, 0.0],
                 [1.0, 0.0, 0.0],

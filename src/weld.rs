@@ -45,6 +45,8 @@ pub(crate) struct Slab {
     last_level: u8,
     tris: Vec<[u32; 3]>,
     labels: Vec<BoundaryLabel>,
+    /// With several regions: the region of the tet of each triangle.
+    tri_regions: Vec<u8>,
     /// Cells meshed per case.
     pub(crate) cases: [u64; 6],
 }
@@ -68,6 +70,7 @@ impl Slab {
             last_level: 0,
             tris: Vec::new(),
             labels: Vec::new(),
+            tri_regions: Vec::new(),
             cases: [0; 6],
         }
     }
@@ -83,8 +86,9 @@ impl Slab {
         self.labels.reserve(meshed);
     }
 
-    /// Meshes `levels` levels (more than two: every tet is tagged with
-    /// [`Slab::region`], and the level faces between regions are inner faces, not boundary).
+    /// Meshes `levels` levels (more than two: every tet and triangle is tagged with
+    /// [`Slab::region`], and the triangles on a level between regions are kept once, as
+    /// interfaces).
     pub(crate) fn set_levels(&mut self, levels: usize) {
         if levels > 2 {
             self.last_level = (levels - 1) as u8;
@@ -157,16 +161,17 @@ impl ClipSink for Slab {
     }
     #[inline]
     fn triangle(&mut self, points: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
-        let label = match label {
-            BoundaryLabel::Level(i) if self.tags_regions() && i == self.last_level => {
-                BoundaryLabel::BETA
-            }
-            BoundaryLabel::Level(i) if self.tags_regions() && i != 0 => return,
-            l => l,
-        };
+        // A level between two regions is clipped from both sides: its triangles are kept
+        // once, from the region below (normals towards increasing f).
+        if self.tags_regions() && label.level() == Some(self.region as usize) && self.region != 0 {
+            return;
+        }
         let ids = t.map(|i| self.id(&points[i]));
         self.tris.push(ids);
         self.labels.push(label);
+        if self.tags_regions() {
+            self.tri_regions.push(self.region);
+        }
     }
 }
 
@@ -363,6 +368,7 @@ impl Welder {
             boundary_labels: s.labels,
             label_boxes,
             regions: s.regions,
+            boundary_regions: s.tri_regions,
         }
     }
 }

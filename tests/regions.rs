@@ -17,6 +17,7 @@ use common::invariants::{mesh_betti, mesh_errors, total_volume};
 use common::reference::{sample, sampled_betti, Field};
 use common::Rng;
 use tptd::check::{check_mesh, CheckOptions};
+use tptd::levels::Levels;
 use tptd::{mesh_interval, BoundaryLabel, MeshOptions, Method, ScalarGrid, TetMesh};
 
 /// Outward faces of a positive tet `[a, b, c, d]`.
@@ -119,16 +120,14 @@ fn check_case(case: &Case, method: Method) -> usize {
     let opts = MeshOptions::default().method(method).levels(levels);
     let out = mesh_interval(&grid, &opts.clone().threads(Some(1))).unwrap();
     let two = mesh_interval(&grid, &opts.threads(Some(2))).unwrap();
-    assert!(
-        out.mesh == two.mesh && out.regions == two.regions,
-        "{name}: threads differ"
-    );
-    let (mesh, regions) = (&out.mesh, &out.regions);
+    assert!(out.mesh == two.mesh, "{name}: threads differ");
+    let (mesh, regions) = (&out.mesh, &out.mesh.regions.tets);
     assert_eq!(regions.len(), mesh.tets.len(), "{name}");
     let (first, last) = (levels[0], levels[levels.len() - 1]);
     let errs = mesh_errors(mesh);
     assert!(errs.is_empty(), "{name} {method:?}: {errs:?}");
-    let report = check_mesh(mesh, &CheckOptions::with_grid(&grid, first, last));
+    let all = Levels::new(levels).unwrap();
+    let report = check_mesh(mesh, &CheckOptions::with_levels(&grid, all));
     assert!(report.valid, "{name} {method:?}: {}", report.summary_line());
     let mut unresolved = 0;
     match expected(case, first, last) {
@@ -205,6 +204,47 @@ fn interfaces_lie_on_their_levels(mesh: &TetMesh, regions: &[u8], levels: &[f64]
         .zip(used.iter().skip(1))
         .any(|(a, b)| b - a == 1);
     assert!(!adjacent || shared > 0, "{name}: no interface face");
+    assert_eq!(
+        shared,
+        mesh.regions.interfaces.len(),
+        "{name}: interfaces listed"
+    );
+}
+
+/// The checker finds a mesh's regions broken: an interface dropped, one turned over, and a
+/// tet moved to another region.
+#[test]
+fn the_checker_finds_broken_regions() {
+    use tptd::check::ProblemKind::*;
+    let field = sphere_distance(16, 7.3);
+    let grid = ScalarGrid::new(field.dims, field.values.clone()).unwrap();
+    let levels = [f64::NEG_INFINITY, 2.7, 5.2];
+    let out = mesh_interval(&grid, &MeshOptions::default().levels(&levels)).unwrap();
+    let check = |m: &TetMesh| {
+        let opts = CheckOptions::with_levels(&grid, Levels::new(&levels).unwrap());
+        check_mesh(m, &opts)
+    };
+    assert!(
+        check(&out.mesh).valid,
+        "{}",
+        check(&out.mesh).summary_line()
+    );
+    let mut dropped = out.mesh.clone();
+    dropped.regions.interfaces.pop();
+    dropped.regions.interface_labels.pop();
+    assert_eq!(check(&dropped).kinds(), [UnlistedInterface]);
+    let mut turned = out.mesh.clone();
+    turned.regions.interfaces[0].swap(1, 2);
+    assert_eq!(
+        check(&turned).kinds(),
+        [UnlistedInterface, InterfaceNotBetweenRegions]
+    );
+    let mut moved = out.mesh.clone();
+    let t = moved.regions.tets.iter().position(|&r| r == 1).unwrap();
+    moved.regions.tets[t] = 0;
+    assert!(check(&moved).has(UnlistedInterface) || check(&moved).has(InterfaceNotBetweenRegions));
+    moved.regions.tets[t] = 2;
+    assert_eq!(check(&moved).kinds(), [RegionCount]);
 }
 
 fn sphere_distance(n: usize, c: f64) -> Field {
@@ -280,7 +320,7 @@ fn linear_field_regions_have_exact_volumes() {
     let fine = sample(&field, 40, levels[0], levels[3]).volume();
     let mut sum = 0.0;
     for k in 0..3u8 {
-        let sub = region_mesh(&out.mesh, &out.regions, k);
+        let sub = region_mesh(&out.mesh, &out.mesh.regions.tets, k);
         let got = total_volume(&sub);
         let want = sample(&field, 40, levels[k as usize], levels[k as usize + 1]).volume();
         assert!(

@@ -57,7 +57,7 @@ pub(crate) fn orientation(mesh: &TetMesh, problems: &mut Problems) {
 
 /// Sorted corners of a triangle, packed into the upper 96 bits; the parity of the sort
 /// (whether it took an odd permutation).
-fn face_key(f: [u32; 3]) -> (u128, bool) {
+pub(crate) fn face_key(f: [u32; 3]) -> (u128, bool) {
     let mut s = f;
     let mut odd = false;
     for (i, j) in [(0, 1), (1, 2), (0, 1)] {

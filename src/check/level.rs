@@ -268,8 +268,8 @@ fn samples(u: &[P; 3], bound: f64) -> Vec<P> {
     out
 }
 
-/// Checks the labelled triangles of `mesh`, with its points at `points`, against `grid` and
-/// the `levels` (alpha, beta).
+/// Checks the labelled triangles of `mesh` (boundary and interfaces), with its points at
+/// `points`, against `grid` and the `levels`.
 pub(crate) fn level_distance(
     (mesh, points): (&TetMesh, &[[f64; 3]]),
     grid: &ScalarGrid,
@@ -280,13 +280,18 @@ pub(crate) fn level_distance(
     let search = Search::new(grid, bound);
     let to_index = |v: u32| search.field.to_index(points[v as usize]);
     let corners = Corners::new(mesh, &search, &to_index, levels);
-    let per_tri: Vec<Tri> = mesh
-        .boundary
-        .par_iter()
-        .zip(&mesh.boundary_labels)
+    let per_tri: Vec<Tri> = labelled(mesh)
         .map(|(t, &label)| triangle(t, label, &search, &to_index, &corners, levels))
         .collect();
     summarize(bound, &corners, &per_tri, problems)
+}
+
+/// The labelled triangles: the boundary's, then the interfaces between regions (numbered on
+/// after the boundary's in the problems' ids).
+fn labelled(mesh: &TetMesh) -> impl IndexedParallelIterator<Item = (&[u32; 3], &BoundaryLabel)> {
+    let r = &mesh.regions;
+    (mesh.boundary.par_iter().zip(&mesh.boundary_labels))
+        .chain(r.interfaces.par_iter().zip(&r.interface_labels))
 }
 
 /// The level a triangle's label stands for (`None`: a box triangle).
@@ -310,12 +315,9 @@ impl Corners {
         to_index: &(impl Fn(u32) -> P + Sync),
         levels: &Levels,
     ) -> Self {
-        let mut list: Vec<(u32, u8)> = mesh
-            .boundary
-            .iter()
-            .zip(&mesh.boundary_labels)
+        let mut list: Vec<(u32, u8)> = labelled(mesh)
             .filter(|(_, &l)| l != BoundaryLabel::Box)
-            .flat_map(|(t, &l)| t.iter().map(move |&v| (v, l.index() as u8)))
+            .flat_map_iter(|(t, &l)| t.iter().map(move |&v| (v, l.index() as u8)))
             .collect();
         list.par_sort_unstable();
         list.dedup();

@@ -13,10 +13,13 @@
 //!    buckets, `intersect.rs`), and the winding number of the boundary at sampled tet
 //!    centroids is 1: the tets cover the domain once (`winding.rs`); the tets' volume equals
 //!    the volume the labelled boundary encloses;
-//! 6. **level-set distance** (with a grid): alpha and beta triangles within
+//! 6. **regions** (a mesh of several intervals): the faces between tets of two regions are
+//!    exactly the listed interfaces, each on the level between consecutive regions and
+//!    oriented out of the region below (`regions.rs`);
+//! 7. **level-set distance** (with a grid): level triangles (boundary and interfaces) within
 //!    [`CheckOptions::level_distance_bound`] voxels of their trilinear level set, box
 //!    triangles on the grid box (`level.rs`);
-//! 7. **volume**: the sum of the tet volumes, reported for the caller to compare.
+//! 8. **volume**: the sum of the tet volumes, reported for the caller to compare.
 //!
 //! Every pass that matters runs in parallel, and the report is the same for any thread count.
 
@@ -26,6 +29,7 @@ mod conformity;
 mod intersect;
 mod level;
 mod predicates;
+mod regions;
 mod winding;
 
 #[cfg(test)]
@@ -133,6 +137,16 @@ impl<'a> CheckOptions<'a> {
         }
     }
 
+    /// Options that also check the level-set distance against `grid` and the `levels` of a
+    /// mesh of several regions (its labels name them by index).
+    pub fn with_levels(grid: &'a ScalarGrid, levels: Levels) -> Self {
+        CheckOptions {
+            grid: Some(grid),
+            levels,
+            ..CheckOptions::default()
+        }
+    }
+
     /// [`CheckOptions::with_grid`] with the level-set bound `method` keeps ([`level_bound`]).
     pub fn for_method(grid: &'a ScalarGrid, alpha: f64, beta: f64, method: Method) -> Self {
         CheckOptions {
@@ -195,6 +209,15 @@ pub enum ProblemKind {
     OutsideGrid,
     /// A box triangle not on a face of the grid box (ids: labelled triangle).
     BoxTriangleOffBox,
+    /// The region lists are not as long as the tets, boundary or interface lists, or a
+    /// region number is not below the number of regions (ids: tet, when it is one).
+    RegionCount,
+    /// Two tets of different regions share a face that is not a listed interface on the
+    /// level between them, oriented out of the region below (ids: the two tets).
+    UnlistedInterface,
+    /// A listed interface that is not a face between tets of the two regions its level
+    /// separates, oriented out of the region below (ids: interface).
+    InterfaceNotBetweenRegions,
 }
 
 impl ProblemKind {
@@ -225,6 +248,9 @@ impl ProblemKind {
             OffLevel => "off_level",
             OutsideGrid => "outside_grid",
             BoxTriangleOffBox => "box_triangle_off_box",
+            RegionCount => "region_count",
+            UnlistedInterface => "unlisted_interface",
+            InterfaceNotBetweenRegions => "interface_not_between_regions",
         }
     }
 }
@@ -364,6 +390,7 @@ pub fn check_mesh(mesh: &TetMesh, opts: &CheckOptions) -> CheckReport {
     if !mesh.boundary.is_empty() && labels_ok {
         conformity::labelled(mesh, &faces, &mut problems);
     }
+    regions::regions(mesh, &mut problems);
     report.boundary_faces = faces.len();
     let ids: Vec<[u32; 3]> = faces.iter().map(|f| f.tri).collect();
     let tet_of: Vec<u32> = faces.iter().map(|f| f.tet).collect();

@@ -21,6 +21,7 @@ fn positive(points: &[P], mut t: [u32; 4]) -> [u32; 4] {
 fn mesh(points: Vec<P>, tets: &[[u32; 4]]) -> TetMesh {
     let tets = tets.iter().map(|&t| positive(&points, t)).collect();
     TetMesh {
+        regions: Default::default(),
         values: vec![0.0; points.len()],
         points,
         tets,

@@ -33,9 +33,10 @@ pub struct MeshOptions {
     pub beta: f64,
     /// Several levels (2 to [`MAX_LEVELS`](crate::levels::MAX_LEVELS), increasing), meshed
     /// as the regions between consecutive ones in one conforming mesh, each tet tagged with
-    /// its region ([`MeshOutput::regions`]); when not empty, `alpha` and `beta` are not used.
-    /// The boundary is labelled alpha (the first level), beta (the last) and box; the level
-    /// faces between two regions are inner faces. Not with warping.
+    /// its region ([`crate::mesh::Regions`]); when not empty, `alpha` and `beta` are not used.
+    /// The boundary is labelled with the first and the last level and box; the triangles on
+    /// the levels between regions are interfaces ([`crate::mesh::Regions::interfaces`]). Not
+    /// with warping.
     pub levels: Vec<f64>,
     /// Cell decomposition.
     pub method: Method,
@@ -226,9 +227,6 @@ pub struct MeshOutput {
     pub stats: MeshStats,
     /// The grid vertices that warping put on a level ([`MeshOptions::warp`]), by grid index.
     pub snapped: Vec<Snapped>,
-    /// With several regions ([`MeshOptions::levels`]), the region of each tet: `k` for the
-    /// interval between levels `k` and `k + 1`. Empty for one interval.
-    pub regions: Vec<u8>,
 }
 
 /// Meshes `{alpha < f < beta}` (its closure) of the piecewise-trilinear field on `grid`.
@@ -253,13 +251,12 @@ pub fn mesh_interval_with_progress(
     opts: &MeshOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<MeshOutput, MeshError> {
-    let mut gather = Gather::default();
+    let mut gather = Gather::new(opts.levels.len());
     let (stats, snapped) = mesh_in_pool(grid, opts, progress, &mut gather)?;
     Ok(MeshOutput {
         mesh: gather.mesh,
         stats,
         snapped,
-        regions: gather.regions,
     })
 }
 

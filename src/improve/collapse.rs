@@ -683,6 +683,7 @@ mod tests {
             crate::ScalarGrid::new([4, 4, 4], (0..64u8).map(f64::from).collect::<Vec<f64>>())
                 .unwrap();
         let mesh = crate::mesh::TetMesh {
+            regions: Default::default(),
             points: vec![
                 [1.0, 1.0, 1.0],
                 [2.0, 1.0, 1.0],

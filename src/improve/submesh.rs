@@ -103,6 +103,7 @@ impl SubMesh {
             .collect();
         let to_local = |v: &u32| local[*v as usize];
         let sub = TetMesh {
+            regions: Default::default(),
             points: points
                 .par_iter()
                 .map(|&v| mesh.points[v as usize])

@@ -223,7 +223,10 @@ pub fn problem_group(kind: ProblemKind) -> &'static str {
         | TetsOnSameSideOfFace
         | BoundaryFaceUnlisted
         | ListedFaceNotBoundary
-        | BoundaryTriangleInward => PROBLEM_GROUPS[0],
+        | BoundaryTriangleInward
+        | RegionCount
+        | UnlistedInterface
+        | InterfaceNotBetweenRegions => PROBLEM_GROUPS[0],
         InvertedTet | DegenerateTet => PROBLEM_GROUPS[1],
         OpenBoundaryEdge
         | NonManifoldBoundaryEdge

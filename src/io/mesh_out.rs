@@ -212,6 +212,7 @@ mod tests {
 
     fn one_tet() -> TetMesh {
         TetMesh {
+            regions: Default::default(),
             points: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             values: vec![0.0, 1.0, 2.0, 3.0],
             tets: vec![[0, 1, 2, 3]],

@@ -602,6 +602,7 @@ mod tests {
     /// Two tets on a shared face; three boundary triangles labelled alpha, box, box.
     fn two_tets() -> TetMesh {
         TetMesh {
+            regions: Default::default(),
             points: vec![
                 [0.0, 0.0, 0.0],
                 [1.0, 0.0, 0.0],
