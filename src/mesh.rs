@@ -189,6 +189,8 @@ pub struct Regions {
     pub interfaces: Vec<[u32; 3]>,
     /// Level label ([`BoundaryLabel::Level`]) of each interface triangle.
     pub interface_labels: Vec<BoundaryLabel>,
+    /// The regions' names as the writers give them (missing ones: [`Regions::name`]).
+    pub names: Vec<String>,
 }
 
 impl Regions {
@@ -200,6 +202,11 @@ impl Regions {
     /// Number of regions (0 for one interval).
     pub fn count(&self) -> usize {
         self.levels.saturating_sub(1)
+    }
+
+    /// The name of region `k`: the given one, else `region1`, `region2`, … (counting from 1).
+    pub fn name(&self, k: usize) -> String {
+        region_name(&self.names, k)
     }
 }
 
@@ -314,6 +321,12 @@ pub trait MeshSink {
     /// # Errors
     /// Any I/O error: it stops the meshing run and is returned from it.
     fn chunk(&mut self, chunk: &MeshChunk) -> io::Result<()>;
+}
+
+/// The name of region `k` among `names`: the given one, else `region1`, `region2`, …
+/// (counting from 1).
+pub fn region_name(names: &[String], k: usize) -> String {
+    names.get(k).cloned().unwrap_or_else(|| format!("region{}", k + 1))
 }
 
 /// A sink that gathers the chunks into one [`TetMesh`] (the interface triangles of several
