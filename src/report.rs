@@ -167,8 +167,15 @@ pub struct Report {
     pub nodes: usize,
     /// Number of tetrahedra.
     pub tets: usize,
-    /// Boundary triangles per label (`alpha`, `beta`, `box`).
-    pub boundary_triangles: BTreeMap<&'static str, usize>,
+    /// The levels of a run of several regions (`--levels`; absent for one interval).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub levels: Vec<Bound>,
+    /// Labelled triangles per label (`alpha`, `beta`, `box`; with several regions `level1`,
+    /// …, `box`, the levels between regions counting their interface triangles).
+    pub boundary_triangles: BTreeMap<String, usize>,
+    /// The regions of a run of several levels, in order (absent for one interval).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<RegionReport>,
     /// Cells in the grid.
     pub cells_total: u64,
     /// Cells not entirely outside the interval (the sum over `cells_by_case`).
@@ -199,6 +206,23 @@ pub struct Report {
     /// Every warning the run printed on stderr, in order, without the `tptd-mesh: warning: `
     /// prefix (set by the caller after [`build_report`]; empty when there was none).
     pub warnings: Vec<String>,
+}
+
+/// One region of a run of several levels.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RegionReport {
+    /// Its name (`--region-names`, default `region1`, …).
+    pub name: String,
+    /// Its lower and upper level.
+    pub levels: [Bound; 2],
+    /// Number of tetrahedra.
+    pub tets: usize,
+    /// Its volume (physical units).
+    pub volume: f64,
+    /// Betti numbers `[b0, b1, b2]`; `null` when the analysis was skipped.
+    pub betti: Option<[usize; 3]>,
+    /// Dihedral angle range in degrees; `null` when the analysis was skipped.
+    pub dihedral_degrees: Option<Dihedral>,
 }
 
 /// What the quality pass did, with the element quality before and after it (both `None` when
@@ -247,6 +271,8 @@ pub struct RunInfo<'a> {
     pub alpha: f64,
     /// Upper bound.
     pub beta: f64,
+    /// The levels of several regions (empty for one interval).
+    pub levels: &'a [f64],
     /// Worker threads used.
     pub threads: usize,
 }
@@ -260,9 +286,19 @@ pub fn build_report(
     quality: Option<QualitySection>,
     timings: Timings,
 ) -> Report {
-    let boundary_triangles: BTreeMap<&'static str, usize> = BoundaryLabel::ALL
-        .iter()
-        .map(|&l| (l.name(), facts.boundary_triangles[l.index()]))
+    let n = facts.level_count();
+    let boundary_triangles: BTreeMap<String, usize> = BoundaryLabel::of_levels(n)
+        .map(|l| (l.name_in(n), facts.boundary_triangles[l.index()]))
+        .collect();
+    let regions = (facts.regions.iter())
+        .map(|r| RegionReport {
+            name: r.name.clone(),
+            levels: r.levels.map(Bound),
+            tets: r.tets,
+            volume: r.volume,
+            betti: r.betti,
+            dihedral_degrees: r.dihedral.map(|(min, max)| Dihedral { min, max }),
+        })
         .collect();
     let cells_meshed: u64 = stats.cells_by_case.iter().sum();
     let cells_by_case = CaseCounts(
@@ -290,7 +326,9 @@ pub fn build_report(
         beta: Bound(run.beta),
         nodes: facts.nodes,
         tets: facts.tets,
+        levels: run.levels.iter().map(|&l| Bound(l)).collect(),
         boundary_triangles,
+        regions,
         cells_total: stats.cells_total,
         cells_meshed,
         cells_by_case,
@@ -352,9 +390,10 @@ mod tests {
             method: Method::Ctd,
             alpha: f64::NEG_INFINITY,
             beta: f64::INFINITY,
+            levels: &[],
             threads: 1,
         };
-        let facts = MeshFacts::of(&mesh, false);
+        let facts = MeshFacts::of(&mesh, false, &[]);
         let r = build_report(&run, &facts, &stats, None, Timings::default());
         let v: serde_json::Value = serde_json::from_str(&r.to_json_pretty()).unwrap();
         assert_eq!(v["alpha"], "-inf");

@@ -13,12 +13,12 @@ mod common;
 
 use std::collections::HashMap;
 
-use common::invariants::{mesh_betti, mesh_errors, total_volume};
+use common::invariants::{mesh_betti, mesh_errors, region_submesh, total_volume};
 use common::reference::{sample, sampled_betti, Field};
 use common::Rng;
 use tptd::check::{check_mesh, CheckOptions};
 use tptd::levels::Levels;
-use tptd::{mesh_interval, BoundaryLabel, MeshOptions, Method, ScalarGrid, TetMesh};
+use tptd::{mesh_interval, MeshOptions, Method, ScalarGrid, TetMesh};
 
 /// Outward faces of a positive tet `[a, b, c, d]`.
 fn tet_faces(t: [u32; 4]) -> [[u32; 3]; 4] {
@@ -33,35 +33,6 @@ fn tet_faces(t: [u32; 4]) -> [[u32; 3]; 4] {
 fn sorted(mut f: [u32; 3]) -> [u32; 3] {
     f.sort_unstable();
     f
-}
-
-/// The tets of region `k` as a mesh of their own: points renumbered, the faces that belong
-/// to one of its tets as its boundary (labelled box: only the complex is judged here).
-fn region_mesh(mesh: &TetMesh, regions: &[u8], k: u8) -> TetMesh {
-    let mut new_id: HashMap<u32, u32> = HashMap::new();
-    let mut out = TetMesh::default();
-    let mut count: HashMap<[u32; 3], ([u32; 3], usize)> = HashMap::new();
-    for (t, _) in mesh.tets.iter().zip(regions).filter(|(_, &r)| r == k) {
-        let t = t.map(|p| {
-            *new_id.entry(p).or_insert_with(|| {
-                out.points.push(mesh.points[p as usize]);
-                out.values.push(mesh.values[p as usize]);
-                (out.points.len() - 1) as u32
-            })
-        });
-        out.tets.push(t);
-        for f in tet_faces(t) {
-            count.entry(sorted(f)).or_insert((f, 0)).1 += 1;
-        }
-    }
-    let mut faces: Vec<[u32; 3]> = (count.values())
-        .filter(|(_, n)| *n == 1)
-        .map(|(f, _)| *f)
-        .collect();
-    faces.sort_unstable();
-    out.boundary_labels = vec![BoundaryLabel::Box; faces.len()];
-    out.boundary = faces;
-    out
 }
 
 /// What a region's (and the union's) Betti numbers are compared with.
@@ -136,7 +107,7 @@ fn check_case(case: &Case, method: Method) -> usize {
     }
     interfaces_lie_on_their_levels(mesh, regions, levels, name);
     for k in 0..levels.len() - 1 {
-        let sub = region_mesh(mesh, regions, k as u8);
+        let sub = region_submesh(mesh, k as u8);
         let errs = mesh_errors(&sub);
         assert!(errs.is_empty(), "{name} {method:?} region {k}: {errs:?}");
         let (a, b) = (levels[k], levels[k + 1]);
@@ -320,7 +291,7 @@ fn linear_field_regions_have_exact_volumes() {
     let fine = sample(&field, 40, levels[0], levels[3]).volume();
     let mut sum = 0.0;
     for k in 0..3u8 {
-        let sub = region_mesh(&out.mesh, &out.mesh.regions.tets, k);
+        let sub = region_submesh(&out.mesh, k);
         let got = total_volume(&sub);
         let want = sample(&field, 40, levels[k as usize], levels[k as usize + 1]).volume();
         assert!(

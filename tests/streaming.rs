@@ -91,15 +91,14 @@ fn streamed_output_equals_the_in_memory_output() {
         let grid = field([9, 8, 11], seed, left);
         let base = MeshOptions::new(-0.8, 1.1, Method::Ctd);
         let mesh = mesh_interval(&grid, &base).unwrap().mesh;
-        let labels: Vec<_> = BoundaryLabel::ALL
-            .iter()
-            .map(|l| mesh.boundary_labels.iter().filter(|&m| m == l).count())
+        let labels: Vec<_> = BoundaryLabel::of_levels(2)
+            .map(|l| mesh.boundary_labels.iter().filter(|&&m| m == l).count())
             .collect();
         assert!(
             labels.iter().all(|&n| n > 0),
             "every label occurs: {labels:?}"
         );
-        let expect = MeshFacts::of(&mesh, true);
+        let expect = MeshFacts::of(&mesh, true, &[]);
         for (name, w) in outputs() {
             let want = in_memory(&mesh, dir.path(), name, &w);
             for (threads, slabs) in [(1, 1), (2, 3), (2, 0)] {
@@ -132,7 +131,11 @@ fn streamed_facts_match_on_every_method_and_an_empty_mesh() {
         let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
         let mut facts = FactsSink::new(true);
         mesh_interval_streamed(&grid, &opts, &|_, _| {}, &mut facts).unwrap();
-        assert_eq!(facts.finish(), MeshFacts::of(&mesh, true), "{method:?}");
+        assert_eq!(
+            facts.finish(),
+            MeshFacts::of(&mesh, true, &[]),
+            "{method:?}"
+        );
     }
     let opts = MeshOptions::new(100.0, 200.0, Method::Ctd);
     let mut facts = FactsSink::new(true);
@@ -162,4 +165,40 @@ fn a_failing_sink_stops_meshing_with_its_error() {
     let e = mesh_interval_streamed(&grid, &opts, &|_, _| {}, &mut sink).unwrap_err();
     assert_eq!(e.to_string(), "disk full");
     assert_eq!(sink.0, 3, "no chunk after the error");
+}
+
+/// With several regions, the facts streamed (each region's included) equal those of the mesh
+/// in memory, and each region's Betti numbers and volume equal those of its tets meshed as
+/// one interval's run would count them (the region's own mesh from the library's checker).
+#[test]
+fn streamed_region_facts_match_the_mesh_in_memory() {
+    let grid = field([12, 11, 10], 5, false);
+    let levels = [f64::NEG_INFINITY, -0.4, 0.1, 0.7];
+    for method in [Method::Ctd, Method::Tptd] {
+        let opts = MeshOptions::default().method(method).levels(&levels);
+        let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
+        let names = vec!["low".to_string()];
+        let mut facts = FactsSink::new(true).with_regions(&levels, names.clone());
+        mesh_interval_streamed(&grid, &opts, &|_, _| {}, &mut facts).unwrap();
+        let mut named = mesh.clone();
+        named.regions.names = names;
+        let want = MeshFacts::of(&named, true, &levels);
+        let got = facts.finish();
+        assert_eq!(got, want, "{method:?}");
+        assert_eq!(got.regions.len(), 3);
+        let names: Vec<&str> = got.regions.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(names, ["low", "region2", "region3"]);
+        let tets: usize = got.regions.iter().map(|r| r.tets).sum();
+        assert_eq!(tets, got.tets);
+        let volume: f64 = got.regions.iter().map(|r| r.volume).sum();
+        assert!((volume - got.volume).abs() < 1e-9 * got.volume);
+        for (k, r) in got.regions.iter().enumerate() {
+            let sub = common::invariants::region_submesh(&mesh, k as u8);
+            assert_eq!(
+                r.betti,
+                Some(common::invariants::mesh_betti(&sub)),
+                "{method:?} {k}"
+            );
+        }
+    }
 }

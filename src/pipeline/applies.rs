@@ -259,9 +259,11 @@ const CRITICAL_ONLY: [Param; 9] = [
 ];
 
 /// Parameters that only meshing uses.
-const MESH_ONLY: [Param; 15] = [
+const MESH_ONLY: [Param; 17] = [
     Param::Alpha,
     Param::Beta,
+    Param::Levels,
+    Param::RegionNames,
     Param::Method,
     Param::Report,
     Param::MshVersion,
@@ -334,6 +336,7 @@ pub fn check_applies(g: &Given) -> Result<(), Inapplicable> {
     }
     check_output(g, g.output.unwrap_or(Path::new(DEMO_OUTPUT)))?;
     check_input(g)?;
+    check_levels(g)?;
     if g.has(Param::NoCriticalCheck) && g.has(Param::CriticalTol) {
         return Err(Inapplicable::NothingWith {
             param: Param::CriticalTol,
@@ -341,6 +344,48 @@ pub fn check_applies(g: &Given) -> Result<(), Inapplicable> {
         });
     }
     Ok(())
+}
+
+/// Several levels: not with a bound of one interval, nor (yet) with the quality pass, an
+/// isosurface output or a closed-surface input; region names only with them.
+fn check_levels(g: &Given) -> Result<(), Inapplicable> {
+    if !g.has(Param::Levels) {
+        return match g.has(Param::RegionNames) {
+            true => Err(Inapplicable::OnlyWith {
+                param: Param::RegionNames,
+                with: &[Param::Levels],
+            }),
+            false => Ok(()),
+        };
+    }
+    if let Some(param) = g.first(&[Param::Alpha, Param::Beta]) {
+        return Err(Inapplicable::Exclusive {
+            param,
+            other: Param::Levels,
+        });
+    }
+    if g.has(Param::Quality) {
+        return Err(Inapplicable::NotWith {
+            param: Param::Quality,
+            mode: Param::Levels,
+            why: "the quality pass improves one interval; mesh the regions without it",
+        });
+    }
+    if let Some(output) = g.output.filter(|o| SurfaceFormat::from_path(o).is_some()) {
+        return Err(Inapplicable::OutputKind {
+            param: Param::Levels,
+            only: "tetrahedral output (.msh, .inp, .vtu)",
+            output: output.to_path_buf(),
+        });
+    }
+    match g.input.filter(|p| is_surface(p)) {
+        Some(input) => Err(Inapplicable::InputKind {
+            param: Param::Levels,
+            only: "a volume input",
+            input: Some(input.to_path_buf()),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// With an inspection: only its parameters, the interval and the spacing only with a

@@ -24,14 +24,35 @@ pub(crate) fn warn_input(grid: &ScalarGrid, job: &Job, curvilinear: bool, report
         warn_near_singular(grid, job, reporter);
     }
     if job.req.critical_check {
-        let (a, b) = (job.opts.alpha, job.opts.beta);
         let tol = job.req.critical_tol;
-        let names = (
-            job.req.names.of(Param::Alpha),
-            job.req.names.of(Param::Beta),
-        );
-        warn_critical_bounds(grid, (&job.input_name, reporter), (a, b), names, tol);
+        warn_critical_bounds(grid, (&job.input_name, reporter), &checked(job), tol);
     }
+}
+
+/// The levels to check against the critical values: each with its name in messages and the
+/// sides (`true`: `{f >= w}`, `false`: `{f <= w}`) whose topology it bounds. One interval:
+/// alpha (lower) and beta (upper); several regions: every level, the inner ones both ways.
+fn checked(job: &Job) -> Vec<(String, f64, Vec<bool>)> {
+    let n = job.req.names;
+    let levels = &job.opts.levels;
+    if levels.is_empty() {
+        let (a, b) = (job.opts.alpha, job.opts.beta);
+        return vec![
+            (n.of(Param::Alpha).to_string(), a, vec![true]),
+            (n.of(Param::Beta).to_string(), b, vec![false]),
+        ];
+    }
+    let last = levels.len() - 1;
+    (levels.iter().enumerate())
+        .map(|(i, &l)| {
+            let sides = match i {
+                0 => vec![true],
+                i if i == last => vec![false],
+                _ => vec![true, false],
+            };
+            (format!("{} L{}", n.of(Param::Levels), i + 1), l, sides)
+        })
+        .collect()
 }
 
 /// Warns when the direction matrix is nearly singular (the mesh comes out nearly flat); an
@@ -48,14 +69,13 @@ fn warn_near_singular(grid: &ScalarGrid, job: &Job, reporter: &Reporter) {
     }
 }
 
-/// Warns about each bound that equals grid values exactly.
+/// Warns about each bound of the meshed set (the first and the last level) that equals grid
+/// values exactly (a value equal to a level between regions just counts in the region below).
 fn warn_exact_bounds(grid: &ScalarGrid, job: &Job, reporter: &Reporter) {
     let (alpha, beta) = (job.opts.alpha, job.opts.beta);
-    let n = job.req.names;
-    for (name, bound, lower) in [
-        (n.of(Param::Alpha), alpha, true),
-        (n.of(Param::Beta), beta, false),
-    ] {
+    let all = checked(job);
+    let (first, last) = (&all[0].0, &all[all.len() - 1].0);
+    for (name, bound, lower) in [(first, alpha, true), (last, beta, false)] {
         if let Some(w) = bound_warning(&grid.values, name, bound, lower) {
             reporter.warn(format_args!("{}: {w}", job.input_name));
         }
@@ -97,21 +117,20 @@ fn inside_value(values: &Samples, bound: f64, lower: bool) -> Option<f64> {
     next.is_finite().then(|| bound + (next - bound) / 2.0)
 }
 
-/// Warns when `alpha` (`beta`) lies within `tol` of a value where `{f >= w}` (`{f <= w}`)
-/// changes topology, naming the points and the nearest safe bounds.
+/// Warns when a level lies within `tol` of a value where `{f >= w}` or `{f <= w}` (the sides
+/// it bounds) changes topology, naming the points and the nearest safe values.
 fn warn_critical_bounds(
     grid: &ScalarGrid,
     (input, reporter): (&str, &Reporter),
-    (alpha, beta): (f64, f64),
-    (alpha_name, beta_name): (&str, &str),
+    levels: &[(String, f64, Vec<bool>)],
     tol: Option<f64>,
 ) {
     let (lo, hi) = grid.value_range();
     let tol = tol.unwrap_or(1e-5 * (hi - lo));
     // look for safe values this far around each bound
     let reach = tol + 0.004 * (hi - lo);
-    let windows: Vec<(f64, f64)> = [alpha, beta]
-        .into_iter()
+    let windows: Vec<(f64, f64)> = (levels.iter())
+        .map(|l| l.1)
         .filter(|b| b.is_finite())
         .map(|b| (b - reach, b + reach))
         .collect();
@@ -119,7 +138,8 @@ fn warn_critical_bounds(
         return;
     }
     let points = critical_in_windows(grid, &windows);
-    for (name, bound, lower) in [(alpha_name, alpha, true), (beta_name, beta, false)] {
+    for (name, bound, sides) in levels {
+        let bound = *bound;
         if !bound.is_finite() {
             continue;
         }
@@ -140,7 +160,11 @@ fn warn_critical_bounds(
             tol,
         };
         warn_face_saddles(grid, &bound, reporter);
-        warn_near_critical(&bound, &around, (lower, reach), reporter);
+        for &lower in sides {
+            if warn_near_critical(&bound, &around, (lower, reach), reporter) {
+                break;
+            }
+        }
     }
 }
 
@@ -176,16 +200,16 @@ fn warn_face_saddles(grid: &ScalarGrid, b: &Bound, reporter: &Reporter) {
 
 /// Warns when critical values among `around` (those within `reach` of the bound) change the
 /// filtration of the bound (`lower`: `{f >= w}`, else `{f <= w}`) within `tol`, naming the
-/// nearest safer values within `reach`.
+/// nearest safer values within `reach`; whether it warned.
 fn warn_near_critical(
     b: &Bound,
     around: &[CriticalPoint],
     (lower, reach): (bool, f64),
     reporter: &Reporter,
-) {
+) -> bool {
     let (bound, tol) = (b.value, b.tol);
     let Some(near) = near_critical(around, bound, lower, tol) else {
-        return;
+        return false;
     };
     let first = &near.hits[0];
     let p = first.position;
@@ -211,4 +235,5 @@ fn warn_near_critical(
         safe(near.safe_below),
         safe(near.safe_above),
     ));
+    true
 }

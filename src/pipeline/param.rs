@@ -34,6 +34,8 @@ params! {
     Output => "output",
     Alpha => "alpha",
     Beta => "beta",
+    Levels => "levels",
+    RegionNames => "region_names",
     Method => "method",
     Report => "report",
     Threads => "threads",

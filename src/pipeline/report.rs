@@ -34,6 +34,7 @@ pub(crate) fn make_report(
             method: job.opts.method,
             alpha: job.opts.alpha,
             beta: job.opts.beta,
+            levels: &job.opts.levels,
             threads,
         },
         &w.facts,

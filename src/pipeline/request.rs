@@ -45,6 +45,12 @@ pub struct MeshRequest {
     /// Upper bound of the interval (`None`: `inf`; for a closed surface `0`, the surface
     /// itself: a positive `beta` offsets it outwards, a negative one inwards).
     pub beta: Option<f64>,
+    /// Several levels `L1 < … < Ln` (2 to 16; `-inf` and `inf` at the ends): the regions
+    /// `[L1, L2]`, …, `[Ln-1, Ln]` meshed in one pass as one conforming mesh, instead of the
+    /// one interval of `alpha` and `beta` (which must then not be given).
+    pub levels: Option<Vec<f64>>,
+    /// The regions' names (as many as regions; default `region1`, `region2`, …).
+    pub region_names: Vec<String>,
     /// The cell decomposition.
     pub method: Method,
     /// Worker threads (`None`: all cores).
@@ -85,6 +91,8 @@ impl Default for MeshRequest {
             surface_grid: SurfaceGridOptions::default(),
             alpha: None,
             beta: None,
+            levels: None,
+            region_names: Vec::new(),
             method: Method::Ctd,
             threads: None,
             output: None,
@@ -169,7 +177,10 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
         (None, true) => PathBuf::from(DEMO_OUTPUT),
         (None, false) => return Err(PipelineError::file(&input_name, "no output given")),
     };
-    let (alpha, beta) = interval(req, &input_name)?;
+    let (alpha, beta) = match &req.levels {
+        Some(levels) => run_levels(req, levels, &input_name)?,
+        None => interval(req, &input_name)?,
+    };
     check_surface_grid(req, &input_name)?;
     check_threads(req.threads, req.names)?;
     check_outputs(req, &output)?;
@@ -183,6 +194,7 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
         } else {
             0.0
         },
+        levels: req.levels.clone().unwrap_or_default(),
         ..MeshOptions::default()
     };
     Ok(Job {
@@ -226,6 +238,63 @@ fn interval(req: &MeshRequest, input_name: &str) -> Result<(f64, f64), PipelineE
         ));
     }
     Ok((alpha, beta))
+}
+
+/// Checks the levels of the request and the region names against them; returns the first
+/// and the last level (the bounds of the union). A refusal is a usage error.
+fn run_levels(
+    req: &MeshRequest,
+    levels: &[f64],
+    input_name: &str,
+) -> Result<(f64, f64), PipelineError> {
+    let n = req.names;
+    let checked = crate::levels::Levels::new(levels).map_err(|e| {
+        PipelineError::usage(
+            input_name,
+            format_args!("{} {}: {e}", n.of(Param::Levels), list(levels)),
+        )
+    })?;
+    let names = &req.region_names;
+    if !names.is_empty() && names.len() != checked.regions() {
+        return Err(PipelineError::usage(
+            input_name,
+            format_args!(
+                "{} gives {} name(s) for {} regions",
+                n.of(Param::RegionNames),
+                names.len(),
+                checked.regions()
+            ),
+        ));
+    }
+    let mut seen = std::collections::HashSet::new();
+    if let Some(bad) = names
+        .iter()
+        .find(|s| !valid_name(s) || !seen.insert(s.to_ascii_uppercase()))
+    {
+        return Err(PipelineError::usage(
+            input_name,
+            format_args!(
+                "{} {bad:?}: names must be distinct, start with a letter and hold only letters, \
+                 digits and _ (they become Abaqus set names)",
+                n.of(Param::RegionNames)
+            ),
+        ));
+    }
+    Ok((levels[0], levels[levels.len() - 1]))
+}
+
+/// Whether `s` is a region name every writer takes: a letter, then letters, digits and `_`,
+/// at most 64 characters.
+fn valid_name(s: &str) -> bool {
+    s.len() <= 64
+        && s.starts_with(|c: char| c.is_ascii_alphabetic())
+        && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// Levels as given, comma-separated.
+fn list(levels: &[f64]) -> String {
+    let parts: Vec<String> = levels.iter().map(|&l| fmt_bound(l)).collect();
+    parts.join(",")
 }
 
 /// Checks the signed-distance grid of the request: a resolution or a voxel size only for a

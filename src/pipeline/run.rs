@@ -61,7 +61,8 @@ pub(crate) fn stream_to_disk(
 ) -> Result<Written, PipelineError> {
     let t = Instant::now();
     let mut spill = spill_for(&job.output)?;
-    let mut facts = FactsSink::new(job.req.analysis);
+    let mut facts = FactsSink::new(job.req.analysis)
+        .with_regions(&job.opts.levels, job.req.region_names.clone());
     let stage = reporter.stage("meshing", meshing(grid));
     let stats = mesh_interval_streamed(
         grid,
@@ -142,7 +143,7 @@ pub(crate) fn mesh_in_memory(
 
     let t = Instant::now();
     let stage = reporter.stage("analysing the mesh", StageKind::Step);
-    let facts = MeshFacts::of(&out.mesh, job.req.analysis);
+    let facts = MeshFacts::of(&out.mesh, job.req.analysis, &job.opts.levels);
     let after = (quality.is_some() && job.req.analysis).then(|| summarize(&out.mesh));
     stage.finish();
     let quality = quality.map(|q| QualitySection { after, ..q });
@@ -189,10 +190,13 @@ fn check_output(
     }
     let t = Instant::now();
     let stage = reporter.stage("checking the mesh", StageKind::Step);
-    let opts = CheckOptions {
+    let mut opts = CheckOptions {
         level_points: parameter_points,
         ..CheckOptions::for_method(grid, job.opts.alpha, job.opts.beta, job.opts.method)
     };
+    if let Ok(levels) = crate::levels::Levels::new(&job.opts.levels) {
+        opts.levels = levels;
+    }
     let report = check_mesh(mesh, &opts);
     stage.finish();
     if !report.valid {
@@ -248,8 +252,9 @@ fn mesh(grid: &ScalarGrid, job: &Job, reporter: &Reporter) -> Result<MeshOutput,
     let stage = reporter.stage("meshing", meshing(grid));
     let out = mesh_interval_with_progress(grid, &job.opts, &stage.counter());
     stage.finish();
-    let out = out.map_err(|e| PipelineError::file(&job.input_name, e))?;
+    let mut out = out.map_err(|e| PipelineError::file(&job.input_name, e))?;
     check_not_empty(grid, job, out.mesh.tets.len())?;
+    out.mesh.regions.names = job.req.region_names.clone();
     Ok(out)
 }
 

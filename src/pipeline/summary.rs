@@ -42,6 +42,7 @@ pub fn summary(
     input_lines(&mut s, r);
     mesh_lines(&mut s, r);
     analysis_lines(&mut s, r, names);
+    region_lines(&mut s, r);
     quality_lines(&mut s, r, names);
     cells_line(&mut s, r);
     output_lines(&mut s, r, report_path);
@@ -69,10 +70,22 @@ fn input_lines(s: &mut String, r: &Report) {
          samples {}",
         r.spacing[0], r.spacing[1], r.spacing[2], r.cells_total, r.samples
     );
+    if r.levels.is_empty() {
+        let _ = writeln!(
+            s,
+            "  interval  {alpha}, {beta}   method {}   threads {}",
+            r.method, r.threads
+        );
+        return;
+    }
+    let levels: Vec<String> = r.levels.iter().map(|l| fmt_bound(l.0)).collect();
     let _ = writeln!(
         s,
-        "  interval  {alpha}, {beta}   method {}   threads {}",
-        r.method, r.threads
+        "  levels    {} ({} regions)   method {}   threads {}",
+        levels.join(", "),
+        r.levels.len() - 1,
+        r.method,
+        r.threads
     );
 }
 
@@ -84,14 +97,53 @@ fn mesh_lines(s: &mut String, r: &Report) {
         r.nodes, r.tets, r.volume
     );
     let bt = |k: &str| r.boundary_triangles.get(k).copied().unwrap_or(0);
+    if r.levels.is_empty() {
+        let _ = writeln!(
+            s,
+            "  boundary  {} triangles: alpha {}, beta {}, box {}",
+            bt("alpha") + bt("beta") + bt("box"),
+            bt("alpha"),
+            bt("beta"),
+            bt("box")
+        );
+        return;
+    }
+    let n = r.levels.len();
+    let (first, last) = ("level1".to_string(), format!("level{n}"));
+    let outer = bt(&first) + bt(&last) + bt("box");
+    let inner: Vec<String> = (2..n)
+        .map(|i| format!("level{i} {}", bt(&format!("level{i}"))))
+        .collect();
     let _ = writeln!(
         s,
-        "  boundary  {} triangles: alpha {}, beta {}, box {}",
-        bt("alpha") + bt("beta") + bt("box"),
-        bt("alpha"),
-        bt("beta"),
-        bt("box")
+        "  boundary  {outer} triangles: {first} {}, {last} {}, box {}; interfaces: {}",
+        bt(&first),
+        bt(&last),
+        bt("box"),
+        inner.join(", ")
     );
+}
+
+/// Each region of a run of several levels: its interval, tets, volume, and with the analysis
+/// its Betti numbers and dihedral range.
+fn region_lines(s: &mut String, r: &Report) {
+    for g in &r.regions {
+        let mut line = format!(
+            "  region    {} [{}, {}]: {} tets, volume {:.6}",
+            g.name,
+            fmt_bound(g.levels[0].0),
+            fmt_bound(g.levels[1].0),
+            g.tets,
+            g.volume
+        );
+        if let Some([b0, b1, b2]) = g.betti {
+            line += &format!(", b0 = {b0}, b1 = {b1}, b2 = {b2}");
+        }
+        if let Some(d) = g.dihedral_degrees {
+            line += &format!(", dihedral {}..{} deg", fmt_angle(d.min), fmt_angle(d.max));
+        }
+        let _ = writeln!(s, "{line}");
+    }
 }
 
 /// Betti numbers and dihedral angles (or that they were skipped).

@@ -18,6 +18,27 @@ pub fn bound(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
+/// Levels `L1,L2,...`: comma-separated bounds ([`bound`]); their order and count are checked
+/// with the request.
+///
+/// # Errors
+/// What was expected and what was given.
+pub fn levels(s: &str) -> Result<Vec<f64>, String> {
+    s.split(',').map(bound).collect()
+}
+
+/// Names `a,b,...`, comma-separated, none empty.
+///
+/// # Errors
+/// What was expected and what was given.
+pub fn names(s: &str) -> Result<Vec<String>, String> {
+    let names: Vec<String> = s.split(',').map(|n| n.trim().to_string()).collect();
+    match names.iter().any(String::is_empty) {
+        true => Err(format!("'{s}' has an empty name (use e.g. grey,white)")),
+        false => Ok(names),
+    }
+}
+
 /// A grid spacing `sx,sy,sz`: three finite positive numbers.
 ///
 /// # Errors

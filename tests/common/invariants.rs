@@ -361,3 +361,43 @@ pub fn per_cell_volumes(mesh: &TetMesh, cell_dims: [usize; 3]) -> Result<Vec<f64
     }
     Ok(vols)
 }
+
+/// Outward faces of a positive tet `[a, b, c, d]`.
+fn outward_faces(t: [u32; 4]) -> [[u32; 3]; 4] {
+    [
+        [t[1], t[2], t[3]],
+        [t[0], t[3], t[2]],
+        [t[0], t[1], t[3]],
+        [t[0], t[2], t[1]],
+    ]
+}
+
+/// The tets of region `k` as a mesh of their own: points renumbered, the faces that belong
+/// to one of its tets as its boundary (labelled box: only the complex is judged here).
+pub fn region_submesh(mesh: &TetMesh, k: u8) -> TetMesh {
+    let regions = &mesh.regions.tets;
+    let mut new_id: HashMap<u32, u32> = HashMap::new();
+    let mut out = TetMesh::default();
+    let mut count: HashMap<[u32; 3], ([u32; 3], usize)> = HashMap::new();
+    for (t, _) in mesh.tets.iter().zip(regions).filter(|(_, &r)| r == k) {
+        let t = t.map(|p| {
+            *new_id.entry(p).or_insert_with(|| {
+                out.points.push(mesh.points[p as usize]);
+                out.values.push(mesh.values[p as usize]);
+                (out.points.len() - 1) as u32
+            })
+        });
+        out.tets.push(t);
+        for f in outward_faces(t) {
+            count.entry(sorted3(f)).or_insert((f, 0)).1 += 1;
+        }
+    }
+    let mut faces: Vec<[u32; 3]> = (count.values())
+        .filter(|(_, n)| *n == 1)
+        .map(|(f, _)| *f)
+        .collect();
+    faces.sort_unstable();
+    out.boundary_labels = vec![BoundaryLabel::Box; faces.len()];
+    out.boundary = faces;
+    out
+}

@@ -11,7 +11,7 @@ use tptd::critical::{CriticalKind, TransferDesign};
 use tptd::io::msh::MshVersion;
 use tptd::io::vtu::VtuEncoding;
 use tptd::pipeline::values::{bound, max_angle, memory_size, min_angle, nonnegative, ratio};
-use tptd::pipeline::values::{kinds, positive, seconds, spacing};
+use tptd::pipeline::values::{kinds, levels, names, positive, seconds, spacing};
 use tptd::pipeline::{check_applies, Given, Mode, Param, ParamNames};
 use tptd::Method;
 
@@ -48,6 +48,18 @@ pub(crate) struct Cli {
     /// Upper bound of the interval [default: inf; with a surface input 0, the surface]
     #[arg(long, value_name = "B", allow_hyphen_values = true, value_parser = bound)]
     pub(crate) beta: Option<f64>,
+
+    /// Several levels L1,L2,...,Ln (increasing, 2 to 16; -inf and inf at the ends): mesh the
+    /// regions [L1, L2], ..., [Ln-1, Ln] in one pass as one conforming mesh, each tet tagged
+    /// with its region and the levels between regions kept as interfaces; instead of
+    /// --alpha/--beta
+    #[arg(long, value_name = "L1,L2,...", allow_hyphen_values = true, value_parser = |s: &str| levels(s).map(Levels))]
+    pub(crate) levels: Option<Levels>,
+
+    /// With --levels: the regions' names, one per region (a letter, then letters, digits and
+    /// _) [default: region1,region2,...]
+    #[arg(long, value_name = "A,B,...", value_parser = |s: &str| names(s).map(Names))]
+    pub(crate) region_names: Option<Names>,
 
     /// Cell decomposition: ctd and tptd keep the trilinear topology (ctd with fewer tets); std
     /// keeps it except in cells both bounds cross; six and five do not
@@ -240,6 +252,14 @@ pub(crate) struct Cli {
 /// A `--spacing`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Spacing(pub(crate) [f64; 3]);
+
+/// A `--levels` list.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Levels(pub(crate) Vec<f64>);
+
+/// A `--region-names` list.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Names(pub(crate) Vec<String>);
 
 /// A `--kind` list.
 #[derive(Clone, Debug, PartialEq)]

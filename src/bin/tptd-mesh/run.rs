@@ -61,6 +61,8 @@ fn mesh_request(cli: &Cli) -> MeshRequest {
         },
         alpha: cli.alpha,
         beta: cli.beta,
+        levels: cli.levels.clone().map(|l| l.0),
+        region_names: cli.region_names.clone().map(|n| n.0).unwrap_or_default(),
         method: cli.method.get(),
         threads: cli.threads.map(|n| n as usize),
         output: cli.output.clone(),

@@ -9,7 +9,11 @@ use std::io;
 use rayon::prelude::*;
 
 use crate::geom::signed_volume;
-use crate::mesh::{MeshChunk, MeshSink};
+mod regions;
+
+pub use regions::RegionFacts;
+
+use crate::mesh::{BoundaryLabel, MeshChunk, MeshSink, INTERVAL_LEVELS};
 use crate::mesh::{TetMesh, NUM_LABELS, VOLUME_BLOCK};
 use crate::quality::{cosine_extremes, cosines_to_degrees, dihedral_range, widest, NO_COSINES};
 use crate::topology::{betti, tet_links, triangle_links};
@@ -30,13 +34,27 @@ pub struct MeshFacts {
     pub dihedral: Option<(f64, f64)>,
     /// Betti numbers (`None`: not analysed).
     pub betti: Option<[usize; 3]>,
+    /// With several regions, the facts of each (empty for one interval).
+    pub regions: Vec<RegionFacts>,
 }
 
 impl MeshFacts {
-    /// The facts of `mesh`; `analyse`: with the dihedral range and the Betti numbers.
-    pub fn of(mesh: &TetMesh, analyse: bool) -> Self {
+    /// Number of levels the labels name: 2 for one interval.
+    pub fn level_count(&self) -> usize {
+        match self.regions.len() {
+            0 => INTERVAL_LEVELS,
+            n => n + 1,
+        }
+    }
+}
+
+impl MeshFacts {
+    /// The facts of `mesh`; `analyse`: with the dihedral range and the Betti numbers. With
+    /// several regions, `levels` are the run's levels (the regions' bounds in the facts).
+    pub fn of(mesh: &TetMesh, analyse: bool, levels: &[f64]) -> Self {
         let mut boundary_triangles = [0; NUM_LABELS];
-        for &l in &mesh.boundary_labels {
+        let labels = mesh.boundary_labels.iter();
+        for &l in labels.chain(&mesh.regions.interface_labels) {
             boundary_triangles[l.index()] += 1;
         }
         MeshFacts {
@@ -46,11 +64,37 @@ impl MeshFacts {
             volume: mesh.volume(),
             dihedral: if analyse { dihedral_range(mesh) } else { None },
             betti: analyse.then(|| betti(mesh)),
+            regions: region_facts(mesh, analyse, levels),
         }
     }
 }
 
+/// The facts of each region of `mesh` (none for one interval).
+fn region_facts(mesh: &TetMesh, analyse: bool, levels: &[f64]) -> Vec<RegionFacts> {
+    let r = &mesh.regions;
+    if r.is_empty() {
+        return Vec::new();
+    }
+    let mut acc = regions::RegionsAcc::new(r.levels, analyse);
+    let corners = |t: &[u32; 4]| t.map(|i| mesh.points[i as usize]);
+    let vols: Vec<f64> = (mesh.tets.par_iter())
+        .map(|t| {
+            let [a, b, c, d] = corners(t);
+            signed_volume(a, b, c, d)
+        })
+        .collect();
+    let cos: Vec<(f64, f64)> = match analyse {
+        true => (mesh.tets.par_iter())
+            .map(|t| cosine_extremes(corners(t)))
+            .collect(),
+        false => Vec::new(),
+    };
+    acc.add(&regions::as_chunk(mesh), mesh.points.len(), &vols, &cos);
+    acc.finish(&|k| r.name(k), levels)
+}
+
 /// Union–find of the tets' and the boundary triangles' vertices, grown chunk by chunk.
+#[derive(Default)]
 struct Components {
     solid: UnionFind,
     surface: UnionFind,
@@ -59,26 +103,43 @@ struct Components {
 }
 
 impl Components {
-    fn add(&mut self, c: &MeshChunk) {
-        let n = c.first_point + c.points.len();
-        self.solid.grow(n);
-        self.surface.grow(n);
-        self.used.resize(n, false);
-        self.on_boundary.resize(n, false);
-        for t in &c.tets {
-            for &v in t {
-                self.used[v as usize] = true;
-            }
-            for (a, b) in tet_links(t) {
-                self.solid.union(a, b);
-            }
+    /// Makes room for points `0..n`.
+    fn grow(&mut self, n: usize) {
+        if n > self.used.len() {
+            self.solid.grow(n);
+            self.surface.grow(n);
+            self.used.resize(n, false);
+            self.on_boundary.resize(n, false);
         }
-        for t in &c.boundary {
-            for &v in t {
-                self.on_boundary[v as usize] = true;
-            }
-            for (a, b) in triangle_links(t) {
-                self.surface.union(a, b);
+    }
+
+    #[inline]
+    fn add_tet(&mut self, t: &[u32; 4]) {
+        for &v in t {
+            self.used[v as usize] = true;
+        }
+        for (a, b) in tet_links(t) {
+            self.solid.union(a, b);
+        }
+    }
+
+    #[inline]
+    fn add_triangle(&mut self, t: &[u32; 3]) {
+        for &v in t {
+            self.on_boundary[v as usize] = true;
+        }
+        for (a, b) in triangle_links(t) {
+            self.surface.union(a, b);
+        }
+    }
+
+    /// Adds the tets and the outer boundary triangles of `c` (not its interfaces).
+    fn add(&mut self, c: &MeshChunk, levels: usize) {
+        self.grow(c.first_point + c.points.len());
+        c.tets.iter().for_each(|t| self.add_tet(t));
+        for (t, l) in c.boundary.iter().zip(&c.boundary_labels) {
+            if !is_interface(*l, levels) {
+                self.add_triangle(t);
             }
         }
     }
@@ -95,6 +156,12 @@ impl Components {
     }
 }
 
+/// Whether a triangle labelled `l` in a run of `levels` levels is an interface between two
+/// regions (on a level other than the first and the last).
+fn is_interface(l: BoundaryLabel, levels: usize) -> bool {
+    matches!(l.level(), Some(i) if i != 0 && i + 1 < levels)
+}
+
 /// A [`MeshSink`] gathering [`MeshFacts`] while the mesh streams (it keeps the points of the
 /// last two chunks: a tet uses points of its own chunk and of the one before).
 pub struct FactsSink {
@@ -109,6 +176,10 @@ pub struct FactsSink {
     components: Option<Components>,
     prev: (usize, Vec<[f64; 3]>),
     cur: (usize, Vec<[f64; 3]>),
+    /// The run's levels (two for one interval).
+    levels: Vec<f64>,
+    /// With several regions: their names and running facts.
+    regions: Option<(Vec<String>, regions::RegionsAcc)>,
 }
 
 impl FactsSink {
@@ -130,7 +201,20 @@ impl FactsSink {
             }),
             prev: (0, Vec::new()),
             cur: (0, Vec::new()),
+            levels: Vec::new(),
+            regions: None,
         }
+    }
+
+    /// Also gathers the facts of each region of a run of several `levels` (more than two),
+    /// named by `names` (missing ones: [`crate::mesh::region_name`]).
+    pub fn with_regions(mut self, levels: &[f64], names: Vec<String>) -> Self {
+        if levels.len() > INTERVAL_LEVELS {
+            let acc = regions::RegionsAcc::new(levels.len(), self.analyse);
+            self.regions = Some((names, acc));
+            self.levels = levels.to_vec();
+        }
+        self
     }
 
     /// The facts of everything received.
@@ -139,7 +223,11 @@ impl FactsSink {
             self.partials.push(self.block.iter().sum());
         }
         let dihedral = (self.analyse && self.tets > 0).then(|| cosines_to_degrees(self.cos_range));
-        let nb = self.boundary_triangles.iter().sum();
+        let levels = self.levels.len().max(INTERVAL_LEVELS);
+        let nb = (BoundaryLabel::ALL.iter())
+            .filter(|&&l| !is_interface(l, levels))
+            .map(|l| self.boundary_triangles[l.index()])
+            .sum();
         MeshFacts {
             nodes: self.nodes,
             tets: self.tets,
@@ -147,6 +235,12 @@ impl FactsSink {
             volume: self.partials.iter().sum(),
             dihedral,
             betti: self.components.map(|c| c.betti(nb)),
+            regions: match self.regions {
+                Some((names, acc)) => {
+                    acc.finish(&|k| crate::mesh::region_name(&names, k), &self.levels)
+                }
+                None => Vec::new(),
+            },
         }
     }
 
@@ -163,8 +257,8 @@ impl FactsSink {
         })
     }
 
-    /// Adds the volumes of `tets` to the block sums, in order.
-    fn add_volumes(&mut self, tets: &[[u32; 4]]) {
+    /// Adds the volumes of `tets` to the block sums, in order; returns them.
+    fn add_volumes(&mut self, tets: &[[u32; 4]]) -> Vec<f64> {
         let vols: Vec<f64> = tets
             .par_iter()
             .map(|t| {
@@ -172,22 +266,32 @@ impl FactsSink {
                 signed_volume(a, b, c, d)
             })
             .collect();
-        for v in vols {
+        for &v in &vols {
             self.block.push(v);
             if self.block.len() == VOLUME_BLOCK {
                 self.partials.push(self.block.iter().sum());
                 self.block.clear();
             }
         }
+        vols
     }
 
-    /// Widens the range of dihedral cosines by the tets of `tets`.
-    fn add_cosines(&mut self, tets: &[[u32; 4]]) {
+    /// Widens the range of dihedral cosines by the tets of `tets`; returns each tet's
+    /// extremes when `per_tet`.
+    fn add_cosines(&mut self, tets: &[[u32; 4]], per_tet: bool) -> Vec<(f64, f64)> {
+        if per_tet {
+            let each: Vec<(f64, f64)> = (tets.par_iter())
+                .map(|t| cosine_extremes(self.corners(t)))
+                .collect();
+            self.cos_range = each.iter().copied().fold(self.cos_range, widest);
+            return each;
+        }
         let r = tets
             .par_iter()
             .map(|t| cosine_extremes(self.corners(t)))
             .reduce(|| NO_COSINES, widest);
         self.cos_range = widest(self.cos_range, r);
+        Vec::new()
     }
 }
 
@@ -200,12 +304,18 @@ impl MeshSink for FactsSink {
         for &l in &c.boundary_labels {
             self.boundary_triangles[l.index()] += 1;
         }
-        self.add_volumes(&c.tets);
-        if self.analyse {
-            self.add_cosines(&c.tets);
-        }
+        let vols = self.add_volumes(&c.tets);
+        let per_tet = self.regions.is_some();
+        let cos = match self.analyse {
+            true => self.add_cosines(&c.tets, per_tet),
+            false => Vec::new(),
+        };
+        let levels = self.levels.len().max(INTERVAL_LEVELS);
         if let Some(comp) = &mut self.components {
-            comp.add(c);
+            comp.add(c, levels);
+        }
+        if let Some((_, acc)) = &mut self.regions {
+            acc.add(c, c.first_point + c.points.len(), &vols, &cos);
         }
         Ok(())
     }
