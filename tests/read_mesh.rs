@@ -210,3 +210,22 @@ fn truncated_files_are_errors_not_panics() {
         }
     }
 }
+
+/// `*ELSET` cards after the elements move their elements to their region (listed ids and
+/// `GENERATE` ranges); an undefined element is an error naming it.
+#[test]
+fn inp_element_sets_name_the_regions() {
+    let dir = tempfile::tempdir().unwrap();
+    let nodes = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n5, 1, 1, 1\n";
+    let elements =
+        "*ELEMENT, TYPE=C3D4, ELSET=DOMAIN\n1, 1, 2, 3, 4\n2, 2, 3, 4, 5\n3, 1, 2, 3, 4\n";
+    let sets = "*ELSET, ELSET=CORE\n2\n*ELSET, ELSET=RIM, GENERATE\n3, 3, 1\n";
+    let path = dir.path().join("r.inp");
+    std::fs::write(&path, format!("{nodes}{elements}{sets}")).unwrap();
+    let f = read_mesh(&path).unwrap();
+    assert_eq!(f.regions, ["domain", "core", "rim"]);
+    assert_eq!(f.tet_region, [0, 1, 2]);
+    let bad = format!("{nodes}{elements}*ELSET, ELSET=CORE\n9\n");
+    let e = error_of(dir.path(), "b.inp", bad.as_bytes());
+    assert!(e.contains("undefined element 9"), "{e}");
+}

@@ -1,8 +1,10 @@
 //! Abaqus / CalculiX `.inp` reader, the twin of [`super::inp`].
 //!
 //! Reads `*NODE` (ids any positive integers; nodes get 0-based indices in file order),
-//! `*ELEMENT, TYPE=C3D4` (its `ELSET=` names the region of its elements), `*NSET, NSET=name`
-//! (ids, or `first, last, step` with `GENERATE`) and `*SURFACE, NAME=name, TYPE=ELEMENT`
+//! `*ELEMENT, TYPE=C3D4` (its `ELSET=` names the region of its elements), `*ELSET, ELSET=name`
+//! (element ids, or `first, last, step` with `GENERATE`: the listed elements move to the
+//! region `name`, so sets written after the elements, as the writer's per-region sets, name
+//! the regions), `*NSET, NSET=name` (ids, or `first, last, step` with `GENERATE`) and `*SURFACE, NAME=name, TYPE=ELEMENT`
 //! (lines `element, Sk`, C3D4 faces S1 = 1-2-3, S2 = 1-4-2, S3 = 2-4-3, S4 = 3-4-1). Other
 //! keywords and their data lines are skipped; `**` lines are comments; `*INCLUDE` and element
 //! types other than C3D4 are errors.
@@ -28,6 +30,7 @@ enum Block {
     Node,
     Element(u32),
     Nset(usize, bool),
+    Elset(u32, bool),
     Surface(String),
 }
 
@@ -78,10 +81,24 @@ pub(crate) fn parse_inp(text: &str) -> Result<MeshFile, ParseError> {
             Block::Node => node(&l, &mut st, &f)?,
             &Block::Element(region) => element(&l, &mut st, &f, region)?,
             &Block::Nset(g, generate) => nset(&l, &mut st, &f, g, generate)?,
+            &Block::Elset(r, generate) => elset(&l, &mut st, &f, r, generate)?,
             Block::Surface(_) => surface_face(&l, &mut st, &f)?,
         }
     }
     finish(st)
+}
+
+/// The index of region `set` (lower case), added when new.
+fn region_index(st: &mut State, set: &str) -> u32 {
+    let set = set.to_ascii_lowercase();
+    let r = match st.out.regions.iter().position(|r| *r == set) {
+        Some(r) => r,
+        None => {
+            st.out.regions.push(set);
+            st.out.regions.len() - 1
+        }
+    };
+    r as u32
 }
 
 fn keyword(l: &Lines, st: &mut State, line: &str) -> Result<Block, ParseError> {
@@ -94,17 +111,12 @@ fn keyword(l: &Lines, st: &mut State, line: &str) -> Result<Block, ParseError> {
             if !ty.eq_ignore_ascii_case("C3D4") {
                 return Err(l.err(format!("unsupported element type {ty:?} (only C3D4)")));
             }
-            let set = param(&parts, "ELSET")
-                .unwrap_or("unassigned")
-                .to_ascii_lowercase();
-            let r = match st.out.regions.iter().position(|r| *r == set) {
-                Some(r) => r,
-                None => {
-                    st.out.regions.push(set);
-                    st.out.regions.len() - 1
-                }
-            };
-            Block::Element(r as u32)
+            let set = param(&parts, "ELSET").unwrap_or("unassigned");
+            Block::Element(region_index(st, set))
+        }
+        "*ELSET" => {
+            let set = param(&parts, "ELSET").ok_or_else(|| l.err("*ELSET without ELSET="))?;
+            Block::Elset(region_index(st, set), has_flag(&parts, "GENERATE"))
         }
         "*NSET" => {
             let set = param(&parts, "NSET").ok_or_else(|| l.err("*NSET without NSET="))?;
@@ -191,6 +203,32 @@ fn nset(l: &Lines, st: &mut State, f: &[&str], g: usize, generate: bool) -> Resu
     for s in f {
         let i = node_ref(l, st, s)?;
         st.out.node_groups[g].nodes.push(i);
+    }
+    Ok(())
+}
+
+/// An `*ELSET` data line: its elements move to region `r`.
+fn elset(l: &Lines, st: &mut State, f: &[&str], r: u32, generate: bool) -> Result<(), ParseError> {
+    let ids: Vec<u64> = match generate {
+        true => {
+            let a: u64 = field(f.first().copied().unwrap_or(""), l.line, "first id")?;
+            let b: u64 = field(f.get(1).copied().unwrap_or(""), l.line, "last id")?;
+            let s: u64 = field(f.get(2).copied().unwrap_or("1"), l.line, "step")?;
+            if s == 0 || b < a {
+                return Err(l.err("invalid GENERATE range"));
+            }
+            (a..=b).step_by(s as usize).collect()
+        }
+        false => (f.iter())
+            .map(|s| field(s, l.line, "element id (sets of sets are not read)"))
+            .collect::<Result<_, _>>()?,
+    };
+    for id in ids {
+        let t = *st
+            .elem_index
+            .get(&id)
+            .ok_or_else(|| l.err(format!("undefined element {id}")))?;
+        st.out.tet_region[t as usize] = r;
     }
     Ok(())
 }
