@@ -326,7 +326,10 @@ pub trait MeshSink {
 /// The name of region `k` among `names`: the given one, else `region1`, `region2`, …
 /// (counting from 1).
 pub fn region_name(names: &[String], k: usize) -> String {
-    names.get(k).cloned().unwrap_or_else(|| format!("region{}", k + 1))
+    names
+        .get(k)
+        .cloned()
+        .unwrap_or_else(|| format!("region{}", k + 1))
 }
 
 /// A sink that gathers the chunks into one [`TetMesh`] (the interface triangles of several

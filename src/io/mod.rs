@@ -42,8 +42,8 @@ pub use inputs::{
     check_clashes, input_files, input_run_files, output_run_files, FileClash, RunFile,
 };
 pub use mesh_out::{
-    spill_for, write_mesh, write_mesh_pending, write_spilled_pending, write_surface,
-    write_surface_pending, MeshFormat, SurfaceFormat, WriteOptions,
+    spill_for, spill_for_levels, write_mesh, write_mesh_pending, write_spilled_pending,
+    write_surface, write_surface_pending, MeshFormat, SurfaceFormat, WriteOptions,
 };
 pub use read_common::ReadError;
 pub use transfer_out::{write_transfer, TransferFormat, TransferTable};
