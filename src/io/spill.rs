@@ -89,13 +89,9 @@ fn per_label<T: Pod>(dir: &Path, n: usize) -> io::Result<Vec<SpillFile<T>>> {
     (0..n).map(|_| SpillFile::create(dir)).collect()
 }
 
-/// Visits the items of two files of the same length in lockstep, [`READ_SLICE`] at a time
-/// (after [`SpillFile::finish`]).
-fn visit_pair<A: Pod, B: Pod>(
-    a: &SpillFile<A>,
-    b: &SpillFile<B>,
-    f: &mut dyn FnMut(&[A], &[B]) -> io::Result<()>,
-) -> io::Result<()> {
+/// Visits the tets and their regions in lockstep, [`READ_SLICE`] at a time (after
+/// [`SpillFile::finish`]).
+fn visit_pair(a: &SpillFile<[u32; 4]>, b: &SpillFile<u8>, f: VisitRegions) -> io::Result<()> {
     if a.len != b.len {
         return Err(invalid(format!(
             "{} tets but {} regions in the spilled mesh",
@@ -105,8 +101,8 @@ fn visit_pair<A: Pod, B: Pod>(
     let (mut fa, mut fb) = (a.w.get_ref(), b.w.get_ref());
     fa.seek(SeekFrom::Start(0))?;
     fb.seek(SeekFrom::Start(0))?;
-    let mut ba = vec![A::zeroed(); READ_SLICE.min(a.len)];
-    let mut bb = vec![B::zeroed(); READ_SLICE.min(b.len)];
+    let mut ba = vec![[0u32; 4]; READ_SLICE.min(a.len)];
+    let mut bb = vec![0u8; READ_SLICE.min(b.len)];
     let mut left = a.len;
     while left > 0 {
         let n = left.min(READ_SLICE);
@@ -208,8 +204,11 @@ struct Faces {
     /// Per label, the previous chunk's interface triangles whose tet above is in none of
     /// the chunks seen yet, with their faces above so far (written once the next chunk
     /// gives them).
-    waiting: Vec<(Vec<[u32; 3]>, Vec<(u32, u8)>)>,
+    waiting: Vec<Waiting>,
 }
+
+/// Interface triangles and their faces above, some still [`UNSET`].
+type Waiting = (Vec<[u32; 3]>, Vec<(u32, u8)>);
 
 impl Faces {
     fn new(dir: &Path, levels: usize) -> io::Result<Self> {
@@ -508,5 +507,114 @@ impl MeshSource for SpilledMesh {
             buf.extend(tf.iter().map(|&[t, k]| (t, k as u8)));
             f(&buf)
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::inp::write_inp_source;
+    use crate::io::source::InMemory;
+    use crate::mesh::{Regions, TetMesh};
+
+    const LOW: BoundaryLabel = BoundaryLabel::Level(0);
+    const MID: BoundaryLabel = BoundaryLabel::Level(1);
+    const TOP: BoundaryLabel = BoundaryLabel::Level(2);
+
+    /// Two tets on a shared face: tet 0 in region 0, tet 1 in region 1, the face between
+    /// them an interface on level 1 (three levels).
+    fn two_regions() -> TetMesh {
+        TetMesh {
+            points: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 1.0, 1.5],
+            ],
+            values: vec![0.0, 1.0, 1.0, 1.0, 2.0],
+            tets: vec![[0, 1, 2, 3], [1, 2, 3, 4]],
+            boundary: vec![[0, 2, 1], [1, 2, 4]],
+            boundary_labels: vec![LOW, TOP],
+            regions: Regions {
+                levels: 3,
+                tets: vec![0, 1],
+                boundary: vec![0, 1],
+                interfaces: vec![[1, 2, 3]],
+                interface_labels: vec![MID],
+                names: Vec::new(),
+            },
+        }
+    }
+
+    /// The chunk of `mesh`'s tet `t` (points all in the first chunk, the one of tet `first`),
+    /// with the triangles of its region (the interface with the region below it).
+    fn chunk_of(mesh: &TetMesh, t: usize, first: usize) -> MeshChunk {
+        let mut c = MeshChunk {
+            first_tet: t,
+            tets: vec![mesh.tets[t]],
+            label_boxes: [EMPTY_BOX; NUM_LABELS],
+            regions: vec![mesh.regions.tets[t]],
+            ..MeshChunk::default()
+        };
+        if t == first {
+            c.points = mesh.points.clone();
+            c.values = mesh.values.clone();
+        }
+        let r = &mesh.regions;
+        c.boundary.push(mesh.boundary[t]);
+        c.boundary_labels.push(mesh.boundary_labels[t]);
+        c.boundary_regions.push(r.boundary[t]);
+        if r.tets[t] == 0 {
+            c.boundary.push(r.interfaces[0]);
+            c.boundary_labels.push(MID);
+            c.boundary_regions.push(0);
+        }
+        c
+    }
+
+    /// The `.inp` of `mesh` streamed in one chunk per tet, in the order `order`.
+    fn streamed_inp(mesh: &TetMesh, order: [usize; 2]) -> Vec<u8> {
+        let dir = tempfile::tempdir().unwrap();
+        let mut spill = SpilledMesh::new(dir.path(), true, 3, Vec::new()).unwrap();
+        let mut chunks: Vec<MeshChunk> =
+            order.iter().map(|&t| chunk_of(mesh, t, order[0])).collect();
+        // Chunks number their tets in the order they come.
+        for (i, c) in chunks.iter_mut().enumerate() {
+            c.first_tet = i;
+        }
+        chunks.iter().try_for_each(|c| spill.chunk(c)).unwrap();
+        spill.finish().unwrap();
+        let mut out = Vec::new();
+        write_inp_source(&spill, &mut out).unwrap();
+        out
+    }
+
+    /// An interface whose tet above comes in the next chunk, or came in the previous one,
+    /// has the faces of both sides, as in memory.
+    #[test]
+    fn interfaces_find_their_tet_above_in_a_neighbouring_chunk() {
+        let mesh = two_regions();
+        let mut want = Vec::new();
+        write_inp_source(&InMemory::new(&mesh), &mut want).unwrap();
+        let text = String::from_utf8(want.clone()).unwrap();
+        assert!(
+            text.contains("LEVEL2_BELOW, TYPE=ELEMENT\n1, S3\n"),
+            "{text}"
+        );
+        assert!(
+            text.contains("LEVEL2_ABOVE, TYPE=ELEMENT\n2, S1\n"),
+            "{text}"
+        );
+        assert_eq!(streamed_inp(&mesh, [0, 1]), want);
+        let mut swapped = mesh.clone();
+        swapped.tets.swap(0, 1);
+        swapped.regions.tets.swap(0, 1);
+        swapped.boundary.swap(0, 1);
+        swapped.boundary_labels.swap(0, 1);
+        swapped.regions.boundary.swap(0, 1);
+        let mut want = Vec::new();
+        write_inp_source(&InMemory::new(&swapped), &mut want).unwrap();
+        assert_eq!(streamed_inp(&swapped, [0, 1]), want);
     }
 }
