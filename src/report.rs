@@ -260,10 +260,11 @@ pub fn build_report(
     quality: Option<QualitySection>,
     timings: Timings,
 ) -> Report {
-    let boundary_triangles: BTreeMap<&'static str, usize> = BoundaryLabel::ALL
-        .iter()
-        .map(|&l| (l.name(), facts.boundary_triangles[l.index()]))
-        .collect();
+    // The report describes one interval: alpha, beta and the box.
+    let boundary_triangles: BTreeMap<&'static str, usize> =
+        BoundaryLabel::of_levels(crate::mesh::INTERVAL_LEVELS)
+            .map(|l| (l.name(), facts.boundary_triangles[l.index()]))
+            .collect();
     let cells_meshed: u64 = stats.cells_by_case.iter().sum();
     let cells_by_case = CaseCounts(
         CellCase::ALL

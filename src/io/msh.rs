@@ -148,8 +148,9 @@ fn tet_tags(region: Option<&u8>) -> (u32, u32) {
 }
 
 /// Writes `mesh` as a Gmsh mesh of the given version: nodes, tetrahedra (volume
-/// physical group `domain`), the labelled boundary triangles (surface physical groups
-/// `alpha`, `beta`, `box`, only those that occur) and the nodal field `f` (see the module
+/// physical group `domain`, or one per region), the labelled boundary triangles (surface
+/// physical groups `alpha`, `beta`, `box`, or `level1`, … and `box` with the interfaces
+/// between regions; only those that occur) and the nodal field `f` (see the module
 /// documentation for numbering and tags). The output is deterministic.
 ///
 /// # Errors

@@ -277,8 +277,7 @@ impl Faces {
             self.waiting[j] = (tris, above);
             return Ok(());
         }
-        let file = self.above[j].as_mut().expect("an interface label");
-        file.push(&above.into_iter().map(pair).collect::<Vec<_>>())
+        self.write_above(j, &tris, above)
     }
 
     /// Completes label `j`'s waiting faces with the tets of chunk `c` and writes them.

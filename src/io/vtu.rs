@@ -25,8 +25,8 @@
 //!   meshio refuses it: its XML parser rewrites CR LF byte pairs (meshio issue #1324).
 //!
 //! [`write_vtu_fields`] writes other named Float64 point and cell fields instead of `f`
-//! (point fields before `Points`, cell fields after `types`), e.g. a solution and its
-//! gradient.
+//! (point fields before `Points`, cell fields after `types` and `region`), e.g. a solution
+//! and its gradient.
 //!
 //! Only the tetrahedra are written: the labelled boundary triangles and the interfaces
 //! between regions are **not** part of the `.vtu` (use the `.msh` or `.inp` writers when the
