@@ -16,6 +16,7 @@ mod inputs;
 mod mesh_out;
 pub mod mhd;
 pub mod msh;
+mod msh_binary;
 pub mod nifti;
 pub mod npy;
 pub mod nrrd;

@@ -22,12 +22,13 @@
 //! binary encoding (little-endian, the `int` 1 after the format line): counts and node and
 //! element tags as 8-byte `size_t`, entity, physical and type numbers and the node tags of
 //! `$NodeData` as 4-byte `int`, coordinates and values as `f64`; `$PhysicalNames` and the
-//! tags of `$NodeData` stay text.
+//! tags of `$NodeData` stay text (written by `msh_binary.rs`).
 
 use std::io::{self, Write};
 
+use super::msh_binary::write_v41_binary;
 use super::source::{InMemory, MeshSource};
-use super::write_common::{check_lengths, invalid, TextOut};
+use super::write_common::{check_lengths, TextOut};
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// Which `.msh` format version [`write_msh`] produces.
@@ -52,28 +53,28 @@ pub fn label_tag(label: BoundaryLabel, levels: usize) -> u32 {
 }
 
 /// Gmsh element type of a 3-node triangle.
-const TRIANGLE: u32 = 2;
+pub(super) const TRIANGLE: u32 = 2;
 /// Gmsh element type of a 4-node tetrahedron.
-const TETRAHEDRON: u32 = 4;
+pub(super) const TETRAHEDRON: u32 = 4;
 /// Elementary tag of the single volume entity (one interval).
 const VOLUME_ENTITY: u32 = 1;
 
 /// A volume entity with its physical group: the whole mesh (one interval) or one region.
-struct Volume {
+pub(super) struct Volume {
     /// Elementary and physical tag.
-    entity: u32,
-    physical: u32,
-    name: String,
+    pub(super) entity: u32,
+    pub(super) physical: u32,
+    pub(super) name: String,
     /// The region whose tets it holds; `None`: every tet.
-    region: Option<u8>,
-    tets: usize,
+    pub(super) region: Option<u8>,
+    pub(super) tets: usize,
 }
 
 /// What a `.msh` file groups: the labels that occur and the volumes.
-struct Layout {
-    levels: usize,
-    present: Vec<(BoundaryLabel, usize)>,
-    volumes: Vec<Volume>,
+pub(super) struct Layout {
+    pub(super) levels: usize,
+    pub(super) present: Vec<(BoundaryLabel, usize)>,
+    pub(super) volumes: Vec<Volume>,
 }
 
 impl Layout {
@@ -106,23 +107,23 @@ impl Layout {
         }
     }
 
-    fn tag(&self, label: BoundaryLabel) -> u32 {
+    pub(super) fn tag(&self, label: BoundaryLabel) -> u32 {
         label_tag(label, self.levels)
     }
 
     /// The entity the nodes are classified on: the first volume.
-    fn node_entity(&self) -> u32 {
+    pub(super) fn node_entity(&self) -> u32 {
         self.volumes.first().map_or(VOLUME_ENTITY, |v| v.entity)
     }
 
     /// Element blocks: one per volume, one per label that occurs.
-    fn blocks(&self) -> usize {
+    pub(super) fn blocks(&self) -> usize {
         self.volumes.len() + self.present.len()
     }
 }
 
 /// Visits the tets of volume `v` with their element tags (`t + 1`), in mesh order.
-fn volume_tets(
+pub(super) fn volume_tets(
     src: &dyn MeshSource,
     v: &Volume,
     f: &mut dyn FnMut(usize, &[u32; 4]) -> io::Result<()>,
@@ -190,7 +191,7 @@ fn header(out: &mut TextOut, version: &str, layout: &Layout) -> io::Result<()> {
 }
 
 /// `$PhysicalNames` (text in every version).
-fn physical_names(out: &mut TextOut, layout: &Layout) -> io::Result<()> {
+pub(super) fn physical_names(out: &mut TextOut, layout: &Layout) -> io::Result<()> {
     out.s("$PhysicalNames").nl()?;
     out.int(layout.present.len() + layout.volumes.len()).nl()?;
     for &(label, _) in &layout.present {
@@ -213,7 +214,7 @@ fn physical_names(out: &mut TextOut, layout: &Layout) -> io::Result<()> {
 }
 
 /// The text head of `$NodeData`: name `f`, time 0, step 0, one component, the node count.
-fn node_data_head(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
+pub(super) fn node_data_head(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
     out.s("$NodeData").nl()?;
     out.s("1").nl()?;
     out.s("\"f\"").nl()?;
@@ -261,17 +262,17 @@ fn write_v41(src: &dyn MeshSource, layout: &Layout, out: &mut TextOut) -> io::Re
 }
 
 /// An elementary entity of `$Entities` (4.1) with its one physical tag.
-struct Entity {
-    tag: u32,
-    bbox: [f64; 6],
-    physical: u32,
+pub(super) struct Entity {
+    pub(super) tag: u32,
+    pub(super) bbox: [f64; 6],
+    pub(super) physical: u32,
     /// Tags of the bounding entities (one dimension lower).
-    bounding: Vec<u32>,
+    pub(super) bounding: Vec<u32>,
 }
 
 /// The entities: one surface per label that occurs (bounded by no curves), then the volumes,
 /// each bounded by the surfaces of its levels and the box (one interval: all surfaces).
-fn entity_list(src: &dyn MeshSource, layout: &Layout) -> Vec<Entity> {
+pub(super) fn entity_list(src: &dyn MeshSource, layout: &Layout) -> Vec<Entity> {
     let mut list: Vec<Entity> = layout
         .present
         .iter()
@@ -300,7 +301,7 @@ fn entity_list(src: &dyn MeshSource, layout: &Layout) -> Vec<Entity> {
 
 /// The four numbers after `$Nodes` or `$Elements` (4.1): blocks, count, smallest and
 /// largest tag (tags are `1..=count`; `0 0` when empty, as gmsh writes empty meshes).
-fn section_counts(blocks: usize, count: usize) -> [usize; 4] {
+pub(super) fn section_counts(blocks: usize, count: usize) -> [usize; 4] {
     [blocks, count, usize::from(count > 0), count]
 }
 
@@ -463,191 +464,6 @@ fn elements_v22(src: &dyn MeshSource, layout: &Layout, out: &mut TextOut) -> io:
     out.s("$EndElements").nl()
 }
 
-// ---------------------------------------------------------------------------------------
-// Binary 4.1
-// ---------------------------------------------------------------------------------------
-
-/// Size at which [`BinOut`] hands its buffer to the underlying writer.
-const BIN_CHUNK: usize = 1 << 16;
-
-/// Buffered output of binary `.msh`: little-endian numbers and the text between them.
-struct BinOut<'a> {
-    w: &'a mut dyn Write,
-    buf: Vec<u8>,
-}
-
-impl<'a> BinOut<'a> {
-    fn new(w: &'a mut dyn Write) -> Self {
-        BinOut {
-            w,
-            buf: Vec::with_capacity(BIN_CHUNK + 4096),
-        }
-    }
-
-    /// Appends text formatted by `f` (the writers' [`TextOut`]).
-    fn text(&mut self, f: impl FnOnce(&mut TextOut) -> io::Result<()>) -> io::Result<()> {
-        let mut t = TextOut::new(&mut self.buf);
-        f(&mut t)?;
-        t.finish()?;
-        self.spill()
-    }
-
-    fn s(&mut self, s: &str) -> &mut Self {
-        self.buf.extend_from_slice(s.as_bytes());
-        self
-    }
-
-    /// Appends a `size_t` (8 bytes).
-    #[inline]
-    fn size(&mut self, v: usize) -> &mut Self {
-        self.buf.extend_from_slice(&(v as u64).to_le_bytes());
-        self
-    }
-
-    fn sizes(&mut self, v: [usize; 4]) -> &mut Self {
-        for x in v {
-            self.size(x);
-        }
-        self
-    }
-
-    /// Appends an `int` (4 bytes); `v` is at most `i32::MAX`.
-    #[inline]
-    fn int(&mut self, v: u32) -> &mut Self {
-        debug_assert!(i32::try_from(v).is_ok());
-        self.buf.extend_from_slice(&v.to_le_bytes());
-        self
-    }
-
-    #[inline]
-    fn float(&mut self, v: f64) -> &mut Self {
-        self.buf.extend_from_slice(&v.to_le_bytes());
-        self
-    }
-
-    /// Passes the buffer on when it is full.
-    #[inline]
-    fn spill(&mut self) -> io::Result<()> {
-        if self.buf.len() >= BIN_CHUNK {
-            self.w.write_all(&self.buf)?;
-            self.buf.clear();
-        }
-        Ok(())
-    }
-
-    fn finish(self) -> io::Result<()> {
-        self.w.write_all(&self.buf)?;
-        self.w.flush()
-    }
-}
-
-fn write_v41_binary(src: &dyn MeshSource, layout: &Layout, w: &mut dyn Write) -> io::Result<()> {
-    if i32::try_from(src.num_points()).is_err() {
-        return Err(invalid(format!(
-            "{} nodes are too many for binary .msh 4.1 ($NodeData numbers nodes by 4-byte int)",
-            src.num_points()
-        )));
-    }
-    let mut out = BinOut::new(w);
-    out.text(|t| {
-        t.s("$MeshFormat").nl()?;
-        t.s("4.1 1 8").nl()
-    })?;
-    out.int(1).s("\n$EndMeshFormat\n");
-    out.text(|t| physical_names(t, layout))?;
-    entities_binary(src, layout, &mut out);
-    nodes_binary(src, layout, &mut out)?;
-    elements_binary(src, layout, &mut out)?;
-    node_data_binary(src, &mut out)?;
-    out.finish()
-}
-
-/// `$Entities` of [`entity_list`]: counts, then per entity its tag, bounding box, physical
-/// tag and bounding entities.
-fn entities_binary(src: &dyn MeshSource, layout: &Layout, out: &mut BinOut) {
-    out.s("$Entities\n");
-    out.size(0).size(0).size(layout.present.len());
-    out.size(layout.volumes.len());
-    for e in entity_list(src, layout) {
-        out.int(e.tag);
-        for x in e.bbox {
-            out.float(x);
-        }
-        out.size(1).int(e.physical).size(e.bounding.len());
-        for b in e.bounding {
-            out.int(b);
-        }
-    }
-    out.s("\n$EndEntities\n");
-}
-
-/// `$Nodes`: one block on the first volume entity, the tags `1..=n`, then the coordinates.
-fn nodes_binary(src: &dyn MeshSource, layout: &Layout, out: &mut BinOut) -> io::Result<()> {
-    let n_points = src.num_points();
-    out.s("$Nodes\n");
-    out.sizes(section_counts(1, n_points));
-    out.int(3).int(layout.node_entity()).int(0).size(n_points);
-    for i in 1..=n_points {
-        out.size(i).spill()?;
-    }
-    src.points(&mut |ps| {
-        for p in ps {
-            out.float(p[0]).float(p[1]).float(p[2]).spill()?;
-        }
-        Ok(())
-    })?;
-    out.s("\n$EndNodes\n");
-    Ok(())
-}
-
-/// `$Elements`: the blocks of [`elements_v41`]; each element is its tag and its node tags.
-fn elements_binary(src: &dyn MeshSource, layout: &Layout, out: &mut BinOut) -> io::Result<()> {
-    let n_tets = src.num_tets();
-    out.s("$Elements\n");
-    out.sizes(section_counts(
-        layout.blocks(),
-        n_tets + src.num_triangles(),
-    ));
-    let element = |out: &mut BinOut, tag: usize, nodes: &[u32]| {
-        out.size(tag);
-        for &v in nodes {
-            out.size(v as usize + 1);
-        }
-        out.spill()
-    };
-    for v in &layout.volumes {
-        out.int(3).int(v.entity).int(TETRAHEDRON).size(v.tets);
-        volume_tets(src, v, &mut |tag, t| element(out, tag, t))?;
-    }
-    let mut tag = n_tets;
-    for &(label, count) in &layout.present {
-        out.int(2).int(layout.tag(label)).int(TRIANGLE).size(count);
-        src.triangles(label, &mut |ts| {
-            ts.iter().try_for_each(|t| {
-                tag += 1;
-                element(out, tag, t)
-            })
-        })?;
-    }
-    out.s("\n$EndElements\n");
-    Ok(())
-}
-
-/// `$NodeData`: the text head of the ASCII file, then per node its `int` tag and value.
-fn node_data_binary(src: &dyn MeshSource, out: &mut BinOut) -> io::Result<()> {
-    out.text(|t| node_data_head(src, t))?;
-    let mut tag = 0u32;
-    src.values(&mut |vs| {
-        for &v in vs {
-            tag += 1;
-            out.int(tag).float(v).spill()?;
-        }
-        Ok(())
-    })?;
-    out.s("\n$EndNodeData\n");
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -727,16 +543,50 @@ mod tests {
         }
     }
 
+    /// Three tets in regions 1, 0, 1 (of three levels), the faces between them interfaces.
+    fn three_tets_in_two_regions() -> TetMesh {
+        let mut m = two_tets();
+        m.points.push([-1.0, -1.0, -1.0]);
+        m.values.push(0.0);
+        m.tets.insert(0, [0, 2, 1, 5]);
+        m.boundary = vec![[1, 2, 4]];
+        m.boundary_labels = vec![BoundaryLabel::Box];
+        m.regions = crate::mesh::Regions {
+            levels: 3,
+            tets: vec![1, 0, 1],
+            boundary: vec![1],
+            interfaces: vec![[0, 2, 1], [1, 2, 3]],
+            interface_labels: vec![BoundaryLabel::Level(1); 2],
+            names: vec!["inner".into()],
+        };
+        m
+    }
+
     #[test]
     fn slices_of_any_size_give_the_same_bytes() {
-        let mesh = two_tets();
-        for version in [MshVersion::V41, MshVersion::V22, MshVersion::V41Binary] {
-            let mut whole = Vec::new();
-            write_msh(&mesh, &mut whole, version).unwrap();
-            let mut sliced = Vec::new();
-            write_msh_source(&InTwos(InMemory::new(&mesh)), &mut sliced, version).unwrap();
-            assert_eq!(whole, sliced, "{version:?}");
+        for mesh in [two_tets(), three_tets_in_two_regions()] {
+            for version in [MshVersion::V41, MshVersion::V22, MshVersion::V41Binary] {
+                let mut whole = Vec::new();
+                write_msh(&mesh, &mut whole, version).unwrap();
+                let mut sliced = Vec::new();
+                write_msh_source(&InTwos(InMemory::new(&mesh)), &mut sliced, version).unwrap();
+                assert_eq!(whole, sliced, "{version:?}");
+            }
         }
+    }
+
+    #[test]
+    fn regions_are_volumes_with_their_tets_in_blocks() {
+        let mut out = Vec::new();
+        write_msh(&three_tets_in_two_regions(), &mut out, MshVersion::V41).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let names = "$PhysicalNames\n4\n2 2 \"level2\"\n2 4 \"box\"\n3 1 \"inner\"\n\
+                     3 2 \"region2\"\n$EndPhysicalNames\n";
+        assert!(text.contains(names), "{text}");
+        // 3 tets in 2 blocks (tags 2; 1 and 3), 2 interface triangles, 1 on the box
+        let elements = "$Elements\n4 6 1 6\n3 1 4 1\n2 1 2 3 4\n3 2 4 2\n1 1 3 2 6\n\
+                        3 2 3 4 5\n2 2 2 2\n4 1 3 2\n5 2 3 4\n2 4 2 1\n6 2 3 5\n$EndElements\n";
+        assert!(text.contains(elements), "{text}");
     }
 
     #[test]
