@@ -25,7 +25,7 @@ fn shell() -> TetMesh {
     let mesh = mesh_interval(&grid, &MeshOptions::new(2.0, 5.0, Method::Ctd))
         .unwrap()
         .mesh;
-    for l in BoundaryLabel::ALL {
+    for l in BoundaryLabel::of_levels(2) {
         assert!(mesh.boundary_labels.contains(&l), "{l:?} missing");
     }
     mesh
@@ -72,7 +72,7 @@ fn check_round_trip(mesh: &TetMesh, back: &MeshFile, exact_values: bool) {
     if exact_values {
         assert_eq!(back.mesh.values, mesh.values);
     }
-    for label in BoundaryLabel::ALL {
+    for label in BoundaryLabel::of_levels(2) {
         let tris = labelled(mesh, label);
         assert_eq!(labelled(&back.mesh, label), tris, "{label:?} triangles");
         let mut nodes: Vec<u32> = tris.iter().flatten().copied().collect();

@@ -2,7 +2,8 @@
 //! heat transfer by `ccx` (same conductivity, volumetric source and Dirichlet node sets) and
 //! by `solver-demo` reading that `.inp`, agrees to 1e-5 relative in max norm at every node
 //! (the `.frd` holds about six significant digits). Also on a mesh improved by the quality
-//! pass (`tptd-mesh --quality`).
+//! pass (`tptd-mesh --quality`), and on a mesh of two regions (`--levels`) with a material
+//! per region.
 //!
 //! A missing `ccx` makes the test fail unless `TPTD_SKIP_EXTERNAL=1`.
 
@@ -71,9 +72,21 @@ fn frd_temperatures(path: &Path) -> Vec<(usize, f64)> {
 
 /// Runs ccx and solver-demo on `mesh`; returns the max-norm difference relative to max |u|.
 fn compare(mesh: &tptd::TetMesh, name: &str) -> f64 {
+    let opts = Options {
+        k: K,
+        source: SOURCE,
+        dirichlet: vec![("alpha".into(), U_ALPHA), ("beta".into(), U_BETA)],
+        ..Options::default()
+    };
+    compare_with(mesh, name, &deck(), opts)
+}
+
+/// Runs ccx with `deck` and solver-demo with `opts` (reading the same `.inp`) on `mesh`;
+/// returns the max-norm difference relative to max |u|.
+fn compare_with(mesh: &tptd::TetMesh, name: &str, deck: &str, opts: Options) -> f64 {
     let dir = tempfile::tempdir().unwrap();
     let file = through_file(mesh, dir.path(), "mesh.inp");
-    std::fs::write(dir.path().join("job.inp"), deck()).unwrap();
+    std::fs::write(dir.path().join("job.inp"), deck).unwrap();
     let out = Command::new("ccx")
         .args(["-i", "job"])
         .current_dir(dir.path())
@@ -92,14 +105,11 @@ fn compare(mesh: &tptd::TetMesh, name: &str) -> f64 {
         "ccx temperatures for every node"
     );
     let opts = Options {
-        k: K,
-        source: SOURCE,
-        dirichlet: vec![("alpha".into(), U_ALPHA), ("beta".into(), U_BETA)],
         pcg: PcgOptions {
             tol: 1e-13,
             ..PcgOptions::default()
         },
-        ..Options::default()
+        ..opts
     };
     let sol = solve(&file, &opts, &mut |_, _| {}).unwrap();
     let max_u = ccx.iter().map(|&(_, v)| v.abs()).fold(0.0, f64::max);
@@ -139,5 +149,37 @@ fn agrees_with_calculix_on_a_quality_improved_shell() {
         "the quality pass changed nothing"
     );
     let rel = compare(&m, "quality shell");
+    assert!(rel <= 1e-5, "relative max difference {rel:e}");
+}
+
+/// Two materials: a ball (conductivity 1) inside a shell (conductivity 6) meshed in one run
+/// with `--levels`, the outer level held at 0, a unit source; CalculiX takes a material per
+/// region `*ELSET` of the `.inp`, solver-demo `--k NAME=K` per region read from the same sets.
+#[test]
+fn agrees_with_calculix_on_two_materials() {
+    if !have_ccx() {
+        return;
+    }
+    let g = ball_grid(20);
+    let opts = tptd::MeshOptions::default().levels(&[f64::NEG_INFINITY, 0.55, 1.0]);
+    let mut m = tptd::mesh_interval(&g, &opts).unwrap().mesh;
+    m.regions.names = vec!["core".into(), "shell".into()];
+    let deck = "*INCLUDE, INPUT=mesh.inp\n\
+                *MATERIAL, NAME=SOFT\n*CONDUCTIVITY\n1\n\
+                *MATERIAL, NAME=HARD\n*CONDUCTIVITY\n6\n\
+                *SOLID SECTION, ELSET=CORE, MATERIAL=SOFT\n\
+                *SOLID SECTION, ELSET=SHELL, MATERIAL=HARD\n\
+                *STEP\n*HEAT TRANSFER, STEADY STATE\n\
+                *BOUNDARY\nLEVEL3, 11, 11, 0\n\
+                *DFLUX\nDOMAIN, BF, 1\n\
+                *NODE FILE\nNT\n*END STEP\n";
+    let opts = Options {
+        k: 1.0,
+        k_regions: vec![("core".into(), 1.0), ("shell".into(), 6.0)],
+        source: 1.0,
+        dirichlet: vec![("level3".into(), 0.0)],
+        ..Options::default()
+    };
+    let rel = compare_with(&m, "two materials", deck, opts);
     assert!(rel <= 1e-5, "relative max difference {rel:e}");
 }

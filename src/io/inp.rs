@@ -6,10 +6,15 @@
 //! * `*ELEMENT, TYPE=C3D4, ELSET=DOMAIN` with all tets. The mesh's positive orientation
 //!   `(b-a)·((c-a)×(d-a)) > 0` is exactly the C3D4 convention (nodes 1-2-3 counter-clockwise
 //!   seen from node 4), so node order is kept;
-//! * for each boundary label that occurs, `*NSET, NSET=ALPHA|BETA|BOX` (the nodes of its
-//!   triangles, ascending, 16 per line) and `*SURFACE, NAME=ALPHA|BETA|BOX, TYPE=ELEMENT`
-//!   with one `element, Sk` line per triangle (C3D4 faces: S1 = 1-2-3, S2 = 1-4-2,
-//!   S3 = 2-4-3, S4 = 3-4-1).
+//! * several regions: per region that has tets, `*ELSET, ELSET=<NAME>` (its name upper-cased,
+//!   `REGION1`, `REGION2`, … by default) with its element ids, ascending, 16 per line;
+//! * for each label that occurs, `*NSET, NSET=<LABEL>` (the nodes of its triangles,
+//!   ascending, 16 per line) and `*SURFACE, NAME=<LABEL>, TYPE=ELEMENT` with one
+//!   `element, Sk` line per triangle (C3D4 faces: S1 = 1-2-3, S2 = 1-4-2, S3 = 2-4-3,
+//!   S4 = 3-4-1). Labels are `ALPHA`, `BETA`, `BOX` for one interval; `LEVEL1`, `LEVEL2`, …
+//!   and `BOX` for several regions, where a level between two regions (an interface) has
+//!   two surfaces instead of one: `LEVEL<i>_BELOW` (the faces of the tets of the region
+//!   below it) and `LEVEL<i>_ABOVE` (those of the region above).
 //!
 //! No material, section or step is written: a CalculiX/Abaqus deck is expected to
 //! `*INCLUDE, INPUT=mesh.inp` and add those. Every numeric field is at most 20 characters
@@ -29,8 +34,8 @@ const FIELD_WIDTH: usize = 20;
 const IDS_PER_LINE: usize = 16;
 
 /// Writes `mesh` as an Abaqus/CalculiX input fragment: nodes, C3D4 elements (element set
-/// `DOMAIN`), and per boundary label that occurs a node set and an element-face surface
-/// (see the module documentation). The output is deterministic.
+/// `DOMAIN`, and one per region), and per label that occurs a node set and element-face
+/// surfaces (see the module documentation). The output is deterministic.
 ///
 /// # Errors
 /// Returns the first error of `w`, or [`io::ErrorKind::InvalidInput`] when the mesh is
@@ -47,26 +52,99 @@ pub(crate) fn write_inp_source(src: &dyn MeshSource, w: &mut dyn Write) -> io::R
     heading(src, &mut out)?;
     nodes(src, &mut out)?;
     elements(src, &mut out)?;
+    region_sets(src, &mut out)?;
     let mut in_set = vec![false; src.num_points()];
     for (label, _) in src.present_labels() {
-        let upper = label.name().to_ascii_uppercase();
+        let upper = label.name_in(src.level_count()).to_ascii_uppercase();
         node_set(src, label, &upper, &mut in_set, &mut out)?;
-        surface(src, label, &upper, &mut out)?;
+        if src.is_interface(label) {
+            surface(src, label, false, &format!("{upper}_BELOW"), &mut out)?;
+            surface(src, label, true, &format!("{upper}_ABOVE"), &mut out)?;
+        } else {
+            surface(src, label, false, &upper, &mut out)?;
+        }
     }
     out.finish()
 }
 
 /// `*HEADING` and its one-line title.
 fn heading(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
+    let present = src.present_labels();
+    let count = |interface: bool| -> usize {
+        let of_kind = present
+            .iter()
+            .filter(|(l, _)| src.is_interface(*l) == interface);
+        of_kind.map(|&(_, n)| n).sum()
+    };
     out.s("*HEADING").nl()?;
     out.s("tptd interval-volume mesh: ")
         .int(src.num_points())
         .s(" nodes, ")
         .int(src.num_tets())
-        .s(" C3D4 elements, ")
-        .int(src.num_boundary())
-        .s(" boundary faces")
-        .nl()
+        .s(" C3D4 elements, ");
+    if src.region_count() > 0 {
+        out.s("in ").int(src.region_count()).s(" regions, ");
+    }
+    out.int(count(false)).s(" boundary faces");
+    if src.region_count() > 0 {
+        out.s(", ").int(count(true)).s(" interface faces");
+    }
+    out.nl()
+}
+
+/// Data lines of ids, [`IDS_PER_LINE`] per line.
+struct IdLines {
+    on_line: usize,
+}
+
+impl IdLines {
+    fn new() -> Self {
+        IdLines { on_line: 0 }
+    }
+
+    fn push(&mut self, out: &mut TextOut, id: usize) -> io::Result<()> {
+        if self.on_line == IDS_PER_LINE {
+            out.nl()?;
+            self.on_line = 0;
+        }
+        if self.on_line > 0 {
+            out.s(", ");
+        }
+        out.int(id);
+        self.on_line += 1;
+        Ok(())
+    }
+
+    fn end(self, out: &mut TextOut) -> io::Result<()> {
+        if self.on_line > 0 {
+            out.nl()?;
+        }
+        Ok(())
+    }
+}
+
+/// Per region that has tets, `*ELSET, ELSET=<NAME>` with the ids of its elements.
+fn region_sets(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
+    for (k, n) in src.region_tets().into_iter().enumerate() {
+        if n == 0 {
+            continue;
+        }
+        let name = src.region_name(k).to_ascii_uppercase();
+        out.s("*ELSET, ELSET=").s(&name).nl()?;
+        let mut lines = IdLines::new();
+        let mut t = 0usize;
+        src.regions(&mut |rs| {
+            for &r in rs {
+                t += 1;
+                if r as usize == k {
+                    lines.push(out, t)?;
+                }
+            }
+            Ok(())
+        })?;
+        lines.end(out)?;
+    }
+    Ok(())
 }
 
 /// `*NODE, NSET=NALL` with every node.
@@ -120,34 +198,24 @@ fn node_set(
         Ok(())
     })?;
     out.s("*NSET, NSET=").s(upper).nl()?;
-    let mut on_line = 0;
+    let mut lines = IdLines::new();
     for (i, _) in in_set.iter().enumerate().filter(|(_, &b)| b) {
-        if on_line == IDS_PER_LINE {
-            out.nl()?;
-            on_line = 0;
-        }
-        if on_line > 0 {
-            out.s(", ");
-        }
-        out.int(i + 1);
-        on_line += 1;
+        lines.push(out, i + 1)?;
     }
-    if on_line > 0 {
-        out.nl()?;
-    }
-    Ok(())
+    lines.end(out)
 }
 
-/// `*SURFACE, NAME={upper}, TYPE=ELEMENT`: one `element, Sk` line per triangle labelled
-/// `label`.
+/// `*SURFACE, NAME={name}, TYPE=ELEMENT`: one `element, Sk` line per triangle labelled
+/// `label` (for an interface, the faces of the tets above it when `above`, else below).
 fn surface(
     src: &dyn MeshSource,
     label: BoundaryLabel,
-    upper: &str,
+    above: bool,
+    name: &str,
     out: &mut TextOut,
 ) -> io::Result<()> {
-    out.s("*SURFACE, NAME=").s(upper).s(", TYPE=ELEMENT").nl()?;
-    src.faces(label, &mut |fs| {
+    out.s("*SURFACE, NAME=").s(name).s(", TYPE=ELEMENT").nl()?;
+    src.faces(label, above, &mut |fs| {
         for &(tet, face) in fs {
             out.int(tet as usize + 1).s(", S").int(face + 1).nl()?;
         }

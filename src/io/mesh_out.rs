@@ -15,7 +15,7 @@ use super::source::MeshSource;
 use super::spill::SpilledMesh;
 use super::stl::write_stl;
 use super::vtu::{write_vtu_source, write_vtu_with, VtuEncoding};
-use crate::mesh::{TetMesh, TriSurface};
+use crate::mesh::{TetMesh, TriSurface, INTERVAL_LEVELS};
 
 pub use super::formats::{MeshFormat, SurfaceFormat};
 
@@ -166,22 +166,37 @@ pub fn write_mesh_pending(
     write_pending(path, |w| format.write(mesh, w, options))
 }
 
-/// A [`SpilledMesh`] for a mesh bound for `path`: its files in the folder of `path`, with the
-/// boundary faces when the format (by extension) needs them. Feed it to
+/// A [`SpilledMesh`] for a mesh of one interval bound for `path`: its files in the folder
+/// of `path`, with the boundary faces when the format (by extension) needs them. Feed it to
 /// [`crate::mesh_interval_streamed`], then write it with [`write_spilled_pending`].
 ///
 /// # Errors
 /// [`WriteError::UnknownFormat`] for an unknown extension; [`WriteError::Io`] when the files
 /// cannot be created.
 pub fn spill_for(path: &Path) -> Result<SpilledMesh, WriteError> {
+    spill_for_levels(path, INTERVAL_LEVELS, Vec::new())
+}
+
+/// [`spill_for`] a mesh of a run of `levels` levels ([`crate::MeshOptions::levels`]; 2 for
+/// one interval) whose regions are called `names` (missing ones: `region1`, `region2`, …).
+///
+/// # Errors
+/// As [`spill_for`].
+pub fn spill_for_levels(
+    path: &Path,
+    levels: usize,
+    names: Vec<String>,
+) -> Result<SpilledMesh, WriteError> {
     let format = MeshFormat::from_path(path)?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    SpilledMesh::new(dir, format == MeshFormat::Inp).map_err(|source| WriteError::Io {
-        path: path.to_path_buf(),
-        source,
+    SpilledMesh::new(dir, format == MeshFormat::Inp, levels, names).map_err(|source| {
+        WriteError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
     })
 }
 

@@ -16,6 +16,7 @@ mod inputs;
 mod mesh_out;
 pub mod mhd;
 pub mod msh;
+mod msh_binary;
 pub mod nifti;
 pub mod npy;
 pub mod nrrd;
@@ -42,8 +43,8 @@ pub use inputs::{
     check_clashes, input_files, input_run_files, output_run_files, FileClash, RunFile,
 };
 pub use mesh_out::{
-    spill_for, write_mesh, write_mesh_pending, write_spilled_pending, write_surface,
-    write_surface_pending, MeshFormat, SurfaceFormat, WriteOptions,
+    spill_for, spill_for_levels, write_mesh, write_mesh_pending, write_spilled_pending,
+    write_surface, write_surface_pending, MeshFormat, SurfaceFormat, WriteOptions,
 };
 pub use read_common::ReadError;
 pub use transfer_out::{write_transfer, TransferFormat, TransferTable};

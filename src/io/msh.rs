@@ -1,12 +1,20 @@
 //! Gmsh `.msh` writer: ASCII 4.1 and 2.2, binary 4.1.
 //!
 //! Numbering and tags, identical in every version:
-//! * node `i` of the mesh gets tag `i + 1`; tet `t` gets element tag `t + 1`; the boundary
-//!   triangles follow, grouped by label in the order alpha, beta, box (mesh order within a
-//!   label), with tags `#T + 1, …`;
-//! * physical groups: surfaces `alpha` = 1, `beta` = 2, `box` = 3 (dimension 2, only the
-//!   labels that occur) and volume `domain` = 4 (dimension 3); the elementary entity of a
-//!   surface has the same tag as its physical group, the volume entity has tag 1;
+//! * node `i` of the mesh gets tag `i + 1`; tet `t` gets element tag `t + 1`; the labelled
+//!   triangles follow, grouped by label in tag order (mesh order within a label), with tags
+//!   `#T + 1, …`;
+//! * physical groups of one interval: surfaces `alpha` = 1, `beta` = 2, `box` = 3
+//!   (dimension 2, only the labels that occur) and volume `domain` = 4 (dimension 3); the
+//!   elementary entity of a surface has the same tag as its physical group, the volume
+//!   entity has tag 1;
+//! * several regions (a run of `n` levels): surfaces `level1` = 1 … `level<n>` = n and
+//!   `box` = n + 1 (the label's [`BoundaryLabel::code`] plus one; the interfaces between
+//!   regions are the surfaces of the inner levels, each triangle oriented out of the region
+//!   below); per region `k` (counting from 0) that has tets, a volume entity and physical
+//!   group of tag `k + 1` named by the region's name (`region1`, … by default). Its tets
+//!   form their own element block (4.1), blocks in region order, each tet keeping tag
+//!   `t + 1`; in 2.2 each tet carries physical and elementary tag `k + 1`;
 //! * the field is written as `$NodeData` named `f` (time 0, step 0, one component).
 //!
 //! ASCII coordinates and values use the shortest decimal form that parses back to the same
@@ -14,12 +22,13 @@
 //! binary encoding (little-endian, the `int` 1 after the format line): counts and node and
 //! element tags as 8-byte `size_t`, entity, physical and type numbers and the node tags of
 //! `$NodeData` as 4-byte `int`, coordinates and values as `f64`; `$PhysicalNames` and the
-//! tags of `$NodeData` stay text.
+//! tags of `$NodeData` stay text (written by `msh_binary.rs`).
 
 use std::io::{self, Write};
 
+use super::msh_binary::write_v41_binary;
 use super::source::{InMemory, MeshSource};
-use super::write_common::{check_lengths, invalid, TextOut};
+use super::write_common::{check_lengths, TextOut};
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// Which `.msh` format version [`write_msh`] produces.
@@ -34,25 +43,115 @@ pub enum MshVersion {
     V41Binary,
 }
 
-/// Physical tag of the volume group `domain`.
+/// Physical tag of the volume group `domain` (one interval).
 pub const DOMAIN_PHYSICAL_TAG: u32 = 4;
 
-/// Physical (and elementary surface) tag of the boundary group of `label`: 1, 2, 3 for
-/// alpha, beta, box.
-pub fn label_tag(label: BoundaryLabel) -> u32 {
-    label.index() as u32 + 1
+/// Physical (and elementary surface) tag of the group of `label` in a run of `levels`
+/// levels: its [`BoundaryLabel::code`] plus one (1, 2, 3 for alpha, beta, box).
+pub fn label_tag(label: BoundaryLabel, levels: usize) -> u32 {
+    label.code(levels) as u32 + 1
 }
 
 /// Gmsh element type of a 3-node triangle.
-const TRIANGLE: u32 = 2;
+pub(super) const TRIANGLE: u32 = 2;
 /// Gmsh element type of a 4-node tetrahedron.
-const TETRAHEDRON: u32 = 4;
-/// Elementary tag of the single volume entity.
+pub(super) const TETRAHEDRON: u32 = 4;
+/// Elementary tag of the single volume entity (one interval).
 const VOLUME_ENTITY: u32 = 1;
 
+/// A volume entity with its physical group: the whole mesh (one interval) or one region.
+pub(super) struct Volume {
+    /// Elementary and physical tag.
+    pub(super) entity: u32,
+    pub(super) physical: u32,
+    pub(super) name: String,
+    /// The region whose tets it holds; `None`: every tet.
+    pub(super) region: Option<u8>,
+    pub(super) tets: usize,
+}
+
+/// What a `.msh` file groups: the labels that occur and the volumes.
+pub(super) struct Layout {
+    pub(super) levels: usize,
+    pub(super) present: Vec<(BoundaryLabel, usize)>,
+    pub(super) volumes: Vec<Volume>,
+}
+
+impl Layout {
+    fn of(src: &dyn MeshSource) -> Layout {
+        let volumes = if src.region_count() == 0 {
+            vec![Volume {
+                entity: VOLUME_ENTITY,
+                physical: DOMAIN_PHYSICAL_TAG,
+                name: "domain".to_string(),
+                region: None,
+                tets: src.num_tets(),
+            }]
+        } else {
+            let counts = src.region_tets().into_iter().enumerate();
+            counts
+                .filter(|&(_, n)| n > 0)
+                .map(|(k, n)| Volume {
+                    entity: k as u32 + 1,
+                    physical: k as u32 + 1,
+                    name: src.region_name(k),
+                    region: Some(k as u8),
+                    tets: n,
+                })
+                .collect()
+        };
+        Layout {
+            levels: src.level_count(),
+            present: src.present_labels(),
+            volumes,
+        }
+    }
+
+    pub(super) fn tag(&self, label: BoundaryLabel) -> u32 {
+        label_tag(label, self.levels)
+    }
+
+    /// The entity the nodes are classified on: the first volume.
+    pub(super) fn node_entity(&self) -> u32 {
+        self.volumes.first().map_or(VOLUME_ENTITY, |v| v.entity)
+    }
+
+    /// Element blocks: one per volume, one per label that occurs.
+    pub(super) fn blocks(&self) -> usize {
+        self.volumes.len() + self.present.len()
+    }
+}
+
+/// Visits the tets of volume `v` with their element tags (`t + 1`), in mesh order.
+pub(super) fn volume_tets(
+    src: &dyn MeshSource,
+    v: &Volume,
+    f: &mut dyn FnMut(usize, &[u32; 4]) -> io::Result<()>,
+) -> io::Result<()> {
+    let mut tag = 0usize;
+    src.tets_in_regions(&mut |ts, rs| {
+        for (i, tet) in ts.iter().enumerate() {
+            tag += 1;
+            if v.region.is_none_or(|k| rs[i] == k) {
+                f(tag, tet)?;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Physical and elementary tag of a tet of region `region` (`None`: one interval) in 2.2.
+fn tet_tags(region: Option<&u8>) -> (u32, u32) {
+    match region {
+        Some(&k) => (u32::from(k) + 1, u32::from(k) + 1),
+        None => (DOMAIN_PHYSICAL_TAG, VOLUME_ENTITY),
+    }
+}
+
 /// Writes `mesh` as a Gmsh mesh of the given version: nodes, tetrahedra (volume
-/// physical group `domain`), the labelled boundary triangles (surface physical groups
-/// `alpha`, `beta`, `box`, only those that occur) and the nodal field `f` (see the module
+/// physical group `domain`, or one per region), the labelled boundary triangles (surface
+/// physical groups `alpha`, `beta`, `box`, or `level1`, … and `box` with the interfaces
+/// between regions; only those that occur) and the nodal field `f` (see the module
 /// documentation for numbering and tags). The output is deterministic.
 ///
 /// # Errors
@@ -70,45 +169,52 @@ pub(crate) fn write_msh_source(
     w: &mut dyn Write,
     version: MshVersion,
 ) -> io::Result<()> {
-    let present = src.present_labels();
+    let layout = Layout::of(src);
     let write_text: TextWriter = match version {
         MshVersion::V41 => write_v41,
         MshVersion::V22 => write_v22,
-        MshVersion::V41Binary => return write_v41_binary(src, &present, w),
+        MshVersion::V41Binary => return write_v41_binary(src, &layout, w),
     };
     let mut out = TextOut::new(w);
-    write_text(src, &present, &mut out)?;
+    write_text(src, &layout, &mut out)?;
     out.finish()
 }
 
-/// An ASCII writer: mesh, the labels that occur, output.
-type TextWriter = fn(&dyn MeshSource, &[(BoundaryLabel, usize)], &mut TextOut) -> io::Result<()>;
+/// An ASCII writer: mesh, its groups, output.
+type TextWriter = fn(&dyn MeshSource, &Layout, &mut TextOut) -> io::Result<()>;
 
-fn header(out: &mut TextOut, version: &str, present: &[(BoundaryLabel, usize)]) -> io::Result<()> {
+fn header(out: &mut TextOut, version: &str, layout: &Layout) -> io::Result<()> {
     out.s("$MeshFormat").nl()?;
     out.s(version).s(" 0 8").nl()?;
     out.s("$EndMeshFormat").nl()?;
-    physical_names(out, present)
+    physical_names(out, layout)
 }
 
 /// `$PhysicalNames` (text in every version).
-fn physical_names(out: &mut TextOut, present: &[(BoundaryLabel, usize)]) -> io::Result<()> {
+pub(super) fn physical_names(out: &mut TextOut, layout: &Layout) -> io::Result<()> {
     out.s("$PhysicalNames").nl()?;
-    out.int(present.len() + 1).nl()?;
-    for &(label, _) in present {
+    out.int(layout.present.len() + layout.volumes.len()).nl()?;
+    for &(label, _) in &layout.present {
         out.s("2 ")
-            .int(label_tag(label))
+            .int(layout.tag(label))
             .s(" \"")
-            .s(label.name())
+            .s(&label.name_in(layout.levels))
             .s("\"")
             .nl()?;
     }
-    out.s("3 ").int(DOMAIN_PHYSICAL_TAG).s(" \"domain\"").nl()?;
+    for v in &layout.volumes {
+        out.s("3 ")
+            .int(v.physical)
+            .s(" \"")
+            .s(&v.name)
+            .s("\"")
+            .nl()?;
+    }
     out.s("$EndPhysicalNames").nl()
 }
 
 /// The text head of `$NodeData`: name `f`, time 0, step 0, one component, the node count.
-fn node_data_head(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
+pub(super) fn node_data_head(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
     out.s("$NodeData").nl()?;
     out.s("1").nl()?;
     out.s("\"f\"").nl()?;
@@ -147,64 +253,67 @@ fn bbox(src: &dyn MeshSource, label: Option<BoundaryLabel>) -> [f64; 6] {
     }
 }
 
-fn write_v41(
-    src: &dyn MeshSource,
-    present: &[(BoundaryLabel, usize)],
-    out: &mut TextOut,
-) -> io::Result<()> {
-    header(out, "4.1", present)?;
-    entities_v41(src, present, out)?;
-    nodes_v41(src, out)?;
-    elements_v41(src, present, out)?;
+fn write_v41(src: &dyn MeshSource, layout: &Layout, out: &mut TextOut) -> io::Result<()> {
+    header(out, "4.1", layout)?;
+    entities_v41(src, layout, out)?;
+    nodes_v41(src, layout, out)?;
+    elements_v41(src, layout, out)?;
     node_data(src, out)
 }
 
 /// An elementary entity of `$Entities` (4.1) with its one physical tag.
-struct Entity {
-    tag: u32,
-    bbox: [f64; 6],
-    physical: u32,
+pub(super) struct Entity {
+    pub(super) tag: u32,
+    pub(super) bbox: [f64; 6],
+    pub(super) physical: u32,
     /// Tags of the bounding entities (one dimension lower).
-    bounding: Vec<u32>,
+    pub(super) bounding: Vec<u32>,
 }
 
-/// The entities: one surface per boundary label that occurs (bounded by no curves), then
-/// the volume bounded by these surfaces.
-fn entity_list(src: &dyn MeshSource, present: &[(BoundaryLabel, usize)]) -> Vec<Entity> {
-    let mut list: Vec<Entity> = present
+/// The entities: one surface per label that occurs (bounded by no curves), then the volumes,
+/// each bounded by the surfaces of its levels and the box (one interval: all surfaces).
+pub(super) fn entity_list(src: &dyn MeshSource, layout: &Layout) -> Vec<Entity> {
+    let mut list: Vec<Entity> = layout
+        .present
         .iter()
         .map(|&(label, _)| Entity {
-            tag: label_tag(label),
+            tag: layout.tag(label),
             bbox: bbox(src, Some(label)),
-            physical: label_tag(label),
+            physical: layout.tag(label),
             bounding: Vec::new(),
         })
         .collect();
-    let surfaces = list.iter().map(|e| e.tag).collect();
-    list.push(Entity {
-        tag: VOLUME_ENTITY,
-        bbox: bbox(src, None),
-        physical: DOMAIN_PHYSICAL_TAG,
-        bounding: surfaces,
-    });
+    for v in &layout.volumes {
+        let bounds = |l: BoundaryLabel| match (v.region, l.level()) {
+            (Some(k), Some(i)) => i == k as usize || i == k as usize + 1,
+            _ => true,
+        };
+        let bounding = layout.present.iter().filter(|&&(l, _)| bounds(l));
+        list.push(Entity {
+            tag: v.entity,
+            bbox: bbox(src, None),
+            physical: v.physical,
+            bounding: bounding.map(|&(l, _)| layout.tag(l)).collect(),
+        });
+    }
     list
 }
 
 /// The four numbers after `$Nodes` or `$Elements` (4.1): blocks, count, smallest and
 /// largest tag (tags are `1..=count`; `0 0` when empty, as gmsh writes empty meshes).
-fn section_counts(blocks: usize, count: usize) -> [usize; 4] {
+pub(super) fn section_counts(blocks: usize, count: usize) -> [usize; 4] {
     [blocks, count, usize::from(count > 0), count]
 }
 
-/// `$Entities`: one surface per boundary label that occurs, then the volume entity.
-fn entities_v41(
-    src: &dyn MeshSource,
-    present: &[(BoundaryLabel, usize)],
-    out: &mut TextOut,
-) -> io::Result<()> {
+/// `$Entities`: one surface per label that occurs, then the volume entities.
+fn entities_v41(src: &dyn MeshSource, layout: &Layout, out: &mut TextOut) -> io::Result<()> {
     out.s("$Entities").nl()?;
-    out.s("0 0 ").int(present.len()).s(" 1").nl()?;
-    for e in entity_list(src, present) {
+    out.s("0 0 ")
+        .int(layout.present.len())
+        .s(" ")
+        .int(layout.volumes.len())
+        .nl()?;
+    for e in entity_list(src, layout) {
         out.int(e.tag);
         bbox_fields(out, e.bbox);
         out.s(" 1 ").int(e.physical).s(" ").int(e.bounding.len());
@@ -235,12 +344,16 @@ fn bbox_fields(out: &mut TextOut, b: [f64; 6]) {
     }
 }
 
-/// `$Nodes`: all nodes in one block classified on the volume entity.
-fn nodes_v41(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
+/// `$Nodes`: all nodes in one block classified on the first volume entity.
+fn nodes_v41(src: &dyn MeshSource, layout: &Layout, out: &mut TextOut) -> io::Result<()> {
     let n_points = src.num_points();
     out.s("$Nodes").nl()?;
     counts_line(out, section_counts(1, n_points))?;
-    out.s("3 ").int(VOLUME_ENTITY).s(" 0 ").int(n_points).nl()?;
+    out.s("3 ")
+        .int(layout.node_entity())
+        .s(" 0 ")
+        .int(n_points)
+        .nl()?;
     for i in 1..=n_points {
         out.int(i).nl()?;
     }
@@ -253,28 +366,20 @@ fn nodes_v41(src: &dyn MeshSource, out: &mut TextOut) -> io::Result<()> {
     out.s("$EndNodes").nl()
 }
 
-/// `$Elements`: the tets in one block on the volume entity, then one triangle block per
-/// boundary label that occurs.
-fn elements_v41(
-    src: &dyn MeshSource,
-    present: &[(BoundaryLabel, usize)],
-    out: &mut TextOut,
-) -> io::Result<()> {
+/// `$Elements`: the tets in one block per volume entity, then one triangle block per label
+/// that occurs.
+fn elements_v41(src: &dyn MeshSource, layout: &Layout, out: &mut TextOut) -> io::Result<()> {
     let n_tets = src.num_tets();
-    let n_elems = n_tets + src.num_boundary();
+    let n_elems = n_tets + src.num_triangles();
     out.s("$Elements").nl()?;
-    counts_line(out, section_counts(present.len() + 1, n_elems))?;
-    element_block(out, VOLUME_ENTITY, 3, TETRAHEDRON, n_tets)?;
-    let mut tag = 0usize;
-    src.tets(&mut |ts| {
-        for tet in ts {
-            tag += 1;
-            element_nodes(out.int(tag), tet)?;
-        }
-        Ok(())
-    })?;
-    for &(label, count) in present {
-        element_block(out, label_tag(label), 2, TRIANGLE, count)?;
+    counts_line(out, section_counts(layout.blocks(), n_elems))?;
+    for v in &layout.volumes {
+        element_block(out, v.entity, 3, TETRAHEDRON, v.tets)?;
+        volume_tets(src, v, &mut |tag, tet| element_nodes(out.int(tag), tet))?;
+    }
+    let mut tag = n_tets;
+    for &(label, count) in &layout.present {
+        element_block(out, layout.tag(label), 2, TRIANGLE, count)?;
         src.triangles(label, &mut |ts| {
             for tri in ts {
                 tag += 1;
@@ -312,12 +417,8 @@ fn element_nodes(out: &mut TextOut, nodes: &[u32]) -> io::Result<()> {
     out.nl()
 }
 
-fn write_v22(
-    src: &dyn MeshSource,
-    present: &[(BoundaryLabel, usize)],
-    out: &mut TextOut,
-) -> io::Result<()> {
-    header(out, "2.2", present)?;
+fn write_v22(src: &dyn MeshSource, layout: &Layout, out: &mut TextOut) -> io::Result<()> {
+    header(out, "2.2", layout)?;
     out.s("$Nodes").nl()?;
     out.int(src.num_points()).nl()?;
     let mut i = 0usize;
@@ -330,34 +431,27 @@ fn write_v22(
         Ok(())
     })?;
     out.s("$EndNodes").nl()?;
-    elements_v22(src, present, out)?;
+    elements_v22(src, layout, out)?;
     node_data(src, out)
 }
 
-/// `$Elements` (2.2): the tets, then the boundary triangles grouped by label; each element
+/// `$Elements` (2.2): the tets, then the labelled triangles grouped by label; each element
 /// carries two tags, physical and elementary.
-fn elements_v22(
-    src: &dyn MeshSource,
-    present: &[(BoundaryLabel, usize)],
-    out: &mut TextOut,
-) -> io::Result<()> {
+fn elements_v22(src: &dyn MeshSource, layout: &Layout, out: &mut TextOut) -> io::Result<()> {
     out.s("$Elements").nl()?;
-    out.int(src.num_tets() + src.num_boundary()).nl()?;
+    out.int(src.num_tets() + src.num_triangles()).nl()?;
     let mut tag = 0usize;
-    src.tets(&mut |ts| {
-        for tet in ts {
+    src.tets_in_regions(&mut |ts, rs| {
+        for (i, tet) in ts.iter().enumerate() {
             tag += 1;
-            out.int(tag)
-                .s(" 4 2 ")
-                .int(DOMAIN_PHYSICAL_TAG)
-                .s(" ")
-                .int(VOLUME_ENTITY);
+            let (physical, entity) = tet_tags(rs.get(i));
+            out.int(tag).s(" 4 2 ").int(physical).s(" ").int(entity);
             element_nodes(out, tet)?;
         }
         Ok(())
     })?;
-    for &(label, _) in present {
-        let lt = label_tag(label);
+    for &(label, _) in &layout.present {
+        let lt = layout.tag(label);
         src.triangles(label, &mut |ts| {
             for tri in ts {
                 tag += 1;
@@ -370,196 +464,10 @@ fn elements_v22(
     out.s("$EndElements").nl()
 }
 
-// ---------------------------------------------------------------------------------------
-// Binary 4.1
-// ---------------------------------------------------------------------------------------
-
-/// Size at which [`BinOut`] hands its buffer to the underlying writer.
-const BIN_CHUNK: usize = 1 << 16;
-
-/// Buffered output of binary `.msh`: little-endian numbers and the text between them.
-struct BinOut<'a> {
-    w: &'a mut dyn Write,
-    buf: Vec<u8>,
-}
-
-impl<'a> BinOut<'a> {
-    fn new(w: &'a mut dyn Write) -> Self {
-        BinOut {
-            w,
-            buf: Vec::with_capacity(BIN_CHUNK + 4096),
-        }
-    }
-
-    /// Appends text formatted by `f` (the writers' [`TextOut`]).
-    fn text(&mut self, f: impl FnOnce(&mut TextOut) -> io::Result<()>) -> io::Result<()> {
-        let mut t = TextOut::new(&mut self.buf);
-        f(&mut t)?;
-        t.finish()?;
-        self.spill()
-    }
-
-    fn s(&mut self, s: &str) -> &mut Self {
-        self.buf.extend_from_slice(s.as_bytes());
-        self
-    }
-
-    /// Appends a `size_t` (8 bytes).
-    #[inline]
-    fn size(&mut self, v: usize) -> &mut Self {
-        self.buf.extend_from_slice(&(v as u64).to_le_bytes());
-        self
-    }
-
-    fn sizes(&mut self, v: [usize; 4]) -> &mut Self {
-        for x in v {
-            self.size(x);
-        }
-        self
-    }
-
-    /// Appends an `int` (4 bytes); `v` is at most `i32::MAX`.
-    #[inline]
-    fn int(&mut self, v: u32) -> &mut Self {
-        debug_assert!(i32::try_from(v).is_ok());
-        self.buf.extend_from_slice(&v.to_le_bytes());
-        self
-    }
-
-    #[inline]
-    fn float(&mut self, v: f64) -> &mut Self {
-        self.buf.extend_from_slice(&v.to_le_bytes());
-        self
-    }
-
-    /// Passes the buffer on when it is full.
-    #[inline]
-    fn spill(&mut self) -> io::Result<()> {
-        if self.buf.len() >= BIN_CHUNK {
-            self.w.write_all(&self.buf)?;
-            self.buf.clear();
-        }
-        Ok(())
-    }
-
-    fn finish(self) -> io::Result<()> {
-        self.w.write_all(&self.buf)?;
-        self.w.flush()
-    }
-}
-
-fn write_v41_binary(
-    src: &dyn MeshSource,
-    present: &[(BoundaryLabel, usize)],
-    w: &mut dyn Write,
-) -> io::Result<()> {
-    if i32::try_from(src.num_points()).is_err() {
-        return Err(invalid(format!(
-            "{} nodes are too many for binary .msh 4.1 ($NodeData numbers nodes by 4-byte int)",
-            src.num_points()
-        )));
-    }
-    let mut out = BinOut::new(w);
-    out.text(|t| {
-        t.s("$MeshFormat").nl()?;
-        t.s("4.1 1 8").nl()
-    })?;
-    out.int(1).s("\n$EndMeshFormat\n");
-    out.text(|t| physical_names(t, present))?;
-    entities_binary(src, present, &mut out);
-    nodes_binary(src, &mut out)?;
-    elements_binary(src, present, &mut out)?;
-    node_data_binary(src, &mut out)?;
-    out.finish()
-}
-
-/// `$Entities` of [`entity_list`]: counts, then per entity its tag, bounding box, physical
-/// tag and bounding entities.
-fn entities_binary(src: &dyn MeshSource, present: &[(BoundaryLabel, usize)], out: &mut BinOut) {
-    out.s("$Entities\n");
-    out.size(0).size(0).size(present.len()).size(1);
-    for e in entity_list(src, present) {
-        out.int(e.tag);
-        for x in e.bbox {
-            out.float(x);
-        }
-        out.size(1).int(e.physical).size(e.bounding.len());
-        for b in e.bounding {
-            out.int(b);
-        }
-    }
-    out.s("\n$EndEntities\n");
-}
-
-/// `$Nodes`: one block on the volume entity, the tags `1..=n`, then the coordinates.
-fn nodes_binary(src: &dyn MeshSource, out: &mut BinOut) -> io::Result<()> {
-    let n_points = src.num_points();
-    out.s("$Nodes\n");
-    out.sizes(section_counts(1, n_points));
-    out.int(3).int(VOLUME_ENTITY).int(0).size(n_points);
-    for i in 1..=n_points {
-        out.size(i).spill()?;
-    }
-    src.points(&mut |ps| {
-        for p in ps {
-            out.float(p[0]).float(p[1]).float(p[2]).spill()?;
-        }
-        Ok(())
-    })?;
-    out.s("\n$EndNodes\n");
-    Ok(())
-}
-
-/// `$Elements`: the blocks of [`elements_v41`]; each element is its tag and its node tags.
-fn elements_binary(
-    src: &dyn MeshSource,
-    present: &[(BoundaryLabel, usize)],
-    out: &mut BinOut,
-) -> io::Result<()> {
-    let n_tets = src.num_tets();
-    out.s("$Elements\n");
-    out.sizes(section_counts(
-        present.len() + 1,
-        n_tets + src.num_boundary(),
-    ));
-    out.int(3).int(VOLUME_ENTITY).int(TETRAHEDRON).size(n_tets);
-    let mut tag = 0usize;
-    let mut element = |out: &mut BinOut, nodes: &[u32]| {
-        tag += 1;
-        out.size(tag);
-        for &v in nodes {
-            out.size(v as usize + 1);
-        }
-        out.spill()
-    };
-    src.tets(&mut |ts| ts.iter().try_for_each(|t| element(out, t)))?;
-    for &(label, count) in present {
-        out.int(2).int(label_tag(label)).int(TRIANGLE).size(count);
-        src.triangles(label, &mut |ts| ts.iter().try_for_each(|t| element(out, t)))?;
-    }
-    out.s("\n$EndElements\n");
-    Ok(())
-}
-
-/// `$NodeData`: the text head of the ASCII file, then per node its `int` tag and value.
-fn node_data_binary(src: &dyn MeshSource, out: &mut BinOut) -> io::Result<()> {
-    out.text(|t| node_data_head(src, t))?;
-    let mut tag = 0u32;
-    src.values(&mut |vs| {
-        for &v in vs {
-            tag += 1;
-            out.int(tag).float(v).spill()?;
-        }
-        Ok(())
-    })?;
-    out.s("\n$EndNodeData\n");
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::source::Visit;
+    use crate::io::source::{Visit, VisitRegions};
 
     /// A [`MeshSource`] that hands every list on in slices of at most two items, as a mesh
     /// read back from spill files is.
@@ -575,6 +483,24 @@ mod tests {
         }
         fn num_tets(&self) -> usize {
             self.0.num_tets()
+        }
+        fn level_count(&self) -> usize {
+            self.0.level_count()
+        }
+        fn region_name(&self, k: usize) -> String {
+            self.0.region_name(k)
+        }
+        fn regions(&self, f: Visit<u8>) -> io::Result<()> {
+            self.0.regions(&mut |all| in_twos(all, f))
+        }
+        fn region_tets(&self) -> Vec<usize> {
+            self.0.region_tets()
+        }
+        fn tets_in_regions(&self, f: VisitRegions) -> io::Result<()> {
+            self.0.tets_in_regions(&mut |ts, rs| {
+                let rs = |i: usize| rs.get(2 * i..(2 * i + 2).min(rs.len())).unwrap_or(&[]);
+                ts.chunks(2).enumerate().try_for_each(|(i, t)| f(t, rs(i)))
+            })
         }
         fn label_counts(&self) -> [usize; crate::mesh::NUM_LABELS] {
             self.0.label_counts()
@@ -594,8 +520,8 @@ mod tests {
         fn triangles(&self, label: BoundaryLabel, f: Visit<[u32; 3]>) -> io::Result<()> {
             self.0.triangles(label, &mut |all| in_twos(all, f))
         }
-        fn faces(&self, label: BoundaryLabel, f: Visit<(u32, u8)>) -> io::Result<()> {
-            self.0.faces(label, f)
+        fn faces(&self, label: BoundaryLabel, above: bool, f: Visit<(u32, u8)>) -> io::Result<()> {
+            self.0.faces(label, above, f)
         }
     }
 
@@ -617,16 +543,50 @@ mod tests {
         }
     }
 
+    /// Three tets in regions 1, 0, 1 (of three levels), the faces between them interfaces.
+    fn three_tets_in_two_regions() -> TetMesh {
+        let mut m = two_tets();
+        m.points.push([-1.0, -1.0, -1.0]);
+        m.values.push(0.0);
+        m.tets.insert(0, [0, 2, 1, 5]);
+        m.boundary = vec![[1, 2, 4]];
+        m.boundary_labels = vec![BoundaryLabel::Box];
+        m.regions = crate::mesh::Regions {
+            levels: 3,
+            tets: vec![1, 0, 1],
+            boundary: vec![1],
+            interfaces: vec![[0, 2, 1], [1, 2, 3]],
+            interface_labels: vec![BoundaryLabel::Level(1); 2],
+            names: vec!["inner".into()],
+        };
+        m
+    }
+
     #[test]
     fn slices_of_any_size_give_the_same_bytes() {
-        let mesh = two_tets();
-        for version in [MshVersion::V41, MshVersion::V22, MshVersion::V41Binary] {
-            let mut whole = Vec::new();
-            write_msh(&mesh, &mut whole, version).unwrap();
-            let mut sliced = Vec::new();
-            write_msh_source(&InTwos(InMemory::new(&mesh)), &mut sliced, version).unwrap();
-            assert_eq!(whole, sliced, "{version:?}");
+        for mesh in [two_tets(), three_tets_in_two_regions()] {
+            for version in [MshVersion::V41, MshVersion::V22, MshVersion::V41Binary] {
+                let mut whole = Vec::new();
+                write_msh(&mesh, &mut whole, version).unwrap();
+                let mut sliced = Vec::new();
+                write_msh_source(&InTwos(InMemory::new(&mesh)), &mut sliced, version).unwrap();
+                assert_eq!(whole, sliced, "{version:?}");
+            }
         }
+    }
+
+    #[test]
+    fn regions_are_volumes_with_their_tets_in_blocks() {
+        let mut out = Vec::new();
+        write_msh(&three_tets_in_two_regions(), &mut out, MshVersion::V41).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let names = "$PhysicalNames\n4\n2 2 \"level2\"\n2 4 \"box\"\n3 1 \"inner\"\n\
+                     3 2 \"region2\"\n$EndPhysicalNames\n";
+        assert!(text.contains(names), "{text}");
+        // 3 tets in 2 blocks (tags 2; 1 and 3), 2 interface triangles, 1 on the box
+        let elements = "$Elements\n4 6 1 6\n3 1 4 1\n2 1 2 3 4\n3 2 4 2\n1 1 3 2 6\n\
+                        3 2 3 4 5\n2 2 2 2\n4 1 3 2\n5 2 3 4\n2 4 2 1\n6 2 3 5\n$EndElements\n";
+        assert!(text.contains(elements), "{text}");
     }
 
     #[test]

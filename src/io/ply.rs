@@ -14,7 +14,7 @@
 use std::io::{self, Write};
 
 use super::write_common::{check_surface, invalid, TextOut};
-use crate::mesh::TriSurface;
+use crate::mesh::{TriSurface, INTERVAL_LEVELS};
 
 fn header(s: &TriSurface, ascii: bool) -> String {
     let format = if ascii {
@@ -60,7 +60,7 @@ fn vertex_labels(s: &TriSurface) -> Vec<u8> {
     let mut l = vec![u8::MAX; s.points.len()];
     for (t, &label) in s.triangles.iter().zip(&s.labels) {
         for &i in t {
-            l[i as usize] = l[i as usize].min(label.index() as u8);
+            l[i as usize] = l[i as usize].min(label.code(INTERVAL_LEVELS) as u8);
         }
     }
     l

@@ -2,13 +2,17 @@
 //!
 //! Layout: `header_type="UInt64"`, `byte_order="LittleEndian"` (always, independent of the
 //! host), every array stored in `<AppendedData>` in the order `f`, `Points`, `connectivity`,
-//! `offsets`, `types`:
+//! `offsets`, `types` (then `region` for a mesh of several regions):
 //! * `Points`: Float64 × 3;
 //! * `connectivity`, `offsets`: Int32 when every id and offset fits in an `i32`, Int64
 //!   otherwise;
 //! * `types`: UInt8, all 10 (`VTK_TETRA`, whose node order equals the mesh's positive
 //!   orientation);
-//! * point data `f`: Float64, the field values (the active scalars).
+//! * point data `f`: Float64, the field values (the active scalars);
+//! * cell data `region` (only for a mesh of several regions): Int32, the region of each tet,
+//!   counting from 0 (region `k` lies between levels `k` and `k + 1`; the `.msh` and `.inp`
+//!   writers number it `k + 1` and name it). In ParaView, the Threshold filter on `region`
+//!   selects one region.
 //!
 //! Encodings ([`VtuEncoding`]):
 //! * `Base64` (default): each array is its UInt64 byte count followed by the data, base64
@@ -21,11 +25,13 @@
 //!   meshio refuses it: its XML parser rewrites CR LF byte pairs (meshio issue #1324).
 //!
 //! [`write_vtu_fields`] writes other named Float64 point and cell fields instead of `f`
-//! (point fields before `Points`, cell fields after `types`), e.g. a solution and its
-//! gradient.
+//! (point fields before `Points`, cell fields after `types` and `region`), e.g. a solution
+//! and its gradient.
 //!
-//! Only the tetrahedra are written: the labelled boundary triangles are **not** part of the
-//! `.vtu` (use the `.msh` or `.inp` writers when the boundary groups are needed).
+//! Only the tetrahedra are written: the labelled boundary triangles and the interfaces
+//! between regions are **not** part of the `.vtu` (use the `.msh` or `.inp` writers when the
+//! boundary groups or interfaces are needed; in ParaView, Extract Surface on a region
+//! selected by its `region` threshold gives its boundary).
 
 use std::borrow::Cow;
 use std::io::{self, Write};
@@ -120,6 +126,8 @@ enum Array<'a> {
     Offsets,
     /// `VTK_TETRA` per tet, UInt8.
     Types,
+    /// The region of each tet, Int32.
+    Regions,
 }
 
 /// A source's arrays, and whether its ids are Int64.
@@ -140,6 +148,7 @@ impl Arrays<'_> {
             Array::Connectivity => 4 * id * t,
             Array::Offsets => id * t,
             Array::Types => t,
+            Array::Regions => 4 * t,
         }
     }
 
@@ -157,6 +166,13 @@ impl Arrays<'_> {
                 visit_iter((1..=t as u64).map(|k| 4 * k), &mut |o| f(&self.id_bytes(o)))
             }
             Array::Types => visit_iter(std::iter::repeat_n(VTK_TETRA, t), f),
+            Array::Regions => self.src.regions(&mut |rs| {
+                let bytes: Vec<u8> = rs
+                    .iter()
+                    .flat_map(|&r| i32::from(r).to_le_bytes())
+                    .collect();
+                f(&bytes)
+            }),
         }
     }
 
@@ -336,6 +352,7 @@ fn xml_header(
     encoding: VtuEncoding,
     point: &[VtuField],
     cell: &[VtuField],
+    regions: bool,
 ) -> String {
     let compressor = match encoding {
         VtuEncoding::Zlib => " compressor=\"vtkZLibDataCompressor\"",
@@ -359,9 +376,17 @@ fn xml_header(
         h += "      </PointData>\n";
     }
     h += &geometry_arrays(wide, &o[np..np + 4]);
-    if !cell.is_empty() {
+    let mut o = &o[np + 4..];
+    if regions || !cell.is_empty() {
         h += "      <CellData>\n";
-        h += &data_arrays(cell, &o[np + 4..]);
+        if regions {
+            h += &format!(
+                "        <DataArray type=\"Int32\" Name=\"region\" format=\"appended\" offset=\"{}\"/>\n",
+                o[0]
+            );
+            o = &o[1..];
+        }
+        h += &data_arrays(cell, o);
         h += "      </CellData>\n";
     }
     h += &appended_data_start(encoding);
@@ -505,7 +530,7 @@ pub fn write_vtu_fields_with(
 }
 
 /// Writes the `.vtu`: point arrays (name, components, data), then `Points`, the cell
-/// arrays, and `cell` arrays (`cell_fields` names them).
+/// arrays, `region` (several regions) and `cell` arrays (`cell_fields` names them).
 fn write_arrays(
     src: &dyn MeshSource,
     point: &[(&str, usize, Array)],
@@ -525,6 +550,10 @@ fn write_arrays(
         Array::Offsets,
         Array::Types,
     ]);
+    let regions = src.region_count() > 0;
+    if regions {
+        all.push(Array::Regions);
+    }
     all.extend(cell);
     let stored = all
         .into_iter()
@@ -548,7 +577,15 @@ fn write_arrays(
             data: &[],
         })
         .collect();
-    let header = xml_header(src, arrays.wide, &offsets, encoding, &names, cell_fields);
+    let header = xml_header(
+        src,
+        arrays.wide,
+        &offsets,
+        encoding,
+        &names,
+        cell_fields,
+        regions,
+    );
     w.write_all(header.as_bytes())?;
     for a in &stored {
         a.write(&arrays, w, encoding)?;

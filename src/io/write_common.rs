@@ -4,7 +4,7 @@
 
 use std::io::{self, Write};
 
-use crate::mesh::{TetMesh, TriSurface};
+use crate::mesh::{TetMesh, TriSurface, LABEL_LEVELS};
 
 /// Checks that `values` and `boundary_labels` have the lengths of `points` and `boundary` and
 /// that every tet and triangle refers to an existing node.
@@ -29,10 +29,47 @@ pub(crate) fn check_lengths(mesh: &TetMesh) -> io::Result<()> {
         .iter()
         .flatten()
         .chain(mesh.boundary.iter().flatten())
+        .chain(mesh.regions.interfaces.iter().flatten())
         .any(|&i| i as usize >= n);
     if bad {
         return Err(invalid(format!(
             "mesh refers to a node index >= the {n} points"
+        )));
+    }
+    check_regions(mesh)
+}
+
+/// Checks that the regions (if any) fit the mesh: one per tet, each below the count, one
+/// label per interface triangle, and every label one of the run's.
+fn check_regions(mesh: &TetMesh) -> io::Result<()> {
+    let r = &mesh.regions;
+    let levels = mesh.level_count();
+    if levels > LABEL_LEVELS {
+        return Err(invalid(format!(
+            "mesh has {levels} levels, at most {LABEL_LEVELS}"
+        )));
+    }
+    if !r.is_empty() && r.tets.len() != mesh.tets.len() {
+        return Err(invalid(format!(
+            "mesh has {} tets but {} regions",
+            mesh.tets.len(),
+            r.tets.len()
+        )));
+    }
+    if r.tets.iter().any(|&k| k as usize >= r.count()) {
+        return Err(invalid(format!("a region >= the {} regions", r.count())));
+    }
+    if r.interface_labels.len() != r.interfaces.len() {
+        return Err(invalid(format!(
+            "mesh has {} interface triangles but {} labels",
+            r.interfaces.len(),
+            r.interface_labels.len()
+        )));
+    }
+    let mut labels = mesh.boundary_labels.iter().chain(&r.interface_labels);
+    if let Some(l) = labels.find(|l| l.level().is_some_and(|i| i >= levels)) {
+        return Err(invalid(format!(
+            "label {l:?} outside the run of {levels} levels"
         )));
     }
     Ok(())

@@ -8,8 +8,8 @@ use crate::check::{check_mesh, CheckOptions, CheckReport};
 use crate::curvilinear::map_mesh;
 use crate::facts::{FactsSink, MeshFacts, Tee};
 use crate::io::{
-    spill_for, write_mesh_pending, write_spilled_pending, write_surface_pending, PendingFile,
-    SurfaceFormat,
+    spill_for_levels, write_mesh_pending, write_spilled_pending, write_surface_pending,
+    PendingFile, SurfaceFormat,
 };
 use crate::quality::summarize;
 use crate::report::{QualitySection, QualityTimings};
@@ -60,7 +60,8 @@ pub(crate) fn stream_to_disk(
     reporter: &Reporter,
 ) -> Result<Written, PipelineError> {
     let t = Instant::now();
-    let mut spill = spill_for(&job.output)?;
+    let levels = job.opts.levels.len().max(crate::mesh::INTERVAL_LEVELS);
+    let mut spill = spill_for_levels(&job.output, levels, job.req.region_names.clone())?;
     let mut facts = FactsSink::new(job.req.analysis)
         .with_regions(&job.opts.levels, job.req.region_names.clone());
     let stage = reporter.stage("meshing", meshing(grid));
