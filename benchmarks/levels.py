@@ -3,13 +3,13 @@
 the cost per output tet of meshing three regions in one pass against meshing their union as
 one interval, and the README's picture of the regions on an axial cut.
 
-usage: python3 benchmarks/levels.py [--bin target/release/tptd-mesh] [--runs 3] [--no-picture]
+usage: python3 benchmarks/levels.py [--bin target/release/tptd-mesh] [--runs 3] [--no-picture | --picture-only]
 
 Runs, alternating, `tptd-mesh T1 --levels L1,L2,L3,inf` and `tptd-mesh T1 --alpha L1` (the
 union) with `--report`, `-j 2`; the mesh stage (`timings_seconds.mesh`, meshing with the
 analysis, streamed to disk) per output tet, best of `--runs` each; writes
 benchmarks/levels_results.md and benchmarks/levels_slice.png (from the .vtu of the
-three-region run, its `region` cell data, cut at z = 0 mm). Meshes go to benchmarks/out/
+three-region run, its `region` cell data, cut at z = 10.37 mm, off the grid planes). Meshes go to benchmarks/out/
 (git-ignored). Needs numpy, matplotlib, meshio and nilearn.
 """
 import argparse
@@ -26,6 +26,8 @@ T1_NAME = "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz"
 # nothing): dark (CSF and background edge), grey matter, white matter, by T1 intensity.
 LEVELS = ["40.0213", "101.0137", "151.0135", "inf"]
 NAMES = "csf,grey,white"
+# The axial cut of the picture (mm): through the ventricles, between grid planes.
+CUT_Z = 10.37
 
 
 def t1_path():
@@ -89,7 +91,7 @@ def picture(vtu, png):
     m = meshio.read(vtu)
     tets = m.cells_dict["tetra"]
     regions = m.cell_data["region"][0]
-    polys, reg = cut(m.points, tets, regions, 0.0)
+    polys, reg = cut(m.points, tets, regions, CUT_Z)
     colors = np.array(["#4c72b0", "#c9b27c", "#e8e8e8"])[reg]
     fig, ax = plt.subplots(figsize=(5.2, 6.0), dpi=90)
     ax.add_collection(PolyCollection(polys, facecolors=colors, edgecolors="#333333", linewidths=0.05))
@@ -100,7 +102,7 @@ def picture(vtu, png):
     for k, (n, c) in enumerate(zip(names, ["#4c72b0", "#c9b27c", "#e8e8e8"])):
         ax.plot([], [], "s", color=c, markeredgecolor="#333333", label=f"{n} [{LEVELS[k]}, {LEVELS[k + 1]}]")
     ax.legend(loc="lower center", bbox_to_anchor=(0.5, -0.08), ncol=3, fontsize=8, frameon=False)
-    ax.set_title("MNI152 T1, three regions in one mesh: axial cut at z = 0 mm", fontsize=9)
+    ax.set_title(f"MNI152 T1, three regions in one mesh: axial cut at z = {CUT_Z} mm", fontsize=9)
     fig.savefig(png, bbox_inches="tight")
 
 
@@ -142,9 +144,13 @@ def main():
     ap.add_argument("--bin", default=os.path.join(HERE, "..", "target", "release", "tptd-mesh"))
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--no-picture", action="store_true")
+    ap.add_argument("--picture-only", action="store_true", help="redraw from benchmarks/out/t1_regions.vtu")
     args = ap.parse_args()
     out = os.path.join(HERE, "out")
     os.makedirs(out, exist_ok=True)
+    if args.picture_only:
+        picture(os.path.join(out, "t1_regions.vtu"), os.path.join(HERE, "levels_slice.png"))
+        return
     best = timing(args.bin, args.runs, out)
     report(best, os.path.join(HERE, "levels_results.md"))
     if not args.no_picture:
