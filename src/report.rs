@@ -167,7 +167,8 @@ pub struct Report {
     pub nodes: usize,
     /// Number of tetrahedra.
     pub tets: usize,
-    /// The levels of a run of several regions (`--levels`; absent for one interval).
+    /// The levels of a run of several regions (`--levels` with three or more; absent for one
+    /// interval, whose bounds are `alpha` and `beta`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub levels: Vec<Bound>,
     /// Labelled triangles per label (`alpha`, `beta`, `box`; with several regions `level1`,
@@ -326,7 +327,10 @@ pub fn build_report(
         beta: Bound(run.beta),
         nodes: facts.nodes,
         tets: facts.tets,
-        levels: run.levels.iter().map(|&l| Bound(l)).collect(),
+        levels: match run.levels.len() > crate::mesh::INTERVAL_LEVELS {
+            true => run.levels.iter().map(|&l| Bound(l)).collect(),
+            false => Vec::new(),
+        },
         boundary_triangles,
         regions,
         cells_total: stats.cells_total,

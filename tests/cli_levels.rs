@@ -96,6 +96,30 @@ fn regions_are_reported_and_meshed_alike_on_any_thread_count() {
     assert!(r["boundary_triangles"]["level2"].as_u64().unwrap() > 0);
 }
 
+/// Two levels are one interval: the same bytes as `--alpha`/`--beta`, the interval summary.
+#[test]
+fn two_levels_are_one_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    two_balls(dir.path());
+    let o = run_in(dir.path(), &["b.npy", "--levels", "2.7,6.1", "-o", "l.msh"]);
+    assert_ok(&o);
+    assert!(
+        stdout(&o).contains("interval  [2.7, 6.1]"),
+        "{}",
+        stdout(&o)
+    );
+    let o = run_in(
+        dir.path(),
+        &["b.npy", "--alpha", "2.7", "--beta", "6.1", "-o", "a.msh"],
+    );
+    assert_ok(&o);
+    let read = |n: &str| fs::read(dir.path().join(n)).unwrap();
+    assert!(
+        read("l.msh") == read("a.msh"),
+        "two levels differ from --alpha/--beta"
+    );
+}
+
 #[test]
 fn a_level_between_regions_is_checked_against_the_critical_values() {
     let dir = tempfile::tempdir().unwrap();
@@ -122,7 +146,11 @@ fn a_level_between_regions_is_checked_against_the_critical_values() {
 fn bad_levels_are_usage_errors_that_write_nothing() {
     let dir = tempfile::tempdir().unwrap();
     two_balls(dir.path());
-    let cases: [(&[&str], &str); 9] = [
+    let cases: [(&[&str], &str); 10] = [
+        (
+            &["--levels", "1,2", "--region-names", "a"],
+            "needs three levels or more",
+        ),
         (&["--levels", "3,2"], "level 2 is not above level 1"),
         (&["--levels", "3"], "1 level(s) given"),
         (&["--levels", "1,inf,9"], "level 2 is infinite"),

@@ -255,6 +255,16 @@ fn run_levels(
         )
     })?;
     let names = &req.region_names;
+    if !names.is_empty() && checked.regions() == 1 {
+        return Err(PipelineError::usage(
+            input_name,
+            format_args!(
+                "{} needs three levels or more: two levels are one interval, written as the \
+                 volume `domain`",
+                n.of(Param::RegionNames)
+            ),
+        ));
+    }
     if !names.is_empty() && names.len() != checked.regions() {
         return Err(PipelineError::usage(
             input_name,
