@@ -279,6 +279,16 @@ pub struct TriSurface {
     pub triangles: Vec<[u32; 3]>,
     /// #F labels, one per triangle.
     pub labels: Vec<BoundaryLabel>,
+    /// Number of levels the labels name when the surface comes from several regions; 0 for
+    /// one interval (alpha, beta).
+    pub levels: usize,
+}
+
+impl TriSurface {
+    /// Number of levels the labels name: 2 for one interval.
+    pub fn level_count(&self) -> usize {
+        self.levels.max(INTERVAL_LEVELS)
+    }
 }
 
 /// One slab of the mesh in global numbering, as handed to a [`MeshSink`].

@@ -183,7 +183,36 @@ fn bad_levels_are_usage_errors_that_write_nothing() {
         assert!(stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
         assert_eq!(listing(dir.path()), ["b.npy"], "{extra:?}");
     }
-    let o = run_in(dir.path(), &["b.npy", "--levels", "1,2,3", "-o", "m.obj"]);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("tetrahedral output"), "{}", stderr(&o));
+}
+
+/// An isosurface output of several levels has every level, each its own group (`.obj`) or
+/// vertex label (`.ply`), oriented towards increasing f: two spheres at 2.7, two at 6.1 and
+/// one surface around both at 8.45, all closed.
+#[test]
+fn isosurfaces_of_several_levels_hold_every_level() {
+    let dir = tempfile::tempdir().unwrap();
+    two_balls(dir.path());
+    let args = ["b.npy", "--levels", "-inf,2.7,3.9,8.45", "-o", "s.obj"];
+    let o = run_in(dir.path(), &args);
+    assert_ok(&o);
+    assert!(stdout(&o).contains("Betti [5, 0, 5]"), "{}", stdout(&o));
+    let text = fs::read_to_string(dir.path().join("s.obj")).unwrap();
+    let groups: Vec<&str> = text.lines().filter_map(|l| l.strip_prefix("g ")).collect();
+    assert_eq!(groups, ["level2", "level3", "level4"]);
+    let args = [
+        "b.npy",
+        "--levels",
+        "-inf,2.7,3.9,8.45",
+        "-o",
+        "s.ply",
+        "--ascii",
+    ];
+    assert_ok(&run_in(dir.path(), &args));
+    let ply = fs::read_to_string(dir.path().join("s.ply")).unwrap();
+    assert!(
+        ply.contains(
+            "comment vertex label: 0 = level1, 1 = level2, 2 = level3, 3 = level4, 4 = box"
+        ),
+        "{ply}"
+    );
 }

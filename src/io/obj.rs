@@ -37,7 +37,7 @@ pub fn write_obj(s: &TriSurface, w: &mut dyn Write) -> io::Result<()> {
         if group.peek().is_none() {
             continue;
         }
-        out.s("g ").s(label.name());
+        out.s("g ").s(&label.name_in(s.level_count()));
         out.nl()?;
         for (t, _) in group {
             out.s("f ")

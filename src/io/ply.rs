@@ -5,7 +5,8 @@
 //! `list uchar int vertex_indices` (counter-clockwise seen from the side of increasing f).
 //!
 //! The label is a vertex property (0 alpha, 1 beta, 2 box, as
-//! [`crate::mesh::BoundaryLabel`]): the smallest label of the vertex's triangles. A face lies on
+//! [`crate::mesh::BoundaryLabel::code`]; for several levels 0 to n - 1 the levels and n the
+//! box, as the header's comment says): the smallest label of the vertex's triangles. A face lies on
 //! level alpha (beta) exactly when its three vertices have label 0 (1); every other face is a
 //! cap on the grid box. (A clipped box face always keeps a vertex inside the interval, and no
 //! point lies on both levels, so no cap has three vertices of one level.) The label is not a
@@ -14,7 +15,17 @@
 use std::io::{self, Write};
 
 use super::write_common::{check_surface, invalid, TextOut};
-use crate::mesh::{TriSurface, INTERVAL_LEVELS};
+use crate::mesh::TriSurface;
+
+/// What the vertex labels mean: `0 = alpha, 1 = beta, 2 = box`, or for several levels
+/// `0 = level1, ..., n = box`.
+fn label_legend(s: &TriSurface) -> String {
+    let n = s.level_count();
+    let parts: Vec<String> = crate::mesh::BoundaryLabel::of_levels(n)
+        .map(|l| format!("{} = {}", l.code(n), l.name_in(n)))
+        .collect();
+    parts.join(", ")
+}
 
 fn header(s: &TriSurface, ascii: bool) -> String {
     let format = if ascii {
@@ -24,10 +35,11 @@ fn header(s: &TriSurface, ascii: bool) -> String {
     };
     format!(
         "ply\nformat {format} 1.0\ncomment tptd isosurface, normals towards increasing f\n\
-         comment vertex label: 0 = alpha, 1 = beta, 2 = box; a face is on a level iff its 3 vertices are\n\
+         comment vertex label: {}; a face is on a level iff its 3 vertices are\n\
          element vertex {}\nproperty double x\nproperty double y\nproperty double z\n\
          property double value\nproperty uchar label\nelement face {}\n\
          property list uchar int vertex_indices\nend_header\n",
+        label_legend(s),
         s.points.len(),
         s.triangles.len()
     )
@@ -60,7 +72,7 @@ fn vertex_labels(s: &TriSurface) -> Vec<u8> {
     let mut l = vec![u8::MAX; s.points.len()];
     for (t, &label) in s.triangles.iter().zip(&s.labels) {
         for &i in t {
-            l[i as usize] = l[i as usize].min(label.code(INTERVAL_LEVELS) as u8);
+            l[i as usize] = l[i as usize].min(label.code(s.level_count()) as u8);
         }
     }
     l
@@ -119,6 +131,7 @@ mod tests {
             values: vec![0.5; 3],
             triangles: vec![[0, 1, 2]],
             labels: vec![BoundaryLabel::BETA],
+            levels: 0,
         };
         let mut b = Vec::new();
         write_ply(&s, &mut b, false).unwrap();

@@ -229,19 +229,11 @@ impl MeshSource for InMemory<'_> {
     fn faces(&self, label: BoundaryLabel, above: bool, f: Visit<(u32, u8)>) -> io::Result<()> {
         let faces = self.all_faces();
         let side = usize::from(above && self.is_interface(label));
-        let mut err = None;
-        let it = self.labelled(label).map(|(b, t)| {
-            let x = faces[b][side];
-            if x == UNSET && err.is_none() {
-                err = Some(no_tet(*t, above));
-            }
-            x
-        });
-        let visited = visit_iter(it, f);
-        match err {
-            Some(e) => Err(e),
-            None => visited,
+        // Refused before anything is visited: a writer never sees a missing face.
+        if let Some((_, t)) = self.labelled(label).find(|(b, _)| faces[*b][side] == UNSET) {
+            return Err(no_tet(*t, above));
         }
+        visit_iter(self.labelled(label).map(|(b, _)| faces[b][side]), f)
     }
 }
 

@@ -346,8 +346,8 @@ pub fn check_applies(g: &Given) -> Result<(), Inapplicable> {
     Ok(())
 }
 
-/// Several levels: not with a bound of one interval, nor (yet) with the quality pass, an
-/// isosurface output or a closed-surface input; region names only with them.
+/// Several levels: not with a bound of one interval, nor (yet) with the quality pass or a
+/// closed-surface input; region names only with them.
 fn check_levels(g: &Given) -> Result<(), Inapplicable> {
     if !g.has(Param::Levels) {
         return match g.has(Param::RegionNames) {
@@ -369,13 +369,6 @@ fn check_levels(g: &Given) -> Result<(), Inapplicable> {
             param: Param::Quality,
             mode: Param::Levels,
             why: "the quality pass improves one interval; mesh the regions without it",
-        });
-    }
-    if let Some(output) = g.output.filter(|o| SurfaceFormat::from_path(o).is_some()) {
-        return Err(Inapplicable::OutputKind {
-            param: Param::Levels,
-            only: "tetrahedral output (.msh, .inp, .vtu)",
-            output: output.to_path_buf(),
         });
     }
     match g.input.filter(|p| is_surface(p)) {

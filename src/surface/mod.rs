@@ -37,7 +37,8 @@ fn selection(label: BoundaryLabel, opts: &SurfaceOptions) -> Option<bool> {
     match label {
         // the mesh boundary points out of {f > alpha}: flip to point towards increasing f
         BoundaryLabel::Level(0) => Some(true),
-        // out of {f < beta}: already towards increasing f
+        // out of {f < beta} (and the interfaces between regions out of the region below):
+        // already towards increasing f
         BoundaryLabel::Level(_) => Some(false),
         BoundaryLabel::Box if opts.caps => Some(opts.beta == f64::INFINITY),
         BoundaryLabel::Box => None,
@@ -45,23 +46,25 @@ fn selection(label: BoundaryLabel, opts: &SurfaceOptions) -> Option<bool> {
 }
 
 /// The level sets of the meshed interval `mesh` (its boundary triangles labelled alpha and
-/// beta, plus the box caps with [`SurfaceOptions::caps`]), oriented with normals pointing
-/// towards increasing f. Triangles are grouped by label in [`BoundaryLabel::ALL`] order, in
+/// beta, plus the box caps with [`SurfaceOptions::caps`]; with several regions every level,
+/// the ones between regions from the interfaces), oriented with normals pointing towards
+/// increasing f. Triangles are grouped by label in tag order (the levels, then the box), in
 /// mesh order within a label; points are numbered by first use, so the output depends only
 /// on `mesh` (never on the thread count).
 pub fn level_surface(mesh: &TetMesh, opts: &SurfaceOptions) -> TriSurface {
     let mut new_id = vec![u32::MAX; mesh.points.len()];
-    let mut out = TriSurface::default();
-    for label in BoundaryLabel::ALL {
+    let mut out = TriSurface {
+        levels: mesh.regions.levels,
+        ..TriSurface::default()
+    };
+    let r = &mesh.regions;
+    for label in BoundaryLabel::of_levels(mesh.level_count()) {
         let Some(flip) = selection(label, opts) else {
             continue;
         };
-        for (t, _) in mesh
-            .boundary
-            .iter()
-            .zip(&mesh.boundary_labels)
-            .filter(|(_, &l)| l == label)
-        {
+        let outer = mesh.boundary.iter().zip(&mesh.boundary_labels);
+        let inner = r.interfaces.iter().zip(&r.interface_labels);
+        for (t, _) in outer.chain(inner).filter(|(_, &l)| l == label) {
             let mut ids = t.map(|p| {
                 let slot = &mut new_id[p as usize];
                 if *slot == u32::MAX {

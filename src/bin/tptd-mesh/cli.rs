@@ -35,8 +35,9 @@ pub(crate) struct Cli {
     pub(crate) input: Option<PathBuf>,
 
     /// Output; its extension gives the format: .msh (Gmsh), .inp (Abaqus/CalculiX), .vtu (VTK)
-    /// for tetrahedra; .obj, .ply, .stl for the level sets f = alpha and f = beta (normals
-    /// towards increasing f) [default with --demo: tptd-demo.vtu]
+    /// for tetrahedra; .obj, .ply, .stl for the level sets f = alpha and f = beta (with
+    /// --levels every level; normals towards increasing f) [default with --demo:
+    /// tptd-demo.vtu]
     #[arg(short, long, value_name = "OUT", required_unless_present_any = ["demo", "critical", "inspect"])]
     pub(crate) output: Option<PathBuf>,
 
