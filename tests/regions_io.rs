@@ -13,8 +13,6 @@ use std::path::Path;
 use std::process::Command;
 
 use common::external::{python, require_ccx, require_gmsh, require_python_with, run, run_ccx_job};
-use tptd::io::msh::MshVersion;
-use tptd::io::vtu::VtuEncoding;
 use tptd::io::{
     read_mesh, spill_for_levels, write_mesh, write_spilled_pending, MeshFile, WriteOptions,
 };
@@ -39,20 +37,6 @@ fn sphere_distance(n: usize) -> ScalarGrid {
 /// levels 2.7 and 5.2, the box around the outer one.
 const LEVELS: [f64; 4] = [f64::NEG_INFINITY, 2.7, 5.2, f64::INFINITY];
 
-/// Every format and encoding, as (file name, options).
-fn outputs() -> Vec<(&'static str, WriteOptions)> {
-    let w = WriteOptions::default;
-    vec![
-        ("m41.msh", w()),
-        ("m22.msh", w().with_msh_version(MshVersion::V22)),
-        ("m41b.msh", w().with_msh_version(MshVersion::V41Binary)),
-        ("m.inp", w()),
-        ("b64.vtu", w()),
-        ("zlib.vtu", w().with_vtu_encoding(VtuEncoding::Zlib)),
-        ("raw.vtu", w().with_vtu_encoding(VtuEncoding::Raw)),
-    ]
-}
-
 fn mesh_of(grid: &ScalarGrid, levels: &[f64]) -> TetMesh {
     let mesh = mesh_interval(grid, &MeshOptions::default().levels(levels))
         .unwrap()
@@ -76,7 +60,7 @@ fn streamed(grid: &ScalarGrid, opts: &MeshOptions, n: usize, path: &Path, w: &Wr
 fn streamed_equals_in_memory(grid: &ScalarGrid, levels: &[f64]) {
     let dir = tempfile::tempdir().unwrap();
     let mesh = mesh_of(grid, levels);
-    for (name, w) in outputs() {
+    for (name, w) in common::output::mesh_outputs() {
         let mem = dir.path().join(format!("mem-{name}"));
         write_mesh(&mem, &mesh, &w).unwrap();
         let want = fs::read(&mem).unwrap();
@@ -93,7 +77,11 @@ fn streamed_equals_in_memory(grid: &ScalarGrid, levels: &[f64]) {
         }
     }
     let left: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
-    assert_eq!(left.len(), 2 * outputs().len(), "spill files left behind");
+    assert_eq!(
+        left.len(),
+        2 * common::output::mesh_outputs().len(),
+        "spill files left behind"
+    );
 }
 
 #[test]
@@ -117,7 +105,7 @@ fn interfaces_between_slabs_have_their_faces_above() {
 /// The written files and the mesh they hold, in `dir`.
 fn write_all(dir: &Path) -> TetMesh {
     let mesh = mesh_of(&sphere_distance(16), &LEVELS);
-    for (name, w) in outputs() {
+    for (name, w) in common::output::mesh_outputs() {
         write_mesh(&dir.join(name), &mesh, &w).unwrap();
     }
     mesh

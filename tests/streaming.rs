@@ -11,8 +11,6 @@ use std::path::Path;
 
 use common::Rng;
 use tptd::facts::{FactsSink, MeshFacts, Tee};
-use tptd::io::msh::MshVersion;
-use tptd::io::vtu::VtuEncoding;
 use tptd::io::{spill_for, write_mesh, write_spilled_pending, WriteOptions};
 use tptd::{
     mesh_interval, mesh_interval_streamed, BoundaryLabel, MeshOptions, Method, ScalarGrid, TetMesh,
@@ -43,20 +41,6 @@ fn field(dims: [usize; 3], seed: u64, left_handed: bool) -> ScalarGrid {
         dir[2][2] = -1.0;
     }
     ScalarGrid::with_geometry(dims, [0.5, 0.7, 0.9], [1.0, -2.0, 3.0], dir, v).unwrap()
-}
-
-/// Every format and encoding the writers have, as (file name, options).
-fn outputs() -> Vec<(&'static str, WriteOptions)> {
-    let w = WriteOptions::default;
-    vec![
-        ("m41.msh", w()),
-        ("m22.msh", w().with_msh_version(MshVersion::V22)),
-        ("m41b.msh", w().with_msh_version(MshVersion::V41Binary)),
-        ("m.inp", w()),
-        ("b64.vtu", w()),
-        ("zlib.vtu", w().with_vtu_encoding(VtuEncoding::Zlib)),
-        ("raw.vtu", w().with_vtu_encoding(VtuEncoding::Raw)),
-    ]
 }
 
 /// Streams `grid` with `opts` into `dir/name` and returns the bytes and the facts.
@@ -99,7 +83,7 @@ fn streamed_output_equals_the_in_memory_output() {
             "every label occurs: {labels:?}"
         );
         let expect = MeshFacts::of(&mesh, true, &[]);
-        for (name, w) in outputs() {
+        for (name, w) in common::output::mesh_outputs() {
             let want = in_memory(&mesh, dir.path(), name, &w);
             for (threads, slabs) in [(1, 1), (2, 3), (2, 0)] {
                 let opts = MeshOptions {

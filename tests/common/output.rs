@@ -38,3 +38,19 @@ pub fn assert_ok(o: &Output) {
 pub fn read_json(path: &Path) -> Value {
     serde_json::from_str(&fs::read_to_string(path).unwrap()).unwrap()
 }
+
+/// Every mesh format and encoding the writers have, as (file name, options).
+pub fn mesh_outputs() -> Vec<(&'static str, tptd::io::WriteOptions)> {
+    use tptd::io::msh::MshVersion;
+    use tptd::io::vtu::VtuEncoding;
+    let w = tptd::io::WriteOptions::default;
+    vec![
+        ("m41.msh", w()),
+        ("m22.msh", w().with_msh_version(MshVersion::V22)),
+        ("m41b.msh", w().with_msh_version(MshVersion::V41Binary)),
+        ("m.inp", w()),
+        ("b64.vtu", w()),
+        ("zlib.vtu", w().with_vtu_encoding(VtuEncoding::Zlib)),
+        ("raw.vtu", w().with_vtu_encoding(VtuEncoding::Raw)),
+    ]
+}
