@@ -101,6 +101,13 @@ impl BoundaryLabel {
         }
     }
 
+    /// Whether the label names a level between two regions in a run of `levels` levels (not
+    /// the first or the last): its triangles are interfaces, not boundary.
+    #[inline]
+    pub fn is_interface(self, levels: usize) -> bool {
+        matches!(self.level(), Some(i) if i != 0 && i + 1 < levels)
+    }
+
     /// Bit of the label in a per-vertex label set of a one-interval mesh (the quality pass's):
     /// 1 alpha, 2 beta, 4 box. Levels between regions have none (0).
     #[inline]
@@ -373,19 +380,18 @@ impl MeshSink for Gather {
         }
         let r = &mut m.regions;
         r.tets.extend_from_slice(&c.regions);
-        let last = r.levels - 1;
         for ((&t, &l), &region) in c
             .boundary
             .iter()
             .zip(&c.boundary_labels)
             .zip(&c.boundary_regions)
         {
-            match l.level() {
-                Some(i) if i != 0 && i != last => {
+            match l.is_interface(r.levels) {
+                true => {
                     r.interfaces.push(t);
                     r.interface_labels.push(l);
                 }
-                _ => {
+                false => {
                     m.boundary.push(t);
                     m.boundary_labels.push(l);
                     r.boundary.push(region);

@@ -138,7 +138,7 @@ impl Components {
         self.grow(c.first_point + c.points.len());
         c.tets.iter().for_each(|t| self.add_tet(t));
         for (t, l) in c.boundary.iter().zip(&c.boundary_labels) {
-            if !is_interface(*l, levels) {
+            if !l.is_interface(levels) {
                 self.add_triangle(t);
             }
         }
@@ -154,12 +154,6 @@ impl Components {
         let vb = self.on_boundary.iter().filter(|&&x| x).count() as i64;
         crate::topology::betti_from_counts(b0, surfaces, vb, boundary_triangles as i64)
     }
-}
-
-/// Whether a triangle labelled `l` in a run of `levels` levels is an interface between two
-/// regions (on a level other than the first and the last).
-fn is_interface(l: BoundaryLabel, levels: usize) -> bool {
-    matches!(l.level(), Some(i) if i != 0 && i + 1 < levels)
 }
 
 /// A [`MeshSink`] gathering [`MeshFacts`] while the mesh streams (it keeps the points of the
@@ -225,7 +219,7 @@ impl FactsSink {
         let dihedral = (self.analyse && self.tets > 0).then(|| cosines_to_degrees(self.cos_range));
         let levels = self.levels.len().max(INTERVAL_LEVELS);
         let nb = (BoundaryLabel::ALL.iter())
-            .filter(|&&l| !is_interface(l, levels))
+            .filter(|&&l| !l.is_interface(levels))
             .map(|l| self.boundary_triangles[l.index()])
             .sum();
         MeshFacts {

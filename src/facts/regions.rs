@@ -95,7 +95,7 @@ impl RegionsAcc {
     /// interface also the region above.
     fn sides(&self, l: BoundaryLabel, r: u8) -> impl Iterator<Item = usize> {
         let r = usize::from(r);
-        let interface = matches!(l.level(), Some(i) if i != 0 && i + 1 != self.levels);
+        let interface = l.is_interface(self.levels);
         std::iter::once(r).chain(interface.then_some(r + 1))
     }
 

@@ -100,7 +100,7 @@ pub(crate) fn regions_of(levels: usize) -> usize {
 
 /// Whether `label` is a level between two regions in a run of `levels` levels.
 pub(crate) fn is_interface(label: BoundaryLabel, levels: usize) -> bool {
-    levels > INTERVAL_LEVELS && matches!(label.level(), Some(i) if i > 0 && i + 1 < levels)
+    label.is_interface(levels)
 }
 
 /// Slices visited at a time when a list has to be filtered or built.
