@@ -239,6 +239,14 @@ impl Levels {
         v > self.values[0] && v < self.values[self.len() - 1]
     }
 
+    /// The region whose interval holds `v`: the number of levels between regions (not the
+    /// first or the last) below it; a value equal to one counts as below it. Always 0 for
+    /// one interval.
+    #[inline]
+    pub fn region_of(&self, v: f64) -> usize {
+        (1..self.len() - 1).filter(|&i| v > self.values[i]).count()
+    }
+
     /// Value of a (not snapped) vertex for cut placement: a value tied with a level moved to
     /// [`Levels::tie`].
     #[inline]
@@ -425,6 +433,14 @@ impl Bounds {
     #[inline]
     pub fn above(&self, i: usize, v: f64) -> bool {
         below(self.values[i], v, !self.ties_below(i))
+    }
+
+    /// The region whose interval holds `v`: the number of levels between regions (not the
+    /// first or the last) below it; a value equal to one counts as below it. Always 0 for
+    /// one interval.
+    #[inline]
+    pub fn region_of(&self, v: f64) -> usize {
+        (1..self.len() - 1).filter(|&i| v > self.values[i]).count()
     }
 
     /// Value of a (not snapped) vertex for cut placement ([`Levels::effective`]).

@@ -27,6 +27,16 @@ pub const NUM_LABELS: usize = LABEL_LEVELS + 1;
 /// The levels of one interval (alpha and beta): what a mesh without regions has.
 pub const INTERVAL_LEVELS: usize = 2;
 
+/// A set of boundary labels ([`BoundaryLabel::bit`]): bit `i` for level `i`, [`BOX_BIT`] for
+/// the box.
+pub type LabelBits = u32;
+
+/// The box's bit in a [`LabelBits`] (above every level's).
+pub const BOX_BIT: LabelBits = 1 << LABEL_LEVELS;
+
+/// The levels' bits in a [`LabelBits`].
+pub const LEVEL_BITS: LabelBits = BOX_BIT - 1;
+
 impl BoundaryLabel {
     /// The level set f = alpha (level 0, the lower bound of an interval).
     pub const ALPHA: BoundaryLabel = BoundaryLabel::Level(0);
@@ -108,14 +118,13 @@ impl BoundaryLabel {
         matches!(self.level(), Some(i) if i != 0 && i + 1 < levels)
     }
 
-    /// Bit of the label in a per-vertex label set of a one-interval mesh (the quality pass's):
-    /// 1 alpha, 2 beta, 4 box. Levels between regions have none (0).
+    /// Bit of the label in a per-vertex label set (the quality pass's): `1 << i` for level
+    /// `i`, [`BOX_BIT`] for the box.
     #[inline]
-    pub const fn bit(self) -> u8 {
+    pub const fn bit(self) -> LabelBits {
         match self {
-            BoundaryLabel::Level(i) if (i as usize) < INTERVAL_LEVELS => 1 << i,
-            BoundaryLabel::Level(_) => 0,
-            BoundaryLabel::Box => 1 << INTERVAL_LEVELS,
+            BoundaryLabel::Level(i) => 1 << i,
+            BoundaryLabel::Box => BOX_BIT,
         }
     }
 
@@ -234,8 +243,8 @@ impl TetMesh {
 
     /// Per point: bit `1 << label` for each [`BoundaryLabel`] of the boundary triangles around
     /// it (0 for interior points).
-    pub fn vertex_label_bits(&self) -> Vec<u8> {
-        let mut bits = vec![0u8; self.points.len()];
+    pub fn vertex_label_bits(&self) -> Vec<LabelBits> {
+        let mut bits = vec![0; self.points.len()];
         for (tri, &label) in self.boundary.iter().zip(&self.boundary_labels) {
             for &v in tri {
                 bits[v as usize] |= label.bit();

@@ -9,9 +9,9 @@
 
 use smallvec::SmallVec;
 
-use super::embed;
 use super::region::{face_key, BoundaryFace, LocalMesh};
 use super::Ctx;
+use super::{embed, interfaces};
 
 /// The boundary faces at a vertex ([`boundary_faces_at`]; inline up to 16).
 pub type VertexFaces = SmallVec<[BoundaryFace; 16]>;
@@ -229,7 +229,8 @@ fn merge(lm: &mut LocalMesh, a: u32, b: u32, known: &[(u32, f64)], faces: Option
     // Only a level vertex's star changes the domain: the tets left still fill an interior
     // vertex's star.
     let level = lm.con[a as usize].level.is_some();
-    let mut added = if level { -lm.star_volume(a) } else { 0.0 };
+    let counted = lm.counted_region(a);
+    let mut added = if level { -lm.counted_volume(a) } else { 0.0 };
     let shared = lm.edge_tets(a, b);
     let faces = faces.unwrap_or_else(|| boundary_faces_at(lm, a));
     for f in &faces {
@@ -257,7 +258,7 @@ fn merge(lm: &mut LocalMesh, a: u32, b: u32, known: &[(u32, f64)], faces: Option
             Some(&(_, q)) => lm.set_quality(t, q),
             None => lm.update_quality(t),
         }
-        if level {
+        if level && counted.is_none_or(|r| lm.region[t as usize] == r) {
             added += lm.volume_of(t);
         }
     }
@@ -399,6 +400,7 @@ fn link_condition_gathering(
         }
     }
     boundary_link_condition(lm, a, b, &ring, faces)
+        && (!lm.con[a as usize].interface || interfaces::keeps_regions(lm, a, b))
 }
 
 /// Whether a corner of the tets around `b` (other than `a` and `b`) is one of the tets

@@ -1,14 +1,12 @@
 //! Where a vertex may move: the level set it must stay on and the grid-box planes it must
 //! stay in.
 
-/// Which level set a boundary vertex lies on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Level {
-    /// `f = alpha`.
-    Alpha,
-    /// `f = beta`.
-    Beta,
-}
+pub use crate::mesh::LabelBits;
+use crate::mesh::{BOX_BIT, LEVEL_BITS};
+
+/// Which level set a boundary vertex lies on: the level's index in the run (for one
+/// interval, 0 alpha and 1 beta).
+pub type Level = u8;
 
 /// The motion a vertex is allowed.
 ///
@@ -20,21 +18,40 @@ pub struct Constraint {
     pub level: Option<Level>,
     /// Grid-box planes the vertex lies on.
     pub box_planes: u8,
-    /// The vertex may not move at all (it lies on both levels, or on a level and a box edge,
+    /// The vertex may not move at all (it lies on two levels, or on a level and a box edge,
     /// or at a box corner, or its class could not be established).
     pub pinned: bool,
+    /// Its level lies between two regions: a collapse from it must keep the topology of the
+    /// regions on both sides too ([`crate::improve::interfaces`]).
+    pub interface: bool,
+    /// The region a vertex on no level lies in, which it must stay inside (0 for one
+    /// interval).
+    pub region: u8,
 }
 
 /// Index-space distance under which a vertex counts as lying on a grid-box plane.
 pub const BOX_TOL: f64 = 1e-7;
 
-/// Bits of the boundary labels of the faces around a vertex (`1 << label as u8`).
-pub type LabelBits = u8;
+/// The bits of the levels between regions in a run of `levels` levels (none for one
+/// interval).
+pub fn interface_bits(levels: usize) -> LabelBits {
+    match levels {
+        0..=2 => 0,
+        n => ((1 << (n - 1)) - 1) & !1,
+    }
+}
 
 impl Constraint {
     /// The constraint of a vertex at index point `u` (snapped exactly onto the box planes it
-    /// lies on) whose boundary faces carry the labels `labels`, in a grid of `dims` vertices.
-    pub fn classify(labels: LabelBits, u: &mut [f64; 3], dims: [usize; 3]) -> Constraint {
+    /// lies on) whose boundary faces (interfaces included) carry the labels `labels`, in a
+    /// grid of `dims` vertices; `interfaces` are the bits of the levels between regions
+    /// ([`interface_bits`]).
+    pub fn classify(
+        labels: LabelBits,
+        interfaces: LabelBits,
+        u: &mut [f64; 3],
+        dims: [usize; 3],
+    ) -> Constraint {
         let mut c = Constraint::default();
         for a in 0..3 {
             let hi = (dims[a] - 1) as f64;
@@ -46,16 +63,17 @@ impl Constraint {
                 u[a] = hi;
             }
         }
-        c.level = match (labels & 1 != 0, labels & 2 != 0) {
-            (true, false) => Some(Level::Alpha),
-            (false, true) => Some(Level::Beta),
-            (true, true) => {
+        let levels = labels & LEVEL_BITS;
+        c.level = match levels.count_ones() {
+            0 => None,
+            1 => Some(levels.trailing_zeros() as Level),
+            _ => {
                 c.pinned = true;
                 None
             }
-            (false, false) => None,
         };
-        let on_box = labels & 4 != 0;
+        c.interface = levels & interfaces != 0;
+        let on_box = labels & BOX_BIT != 0;
         if (on_box && c.box_planes == 0) || (c.level.is_some() && c.freedom() == 0) {
             c.pinned = true;
         }
@@ -104,7 +122,7 @@ mod tests {
     fn freedom_and_merging() {
         let free = Constraint::default();
         let on_alpha = Constraint {
-            level: Some(Level::Alpha),
+            level: Some(0),
             ..free
         };
         let on_xlow = Constraint {
@@ -112,9 +130,11 @@ mod tests {
             ..free
         };
         let curve = Constraint {
-            level: Some(Level::Alpha),
+            level: Some(0),
             box_planes: 0b01,
             pinned: false,
+            interface: false,
+            region: 0,
         };
         assert_eq!((free.freedom(), on_alpha.freedom()), (3, 2));
         assert_eq!((on_xlow.free_axes(), curve.freedom()), (0b110, 1));
@@ -122,7 +142,7 @@ mod tests {
         assert!(on_alpha.may_merge_into(&curve) && !curve.may_merge_into(&on_alpha));
         assert!(on_xlow.may_merge_into(&curve) && !on_xlow.may_merge_into(&on_alpha));
         let beta = Constraint {
-            level: Some(Level::Beta),
+            level: Some(1),
             ..free
         };
         assert!(!on_alpha.may_merge_into(&beta));

@@ -46,7 +46,7 @@ pub struct RoundFlags<'a> {
     pub pinned: Option<&'a [bool]>,
     /// On a copy: per point, what the whole mesh said of it when the copy was cut
     /// ([`thin::rim_marks`](super::thin::rim_marks); the rim's faces and tets outside the copy are missing from it).
-    pub rim_marks: Option<&'a [u8]>,
+    pub rim_marks: Option<&'a [crate::mesh::LabelBits]>,
     /// A region that ends with a few tets below the target is improved again from its start
     /// with other smoothing ([`RoundFlags::steepest`], [`RoundFlags::centroid`]), and the best end is kept
     /// ([`schedule::improve_local`](super::schedule::improve_local)). Set for the last round of a single pass and of the
@@ -75,6 +75,14 @@ impl Ctx<'_> {
     pub fn inside_interval(&self, u: [f64; 3]) -> bool {
         let f = self.field.value(u);
         self.levels.inside(f)
+    }
+
+    /// Whether index point `u` lies strictly inside region `r`'s interval (where its interior
+    /// vertices must stay; for one interval, [`Ctx::inside_interval`]).
+    pub fn inside_region(&self, u: [f64; 3], r: u8) -> bool {
+        let f = self.field.value(u);
+        let r = r as usize;
+        f > self.levels[r] && f < self.levels[r + 1]
     }
 }
 

@@ -15,7 +15,7 @@
 use smallvec::{smallvec, SmallVec};
 
 use super::flip::even_completion;
-use super::region::LocalMesh;
+use super::region::{face_key, LocalMesh};
 use super::Ctx;
 
 /// Largest ring tried (Stellar's limit): the triangulations of a ring of `k` vertices have
@@ -57,11 +57,13 @@ pub fn try_remove_edge(
     if diagonal_is_edge(lm, &ring) {
         return false;
     }
+    // No face around the edge is an interface's ([`ring_around`]): one region.
+    let region = lm.region[around[0] as usize];
     for &u in &around {
         lm.kill_tet(u);
     }
     for tet in tris.into_iter().flat_map(|tri| cone(a, b, &ring, tri)) {
-        lm.add_tet(tet);
+        lm.add_tet(tet, region);
     }
     true
 }
@@ -79,7 +81,8 @@ fn cone<T: Copy>(a: T, b: T, ring: &[T], [i, j, l]: [usize; 3]) -> [[T; 4]; 2] {
 /// The ring of edge `(a, b)` (whose tets are `edge_tets`) around from tet `t`, ordered so
 /// that `[a, b, r_i, r_{i+1}]` is positive, and the tets around the edge
 /// (`[a, b, r_i, r_{i+1}]` at `i`); `None` when the ring is open (the edge is on the boundary
-/// or leaves the region) or longer than [`MAX_RING`].
+/// or leaves the region), the edge is on an interface between regions, or the ring is longer
+/// than [`MAX_RING`].
 fn ring_around(
     lm: &LocalMesh,
     (t, a, b): (u32, u32, u32),
@@ -110,7 +113,17 @@ fn ring_around(
     // Closed: as many ring vertices as tets, and the last tet closes onto the first vertex.
     let closes =
         ring.len() == around.len() && lm.tets[around[around.len() - 1] as usize].contains(&ring[0]);
-    closes.then_some((ring, around))
+    (closes && !on_interface(lm, [a, b], &ring)).then_some((ring, around))
+}
+
+/// Whether the closed ring's edge `(a, b)` is an edge of an interface between regions: one
+/// of the faces around it is a face of the boundary's map.
+fn on_interface(lm: &LocalMesh, [a, b]: [u32; 2], ring: &[u32]) -> bool {
+    lm.on_boundary(a)
+        && lm.on_boundary(b)
+        && ring
+            .iter()
+            .any(|&w| lm.on_boundary(w) && lm.faces.contains_key(&face_key([a, b, w])))
 }
 
 /// Whether some diagonal of the polygon `ring` is an edge of the region.

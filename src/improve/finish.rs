@@ -6,13 +6,16 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::constraint::interface_bits;
 use super::ctx::Ctx;
 use super::mark::grow;
 use super::pass::PassState;
 use super::region::{self, LocalMesh};
 use super::report::lap;
+use super::volumes::Volumes;
 use super::{restore, split, verify, ImproveReport, QualityOptions};
-use crate::mesh::TetMesh;
+use crate::levels::MAX_LEVELS;
+use crate::mesh::{TetMesh, LEVEL_BITS};
 
 /// The last stage after the rounds (of each target stage), region by region: splits the
 /// boundary edges whose chord sags from the level set ([`split::split_sagging_edges`]), then,
@@ -36,7 +39,11 @@ pub(super) fn finish_stage(
         vec![false; mesh.points.len()]
     };
     let owed = if opts.restore_volume {
-        restore::largest_drift(drift)
+        let labels = mesh.vertex_label_bits();
+        restore::largest_drift_by_group(drift, |v| {
+            let on = labels[v] & LEVEL_BITS;
+            (on.count_ones() == 1).then(|| restore::group_of(ctx, on.trailing_zeros() as u8))
+        })
     } else {
         Vec::new()
     };
@@ -98,7 +105,7 @@ pub(super) fn restore_residual(
     mesh: &mut TetMesh,
     ctx: &Ctx,
     opts: &QualityOptions,
-    (plain, last): (f64, bool),
+    (plain, last): (&Volumes, bool),
     state: &mut PassState,
     report: &mut ImproveReport,
 ) {
@@ -109,8 +116,8 @@ pub(super) fn restore_residual(
     };
     for &rung in rungs {
         let split_sag = rung * opts.split_sag;
-        let residual = mesh.volume() - plain;
-        if residual.abs() <= RESIDUAL * plain.abs() || ctx.out_of_time() {
+        let residual = mesh.volume() - plain.whole;
+        if plain.off(mesh) <= RESIDUAL || ctx.out_of_time() {
             return;
         }
         spread_residual(mesh, residual, &mut state.drift);
@@ -126,11 +133,13 @@ pub(super) fn restore_residual(
     }
 }
 
-/// Books `residual` evenly on every level vertex of `mesh` (`drift`, per point; left as it
-/// is when there is none).
+/// Books `residual` evenly on every vertex of `mesh` on the first or the last level (`drift`,
+/// per point; left as it is when there is none): moves on the levels between regions do not
+/// change the volume of the whole.
 fn spread_residual(mesh: &TetMesh, residual: f64, drift: &mut [f64]) {
     let labels = mesh.vertex_label_bits();
-    let level = |v: usize| labels[v] & 3 != 0;
+    let outer = LEVEL_BITS & !interface_bits(mesh.level_count());
+    let level = |v: usize| labels[v] & outer != 0;
     let n = (0..mesh.points.len()).filter(|&v| level(v)).count();
     if n == 0 {
         return;
@@ -151,25 +160,36 @@ fn finish_region(
     let (splits, added) = if opts.split_sag.is_finite() {
         split::split_sagging_edges(lm, ctx, opts.split_sag, Some(sagging))
     } else {
-        (0, 0.0)
+        (0, [0.0; MAX_LEVELS])
     };
     if !opts.restore_volume {
         return (splits, 0);
     }
-    // Points added by splits (here, or in the first phase) carry no drift.
-    let drifted: f64 = (0..lm.u.len())
-        .filter(|&v| lm.is_free(v as u32))
-        .filter_map(|v| drift.get(lm.global[v] as usize))
-        .sum();
-    // Volume the splits added pays back volume the region lost, and volume they took pays
-    // back volume it gained; beyond that (or the other way) they are a correction towards the
-    // level set, which is kept.
-    let mut owed = if drifted * added >= 0.0 {
-        drifted
-    } else if drifted < 0.0 {
-        (drifted + added).min(0.0)
-    } else {
-        (drifted + added).max(0.0)
-    };
-    (splits, restore::restore_volume(lm, ctx, &mut owed))
+    // Points added by splits (here, or in the first phase) carry no drift. Each volume group
+    // gives back its own ([`restore::group_of`]; one for one interval).
+    let mut drifted = [0.0; MAX_LEVELS];
+    for v in (0..lm.u.len()).filter(|&v| lm.is_free(v as u32)) {
+        if let Some(d) = drift.get(lm.global[v] as usize) {
+            let group = lm.con[v].level.map_or(0, |l| restore::group_of(ctx, l));
+            drifted[group] += d;
+        }
+    }
+    let mut moves = 0;
+    for (group, (&drifted, &added)) in drifted.iter().zip(&added).enumerate() {
+        if group > 0 && drifted == 0.0 {
+            continue;
+        }
+        // Volume the splits added pays back volume the region lost, and volume they took
+        // pays back volume it gained; beyond that (or the other way) they are a correction
+        // towards the level set, which is kept.
+        let mut owed = if drifted * added >= 0.0 {
+            drifted
+        } else if drifted < 0.0 {
+            (drifted + added).min(0.0)
+        } else {
+            (drifted + added).max(0.0)
+        };
+        moves += restore::restore_volume(lm, ctx, &mut owed, group);
+    }
+    (splits, moves)
 }

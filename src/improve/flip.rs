@@ -78,8 +78,9 @@ pub fn try_flip32(
             m += 1;
         }
     }
-    if m != 3 {
-        return false; // an open ring: the edge is on the boundary
+    if m != 3 || ring.iter().any(|&w| is_boundary_face(lm, [p, q, w])) {
+        // An open ring: the edge is on the boundary; or it is an edge of an interface.
+        return false;
     }
     // Orient from tet t: [p, b, c, q] even permutation of it; d is the third ring vertex.
     let (b, c) = even_completion(lm.tets[t as usize], p, q);
@@ -120,11 +121,13 @@ fn replace_if_better(
     if !legal(lm) {
         return false;
     }
+    // No face between two regions is removed, so the old tets are of one region.
+    let region = lm.region[old[0] as usize];
     for &t in old {
         lm.kill_tet(t);
     }
     for (&t, &q) in new.iter().zip(&q_new) {
-        lm.push_tet(t, q);
+        lm.push_tet(t, q, region);
     }
     true
 }

@@ -44,7 +44,7 @@ use crate::field::GUARD_DISTANCE;
 use crate::geom::{distance, dot, norm};
 use crate::grid::{corner_offset, ScalarGrid};
 use crate::levels::Levels;
-use crate::mesh::{BoundaryLabel, TetMesh};
+use crate::mesh::{BoundaryLabel, LabelBits, TetMesh};
 use crate::quality::{cosine_extremes, tet_dihedral_range};
 use crate::trilinear::{body_saddles, coefficients, face_point, face_saddle, hessian};
 
@@ -80,8 +80,12 @@ struct Classifier<'a> {
     /// The sine of the pass's smallest target angle ([`QualityOptions::min_angle`]).
     target_sine: f64,
     tol: f64,
-    /// Per point: bit `1 << label` of the boundary triangles around it.
-    labels: Vec<u8>,
+    /// Per point: the labels of the boundary triangles (and interfaces) around it
+    /// ([`TetMesh::vertex_label_bits`]).
+    labels: &'a [LabelBits],
+    /// The index in the run of `levels`' first level (the tet's region's; 0 for one
+    /// interval).
+    first: u32,
 }
 
 /// Classifies every tet of `mesh` (a mesh of `{alpha <= f <= beta}` of `grid`, in the grid's
@@ -94,32 +98,42 @@ pub fn classify_forced(
     beta: f64,
     opts: &QualityOptions,
 ) -> ForcedReport {
-    classify_forced_mapped(mesh, grid, alpha, beta, opts, None)
+    classify_forced_mapped(mesh, grid, &Levels::interval(alpha, beta), opts, None)
 }
 
 /// [`classify_forced`] for a mesh made in a curvilinear grid's parameter space (`grid` its
 /// values), whose tets are measured after `map` (the grid's geometry map; `None`: as they
 /// are): a tet below the floor after `map` but not before it is [`ForcedReason::GridMapping`];
 /// the others get their reasons in parameter space. Positions are given after `map`.
+///
+/// With several regions (`levels` the run's), each tet is classified in its region's
+/// interval.
 pub fn classify_forced_mapped(
     mesh: &TetMesh,
     grid: &ScalarGrid,
-    alpha: f64,
-    beta: f64,
+    levels: &Levels,
     opts: &QualityOptions,
     map: Option<PointMap>,
 ) -> ForcedReport {
     let floor = opts.forced_floor;
     let (lo, hi) = grid.value_range();
-    let c = Classifier {
-        mesh,
-        field: Field::new(grid),
-        levels: Levels::interval(alpha, beta),
-        range: (hi - lo).max(f64::MIN_POSITIVE),
-        floor: floor.to_radians(),
-        target_sine: opts.min_angle.to_radians().sin(),
-        tol: opts.forced_critical_tol,
-        labels: mesh.vertex_label_bits(),
+    let labels = mesh.vertex_label_bits();
+    let classifiers: Vec<Classifier> = (0..levels.regions())
+        .map(|r| Classifier {
+            mesh,
+            field: Field::new(grid),
+            levels: Levels::interval(levels[r], levels[r + 1]),
+            range: (hi - lo).max(f64::MIN_POSITIVE),
+            floor: floor.to_radians(),
+            target_sine: opts.min_angle.to_radians().sin(),
+            tol: opts.forced_critical_tol,
+            labels: &labels,
+            first: r as u32,
+        })
+        .collect();
+    let of = |t: usize| {
+        let r = mesh.regions.tets.get(t).copied().unwrap_or(0);
+        &classifiers[r as usize]
     };
     // A smallest angle whose cosine is below this is not below the floor, whatever `acos`
     // rounds to.
@@ -142,7 +156,7 @@ pub fn classify_forced_mapped(
             let reason = if flattened {
                 ForcedReason::GridMapping
             } else {
-                c.reason(t)
+                of(t).reason(t)
             };
             Some((lo, hi, t, reason))
         })
@@ -162,7 +176,7 @@ pub fn classify_forced_mapped(
     let elements = below
         .into_par_iter()
         .map(|(lo, hi, t, reason)| {
-            let mut e = c.details(t, lo, hi, reason);
+            let mut e = of(t).details(t, lo, hi, reason);
             if let Some(m) = map {
                 let q = tet_points(mesh, t).map(m);
                 e.point = [0, 1, 2].map(|a| q.iter().map(|x| x[a]).sum::<f64>() / 4.0);
@@ -305,7 +319,9 @@ impl Classifier<'_> {
             self.shortest_chord(centroid, g, reach)
                 .unwrap_or(f64::INFINITY)
         };
-        let on = |i: usize, l: BoundaryLabel| self.labels[tet[i] as usize] & l.bit() != 0;
+        let on = |i: usize, l: BoundaryLabel| {
+            (self.labels[tet[i] as usize] >> self.first) & l.bit() != 0
+        };
         for i in (0..4).filter(|&i| on(i, BoundaryLabel::Level(0))) {
             for j in (0..4).filter(|&j| j != i && on(j, BoundaryLabel::Level(1))) {
                 thinnest = thinnest.min(distance(index[i], index[j]));

@@ -26,6 +26,7 @@ mod finish;
 pub(crate) mod fixtures;
 pub(crate) mod flip;
 pub mod forced;
+pub(crate) mod interfaces;
 mod mark;
 mod options;
 pub mod outcome;
@@ -44,6 +45,7 @@ pub mod stages;
 pub(crate) mod submesh;
 mod thin;
 mod verify;
+mod volumes;
 pub(crate) mod warped;
 
 pub use ctx::{Ctx, RoundFlags};
@@ -93,5 +95,18 @@ pub fn improve_meshed(
     beta: f64,
     opts: &QualityOptions,
 ) -> ImproveReport {
-    outcome::improve_meshed_mapped(out, grid, alpha, beta, opts, None)
+    let levels = Levels::interval(alpha, beta);
+    outcome::improve_meshed_mapped(out, grid, &levels, opts, None)
+}
+
+/// [`improve`] for a mesh of several regions made by [`crate::mesh_interval`] with levels
+/// (`levels` the run's, `mesh.regions` set; one interval works too): every interface stays on
+/// its level set and every tet in its region, and each region keeps its topology.
+pub fn improve_levels(
+    mesh: &mut TetMesh,
+    grid: &ScalarGrid,
+    levels: &Levels,
+    opts: &QualityOptions,
+) -> ImproveReport {
+    outcome::improve_keeping_better(mesh, grid, levels, opts, &[], None)
 }

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 pub use crate::pass_report::{KeptBetter, TargetCounts};
 
+use super::interfaces;
 use super::pass::{improve_keeping_volume, runs_again_for_volume};
 use super::{ImproveReport, QualityOptions, StageSeconds};
 use crate::extract::MeshOutput;
@@ -96,23 +97,18 @@ pub fn keep_better(
 /// curvilinear grid's geometry map, [`crate::curvilinear::map_point`]; `None`: as it is):
 /// when the time budget runs out, and always with a map, the better of the mesh before the
 /// pass and the one it stopped at is kept by their quality through `map` ([`keep_better`]).
+///
+/// `levels` are the run's: with several regions the pass keeps every interface on its level
+/// and every tet in its region ([`super::interfaces`]).
 pub fn improve_meshed_mapped(
     out: &mut MeshOutput,
     grid: &ScalarGrid,
-    alpha: f64,
-    beta: f64,
+    levels: &Levels,
     opts: &QualityOptions,
     map: Option<PointMap>,
 ) -> ImproveReport {
     let (mesh, snapped) = (&mut out.mesh, &out.snapped);
-    improve_keeping_better(
-        mesh,
-        grid,
-        &Levels::interval(alpha, beta),
-        opts,
-        snapped,
-        map,
-    )
+    improve_keeping_better(mesh, grid, levels, opts, snapped, map)
 }
 
 /// The pass ([`improve_keeping_volume`]); with a time budget, a copy of the mesh before it is
@@ -128,6 +124,10 @@ pub(super) fn improve_keeping_better(
     map: Option<PointMap>,
 ) -> ImproveReport {
     let start = Instant::now();
+    let regions = !mesh.regions.is_empty();
+    if regions {
+        interfaces::into_boundary(mesh);
+    }
     let volume = runs_again_for_volume(mesh, opts);
     let copy = (volume || opts.time_budget.is_some() || map.is_some()).then(|| mesh.clone());
     // Copying is part of comparing (the copy is what the result is compared with).
@@ -143,6 +143,9 @@ pub(super) fn improve_keeping_better(
         let t = Instant::now();
         report.budget = Some(keep_better(mesh, before, opts, map));
         report.stage_seconds.compare += t.elapsed().as_secs_f64();
+    }
+    if regions {
+        interfaces::out_of_boundary(mesh);
     }
     report.seconds = start.elapsed().as_secs_f64();
     report.stage_seconds.other = (report.seconds - report.stage_seconds.named()).max(0.0);

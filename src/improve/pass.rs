@@ -10,6 +10,7 @@ use super::quality_cache::{ensure_quality, tet_qualities};
 use super::report::lap;
 use super::rounds::{run_rounds, Rounds};
 use super::stages::{run_stage, stage_targets};
+use super::volumes::Volumes;
 use super::{project, region, submesh, warped, ImproveReport, QualityOptions};
 use crate::grid::ScalarGrid;
 use crate::levels::Levels;
@@ -57,7 +58,7 @@ pub(super) fn improve_keeping_volume(
     };
     let mut spent = report.stage_seconds.clone();
     let mut clock = Instant::now();
-    let off = |m: &TetMesh| (m.volume() - plain).abs() / plain.abs();
+    let off = |m: &TetMesh| plain.off(m);
     let ctx = context(grid, levels, opts, start);
     let worst = |m: &TetMesh| {
         tet_qualities(m, &ctx)
@@ -124,7 +125,7 @@ pub(super) fn improve_in(
     opts: &QualityOptions,
     rings: Option<usize>,
     snapped: &[Snapped],
-) -> (ImproveReport, f64) {
+) -> (ImproveReport, Volumes) {
     let start = Instant::now();
     let mut report = ImproveReport::default();
     let mut state = PassState {
@@ -136,7 +137,10 @@ pub(super) fn improve_in(
     let mut ctx = context(grid, levels, opts, start);
     warped::seed(mesh, &ctx.field, snapped, &mut state.drift);
     // The volume of the mesh before warping, which the restoration aims at.
-    let plain = mesh.volume() - state.drift.iter().sum::<f64>();
+    let plain = Volumes {
+        whole: mesh.volume() - state.drift.iter().sum::<f64>(),
+        regions: Volumes::of_regions(mesh),
+    };
     for (i, &[lo, hi]) in ladder.iter().enumerate() {
         let stage = QualityOptions {
             min_angle: lo,
@@ -157,7 +161,7 @@ pub(super) fn improve_in(
             break;
         }
         let last = i + 1 == ladder.len();
-        end_stage(mesh, &ctx, opts, (plain, last), &mut state, &mut report);
+        end_stage(mesh, &ctx, opts, (&plain, last), &mut state, &mut report);
     }
     // `ctx` is now at the requested targets (the last stage's).
     end_pass(mesh, &ctx, &mut state, &mut report);
@@ -214,14 +218,14 @@ fn end_stage(
     mesh: &mut TetMesh,
     ctx: &Ctx,
     opts: &QualityOptions,
-    (plain, last): (f64, bool),
+    (plain, last): (&Volumes, bool),
     state: &mut PassState,
     report: &mut ImproveReport,
 ) {
     if opts.restore_volume || opts.split_sag.is_finite() {
-        // The drift is given back only where the mesh's volume is off the plain one by
-        // more than RESIDUAL: splits alone otherwise.
-        let off = (mesh.volume() - plain).abs() > RESIDUAL * plain.abs();
+        // The drift is given back only where the mesh's volume (or a region's) is off the
+        // plain one by more than RESIDUAL: splits alone otherwise.
+        let off = plain.off(mesh) > RESIDUAL;
         let finish = QualityOptions {
             restore_volume: opts.restore_volume && off,
             ..opts.clone()

@@ -15,13 +15,13 @@
 use rayon::prelude::*;
 
 use super::collapse::{apply_collapse, legal_collapse, topological_merge};
-use super::constraint::Constraint;
+use super::constraint::{interface_bits, Constraint};
 use super::embed;
 use super::region::{LocalMesh, StarCorners};
 use super::smooth::{climb, move_vertex};
 use super::Ctx;
 use crate::geom::{dot, signed_volume, sub};
-use crate::mesh::TetMesh;
+use crate::mesh::{TetMesh, LEVEL_BITS};
 
 /// Rounds of reverting the moves that invert a tet, at most (then every move is reverted).
 const REVERT_ROUNDS: usize = 8;
@@ -40,16 +40,17 @@ pub fn project_mesh(
     quality: Option<&mut Vec<f64>>,
 ) -> Vec<bool> {
     let labels = mesh.vertex_label_bits();
+    let interfaces = interface_bits(ctx.levels.len());
     let dims = ctx.field.grid().dims;
     // Per point: where a level vertex off its level would go.
     let target: Vec<Option<[f64; 3]>> = (0..mesh.points.len())
         .into_par_iter()
         .map(|v| {
-            if labels[v] & 3 == 0 {
+            if labels[v] & LEVEL_BITS == 0 {
                 return None; // on no level
             }
             let mut u = ctx.field.to_index(mesh.points[v]);
-            let c = Constraint::classify(labels[v], &mut u, dims);
+            let c = Constraint::classify(labels[v], interfaces, &mut u, dims);
             let level = ctx.levels[c.level? as usize];
             if c.pinned || (ctx.field.value(u) - level).abs() <= ctx.tol {
                 return None;
@@ -102,7 +103,8 @@ pub fn project_mesh(
             break;
         }
     }
-    add_moved_volume(mesh, &around_moved, &target, &moved, drift);
+    let counted = counted_regions(mesh, &labels, interfaces);
+    add_moved_volume(mesh, &around_moved, (&target, &moved), &counted, drift);
     for (v, t) in target.iter().enumerate() {
         if moved[v] {
             mesh.points[v] = t.expect("moved vertices have a target");
@@ -164,13 +166,33 @@ fn qualities_after(
     first
 }
 
+/// Per point of a mesh of several regions: the region whose volume its drift counts (for a
+/// vertex on an interface, the region below; [`LocalMesh::counted_region`]), `u8::MAX` for
+/// all of its star. Empty for one interval.
+fn counted_regions(mesh: &TetMesh, labels: &[u32], interfaces: u32) -> Vec<u8> {
+    if mesh.regions.is_empty() {
+        return Vec::new();
+    }
+    labels
+        .iter()
+        .map(|&l| {
+            let on = l & LEVEL_BITS;
+            match on.count_ones() == 1 && on & interfaces != 0 {
+                true => on.trailing_zeros() as u8 - 1,
+                false => u8::MAX,
+            }
+        })
+        .collect()
+}
+
 /// Adds to the `drift` of each `moved` corner of the tets `around` the volume its move to its
-/// `target` adds to them, the other corners where they are.
+/// `target` adds to them (those of its `counted` region, if any), the other corners where
+/// they are.
 fn add_moved_volume(
     mesh: &TetMesh,
     around: &[u32],
-    target: &[Option<[f64; 3]>],
-    moved: &[bool],
+    (target, moved): (&[Option<[f64; 3]>], &[bool]),
+    counted: &[u8],
     drift: &mut [f64],
 ) {
     // Per tet of `around`: what the move of each moved corner adds (summed below in the
@@ -183,7 +205,14 @@ fn add_moved_volume(
             let v0 = signed_volume(old[0], old[1], old[2], old[3]);
             let mut out = [0.0; 4];
             for (i, o) in out.iter_mut().enumerate() {
-                if let (true, Some(x)) = (moved[tet[i] as usize], target[tet[i] as usize]) {
+                let v = tet[i] as usize;
+                let other = counted
+                    .get(v)
+                    .is_some_and(|&r| r != u8::MAX && r != mesh.regions.tets[t as usize]);
+                if other {
+                    continue;
+                }
+                if let (true, Some(x)) = (moved[v], target[v]) {
                     let mut p = old;
                     p[i] = x;
                     *o = signed_volume(p[0], p[1], p[2], p[3]) - v0;
@@ -201,19 +230,20 @@ fn add_moved_volume(
     }
 }
 
-/// Per point: is it on an `alpha` (`beta`) face but farther than the tolerance from that
-/// level set (pinned vertices included)?
+/// Per point: is it on a face of a level but farther than the tolerance from that level set
+/// (pinned vertices included)?
 pub fn off_level_points(mesh: &TetMesh, ctx: &Ctx) -> Vec<bool> {
     let labels = mesh.vertex_label_bits();
     (0..mesh.points.len())
         .into_par_iter()
         .map(|v| {
-            if labels[v] & 3 == 0 {
+            let on_levels = labels[v] & LEVEL_BITS;
+            if on_levels == 0 {
                 return false;
             }
             let f = ctx.field.value(ctx.field.to_index(mesh.points[v]));
-            let on = |l: usize| (f - ctx.levels[l]).abs() <= ctx.tol;
-            (labels[v] & 1 != 0 && !on(0)) || (labels[v] & 2 != 0 && !on(1))
+            (0..ctx.levels.len())
+                .any(|l| on_levels & (1 << l) != 0 && (f - ctx.levels[l]).abs() > ctx.tol)
         })
         .collect()
 }

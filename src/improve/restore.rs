@@ -21,6 +21,7 @@ use super::region::{LocalMesh, StarCorners, StarVec};
 use super::smooth::local_scale;
 use super::Ctx;
 use crate::geom::dot;
+use crate::levels::MAX_LEVELS;
 
 /// Passes over the region's vertices at most (each stops once the drift is given back).
 const PASSES: usize = 5;
@@ -62,9 +63,47 @@ pub fn largest_drift(drift: &[f64]) -> Vec<f64> {
     owed
 }
 
-/// Gives back `owed`, the volume the operations added in the region, where its level
-/// vertices can move; `owed` is left with what could not be given back. Returns the moves.
-pub fn restore_volume(lm: &mut LocalMesh, ctx: &Ctx, owed: &mut f64) -> usize {
+/// The volume group of level `level` ([`largest_drift_by_group`]): 0 for every level of one
+/// interval (the domain's volume), the level itself with several regions (the volume its
+/// drift counts: the region below an interface, the region on a first or last level).
+#[inline]
+pub fn group_of(ctx: &Ctx, level: u8) -> usize {
+    match ctx.levels.len() {
+        0..=2 => 0,
+        _ => level as usize,
+    }
+}
+
+/// Volumes per group ([`group_of`]).
+pub type GroupVolumes = [f64; MAX_LEVELS];
+
+/// [`largest_drift`] of each group of points apart (`group`, per point: its
+/// [`group_of`], `None` for a point on no level): with several regions each level gives back
+/// its own drift, which is what keeps every region's volume.
+pub fn largest_drift_by_group(drift: &[f64], group: impl Fn(usize) -> Option<usize>) -> Vec<f64> {
+    let groups: Vec<Option<usize>> = (0..drift.len()).map(&group).collect();
+    let used = groups.iter().flatten().fold(0u32, |b, &g| b | 1 << g);
+    if used.count_ones() <= 1 {
+        return largest_drift(drift);
+    }
+    let mut owed = vec![0.0; drift.len()];
+    for g in (0..MAX_LEVELS).filter(|&g| used & (1 << g) != 0) {
+        let part: Vec<f64> = drift
+            .iter()
+            .zip(&groups)
+            .map(|(&d, &h)| if h == Some(g) { d } else { 0.0 })
+            .collect();
+        for (o, p) in owed.iter_mut().zip(largest_drift(&part)) {
+            *o += p;
+        }
+    }
+    owed
+}
+
+/// Gives back `owed`, the volume the operations added in the region to volume group `group`
+/// ([`group_of`]), where the group's level vertices can move; `owed` is left with what could
+/// not be given back. Returns the moves.
+pub fn restore_volume(lm: &mut LocalMesh, ctx: &Ctx, owed: &mut f64, group: usize) -> usize {
     let mut moves = 0;
     for _ in 0..PASSES {
         let before = moves;
@@ -73,7 +112,10 @@ pub fn restore_volume(lm: &mut LocalMesh, ctx: &Ctx, owed: &mut f64) -> usize {
             if owed.abs() <= SETTLED * lm.volume.abs() || late {
                 return moves;
             }
-            moves += usize::from(restore_at(lm, ctx, v, owed));
+            let in_group = lm.con[v as usize]
+                .level
+                .is_some_and(|l| group_of(ctx, l) == group);
+            moves += usize::from(in_group && restore_at(lm, ctx, v, owed));
         }
         if moves == before {
             break;
@@ -93,10 +135,13 @@ fn restore_at(lm: &mut LocalMesh, ctx: &Ctx, v: u32, owed: &mut f64) -> bool {
         return false;
     }
     let star = StarCorners::of(lm, v);
+    // The volume the drift counts: on an interface, the region below's.
+    let counted = c.interface.then(|| StarCorners::counted(lm, v));
+    let volume_star = counted.as_ref().unwrap_or(&star);
     let u = lm.u[v as usize];
     let free = c.free_axes();
-    let v0 = star.volume(lm.x[v as usize]);
-    let Some(g) = tangent_volume_gradient(ctx, &star, u, free, v0) else {
+    let v0 = volume_star.volume(lm.x[v as usize]);
+    let Some(g) = tangent_volume_gradient(ctx, volume_star, u, free, v0) else {
         return false;
     };
     let g2 = dot(g, g);
@@ -120,7 +165,7 @@ fn restore_at(lm: &mut LocalMesh, ctx: &Ctx, v: u32, owed: &mut f64) -> bool {
             .project(p, ctx.levels[level as usize], free, ctx.tol)
         {
             let x = ctx.field.to_physical(p);
-            let dv = star.volume(x) - v0;
+            let dv = volume_star.volume(x) - v0;
             if (*owed + dv).abs() < owed.abs()
                 && star.qualities_above(x, ctx, floor * (1.0 - 1e-12), &mut qs, &mut hint)
                 && qs.iter().zip(&floors).all(|(q, f)| q >= f)
@@ -209,7 +254,7 @@ mod tests {
             let mut owed = sign * 2e-3 * lm.volume;
             owed_before += owed.abs();
             let start = owed;
-            moves += restore_volume(lm, &ctx, &mut owed);
+            moves += restore_volume(lm, &ctx, &mut owed, 0);
             owed_after += owed.abs();
             // What is left owed is exactly what the moves did not give back.
             let gained = region_volume(lm) - before;

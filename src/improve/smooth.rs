@@ -65,7 +65,10 @@ pub(crate) fn move_by(
     }
     if c.level.is_some() {
         let (x0, x1) = (lm.x[v as usize], ctx.field.to_physical(u));
-        let (v0, v1) = star.volumes(x0, x1);
+        let (v0, v1) = match c.interface {
+            true => StarCorners::counted(lm, v).volumes(x0, x1),
+            false => star.volumes(x0, x1),
+        };
         lm.drift[v as usize] += v1 - v0;
     }
     lm.set_position_with(v, u, ctx, &qs);
@@ -118,13 +121,13 @@ fn centroid_step(
 
 /// Where a vertex with constraint `c` tried at index point `p` goes: a level vertex onto
 /// its level set (along the axes it may move), an interior one stays at `p` if that is inside
-/// the interval; `None` if neither works.
+/// its region's interval; `None` if neither works.
 pub(crate) fn place(ctx: &Ctx, c: Constraint, p: [f64; 3]) -> Option<[f64; 3]> {
     match c.level {
         Some(l) => ctx
             .field
             .project(p, ctx.levels[l as usize], c.free_axes(), ctx.tol),
-        None => Some(p).filter(|&p| ctx.inside_interval(p)),
+        None => Some(p).filter(|&p| ctx.inside_region(p, c.region)),
     }
 }
 

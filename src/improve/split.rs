@@ -12,8 +12,10 @@
 use super::constraint::Constraint;
 use super::embed;
 use super::region::{face_key, BoundaryFace, EdgeTets, LocalMesh};
+use super::restore::{group_of, GroupVolumes};
 use super::Ctx;
 use crate::geom::{norm, signed_volume, sub};
+use crate::levels::MAX_LEVELS;
 use crate::mesh::{BoundaryLabel, TetMesh};
 
 /// How far the new node may lie from the chord's midpoint, as a fraction of the edge.
@@ -150,7 +152,8 @@ struct Candidate {
 
 /// Splits the boundary edges of the region whose chord sags by more than `min_sag` of their
 /// length, most sagging first, where that keeps every new tet above its floor, and only as far
-/// as the region's volume needs. Returns the splits and the volume they added.
+/// as the region's volume needs. Returns the splits and the volume they added, per volume
+/// group ([`group_of`]).
 ///
 /// Which volume: had every such edge been split, the region would have gained the sum of
 /// their gains (a convex part gains, a concave one loses). Where a split's new tets would be
@@ -164,27 +167,33 @@ pub fn split_sagging_edges(
     ctx: &Ctx,
     min_sag: f64,
     sagging: Option<&[bool]>,
-) -> (usize, f64) {
+) -> (usize, GroupVolumes) {
     let planned: Vec<Split> = candidates(lm, ctx, min_sag, sagging)
         .into_iter()
         .filter_map(|c| plan(lm, ctx, c.a, c.b))
         .collect();
-    let mut owed: f64 = planned.iter().map(|s| s.gain).sum();
-    let (mut n, mut added) = (0, 0.0);
+    // Each volume group splits only as far as its own volume needs.
+    let mut owed: GroupVolumes = [0.0; MAX_LEVELS];
+    for s in &planned {
+        owed[s.group(ctx)] += s.gain;
+    }
+    let (mut n, mut added) = (0, [0.0; MAX_LEVELS]);
     for (i, first) in planned.into_iter().enumerate() {
         if i % 64 == 63 && ctx.out_of_time() {
             break;
         }
-        if first.gain * owed <= 0.0 {
+        let group = first.group(ctx);
+        let (owed, added) = (&mut owed[group], &mut added[group]);
+        if first.gain * *owed <= 0.0 {
             continue;
         }
         // Earlier splits may have cut the tets around this edge.
         let Some(s) = plan(lm, ctx, first.a, first.b) else {
             continue;
         };
-        if (owed - s.gain).abs() < owed.abs() && s.fits(lm, ctx) {
-            owed -= s.gain;
-            added += s.gain;
+        if (*owed - s.gain).abs() < owed.abs() && s.fits(lm, ctx) {
+            *owed -= s.gain;
+            *added += s.gain;
             apply(lm, ctx, s);
             n += 1;
         }
@@ -260,6 +269,11 @@ struct Split {
 }
 
 impl Split {
+    /// The volume group of the split's level ([`group_of`]).
+    fn group(&self, ctx: &Ctx) -> usize {
+        self.con.level.map_or(0, |l| group_of(ctx, l))
+    }
+
     /// The corners of the two halves of tet `t` (around the edge), the new node at `x`.
     fn halves_at(&self, lm: &LocalMesh, t: u32) -> [[[f64; 3]; 4]; 2] {
         halves(lm.tets[t as usize], self.a, self.b, NEW)
@@ -314,6 +328,7 @@ fn plan(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<Split> {
     }
     let con = Constraint {
         level: Some(level),
+        interface: lm.con[a as usize].interface,
         ..Constraint::default()
     };
     let x = ctx.field.to_physical(p);
@@ -328,7 +343,12 @@ fn plan(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<Split> {
         faces,
         gain: 0.0,
     };
+    // On an interface, the volume of the region below ([`LocalMesh::counted_region`]).
+    let counted = lm.counted_region(a);
     for &t in &split.around {
+        if counted.is_some_and(|r| lm.region[t as usize] != r) {
+            continue;
+        }
         split.gain -= lm.volume_of(t);
         for c in split.halves_at(lm, t) {
             split.gain += signed_volume(c[0], c[1], c[2], c[3]);
@@ -351,10 +371,10 @@ fn halves(tet: [u32; 4], a: u32, b: u32, m: u32) -> [[u32; 4]; 2] {
 fn apply(lm: &mut LocalMesh, ctx: &Ctx, s: Split) {
     let m = lm.add_vertex(s.p, s.value, s.con, ctx);
     for t in s.around {
-        let tet = lm.tets[t as usize];
+        let (tet, region) = (lm.tets[t as usize], lm.region[t as usize]);
         lm.kill_tet(t);
         for h in halves(tet, s.a, s.b, m) {
-            lm.add_tet(h);
+            lm.add_tet(h, region);
         }
     }
     for f in s.faces {

@@ -41,7 +41,7 @@ pub struct SubMesh {
     pub rim: Vec<bool>,
     /// Per point of the copy: on the rim, what the whole mesh said of it
     /// ([`super::thin::rim_marks`]); 0 elsewhere.
-    pub rim_marks: Vec<u8>,
+    pub rim_marks: Vec<crate::mesh::LabelBits>,
     /// Points of the copy merged away (copy ids).
     pub removed: Vec<u32>,
     /// What the splices left untouched.
@@ -75,7 +75,7 @@ impl SubMesh {
         work: &[bool],
         rings: usize,
         (quality, drift): (&[f64], &[f64]),
-        marks: &[u8],
+        marks: &[crate::mesh::LabelBits],
     ) -> SubMesh {
         let mut near = work.to_vec();
         for _ in 1..rings {
@@ -103,7 +103,17 @@ impl SubMesh {
             .collect();
         let to_local = |v: &u32| local[*v as usize];
         let sub = TetMesh {
-            regions: Default::default(),
+            regions: crate::mesh::Regions {
+                levels: mesh.regions.levels,
+                tets: match mesh.regions.is_empty() {
+                    true => Vec::new(),
+                    false => tets
+                        .par_iter()
+                        .map(|&t| mesh.regions.tets[t as usize])
+                        .collect(),
+                },
+                ..Default::default()
+            },
             points: points
                 .par_iter()
                 .map(|&v| mesh.points[v as usize])
@@ -189,6 +199,12 @@ impl SubMesh {
         let tets = &self.mesh.tets[from..];
         mesh.tets
             .extend(tets.iter().map(|t| t.each_ref().map(to_global)));
+        if !mesh.regions.is_empty() {
+            retain_flagged(&mut mesh.regions.tets, &stay);
+            mesh.regions
+                .tets
+                .extend_from_slice(&self.mesh.regions.tets[from..]);
+        }
         quality.extend_from_slice(&self.quality[from..]);
         let stay = keep(&self.faces, &self.untouched.faces, mesh.boundary.len());
         retain_flagged(&mut mesh.boundary, &stay);

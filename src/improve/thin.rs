@@ -17,17 +17,17 @@ use rayon::prelude::*;
 use super::Ctx;
 use crate::field::GUARD_DISTANCE;
 use crate::geom::{distance, dot, norm};
-use crate::mesh::TetMesh;
+use crate::mesh::{LabelBits, TetMesh};
 
 /// The bit of [`rim_marks`] that says a point is a corner of a tet across a thin layer (the
 /// bits below it are [`TetMesh::vertex_label_bits`]).
-const THIN: u8 = 1 << 7;
+const THIN: LabelBits = 1 << 31;
 
 /// Per point: its boundary label bits and whether it is a corner of a tet across a thin layer
 /// ([`THIN`]). A copy of part of the mesh ([`super::submesh`]) keeps them for its rim, whose
 /// faces and tets outside the copy it lacks: its marks are then the whole mesh's, and the
 /// copy marks the same work as the whole mesh would.
-pub(crate) fn rim_marks(mesh: &TetMesh, ctx: &Ctx) -> Vec<u8> {
+pub(crate) fn rim_marks(mesh: &TetMesh, ctx: &Ctx) -> Vec<LabelBits> {
     let (labels, thin) = marks(mesh, ctx);
     labels
         .iter()
@@ -39,7 +39,7 @@ pub(crate) fn rim_marks(mesh: &TetMesh, ctx: &Ctx) -> Vec<u8> {
 /// Per point: its boundary label bits ([`TetMesh::vertex_label_bits`]) and whether it is a
 /// corner of a tet across a thin layer; on a copy, with the marks it was cut with
 /// ([`Ctx::rim_marks`]) added.
-pub(crate) fn marks(mesh: &TetMesh, ctx: &Ctx) -> (Vec<u8>, Vec<bool>) {
+pub(crate) fn marks(mesh: &TetMesh, ctx: &Ctx) -> (Vec<LabelBits>, Vec<bool>) {
     let mut labels = mesh.vertex_label_bits();
     if let Some(rim) = ctx.round.rim_marks {
         for (l, &r) in labels.iter_mut().zip(rim) {
@@ -57,9 +57,9 @@ pub(crate) fn marks(mesh: &TetMesh, ctx: &Ctx) -> (Vec<u8>, Vec<bool>) {
 
 /// Per point: a corner of a tet across a thin layer ([`across_thin_layer`]). All false for a
 /// one-sided interval.
-fn thin_layer_points(mesh: &TetMesh, ctx: &Ctx, labels: &[u8]) -> Vec<bool> {
+fn thin_layer_points(mesh: &TetMesh, ctx: &Ctx, labels: &[LabelBits]) -> Vec<bool> {
     let mut thin = vec![false; mesh.points.len()];
-    if !(ctx.levels[0].is_finite() && ctx.levels[1].is_finite()) {
+    if layers(ctx) == 0 {
         return thin;
     }
     let tets: Vec<usize> = (0..mesh.tets.len())
@@ -74,8 +74,16 @@ fn thin_layer_points(mesh: &TetMesh, ctx: &Ctx, labels: &[u8]) -> Vec<bool> {
     thin
 }
 
-/// Whether tet `t` has a corner on alpha and another on beta (`labels`: per point, bit
-/// `1 << label` of its boundary triangles) closer together across the layer (along the
+/// The bits of the levels `l` whose region `[l, l + 1]` is bounded on both sides (both
+/// levels finite): where a layer can be thin.
+fn layers(ctx: &Ctx) -> LabelBits {
+    (0..ctx.levels.len() - 1)
+        .filter(|&l| ctx.levels[l].is_finite() && ctx.levels[l + 1].is_finite())
+        .fold(0, |bits, l| bits | 1 << l)
+}
+
+/// Whether tet `t` has a corner on a level and another on the next (alpha and beta for one
+/// interval; `labels`: per point, [`TetMesh::vertex_label_bits`]) closer together across the layer (along the
 /// gradient at its centroid: the layer's thickness there, for a flat layer) than its longest
 /// edge times the target's sine, and than [`GUARD_DISTANCE`].
 ///
@@ -85,12 +93,17 @@ fn thin_layer_points(mesh: &TetMesh, ctx: &Ctx, labels: &[u8]) -> Vec<bool> {
 /// the other, so the moves and collapses a spanning tet needs cross it. On the MNI T1 band
 /// a fraction of a grey level wide the guards threw away all the work on such tets; a shell
 /// 1.2 voxels thick reaches 30° only with its spanning tets worked on.
-pub(crate) fn across_thin_layer(mesh: &TetMesh, ctx: &Ctx, labels: &[u8], t: usize) -> bool {
+pub(crate) fn across_thin_layer(mesh: &TetMesh, ctx: &Ctx, labels: &[LabelBits], t: usize) -> bool {
     let tet = mesh.tets[t];
-    let on = |i: usize, bit: u8| labels[tet[i] as usize] & bit != 0;
-    if !(0..4).any(|i| on(i, 1)) || !(0..4).any(|i| on(i, 2)) {
+    let on = |i: usize, bit: LabelBits| labels[tet[i] as usize] & bit != 0;
+    let all = tet.iter().fold(0, |b, &v| b | labels[v as usize]);
+    // The first level of a layer the tet spans (for one interval: alpha).
+    let spans = all & (all >> 1) & layers(ctx);
+    if spans == 0 {
         return false;
     }
+    let l = spans.trailing_zeros();
+    let (lo, hi) = (1 << l, 1 << (l + 1));
     let p = tet.map(|v| ctx.field.to_index(mesh.points[v as usize]));
     let longest = (0..4)
         .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
@@ -108,5 +121,5 @@ pub(crate) fn across_thin_layer(mesh: &TetMesh, ctx: &Ctx, labels: &[u8], t: usi
         }
     };
     let limit = (longest * ctx.target).min(GUARD_DISTANCE);
-    (0..4).any(|i| on(i, 1) && (0..4).any(|j| j != i && on(j, 2) && across(i, j) < limit))
+    (0..4).any(|i| on(i, lo) && (0..4).any(|j| j != i && on(j, hi) && across(i, j) < limit))
 }

@@ -346,8 +346,8 @@ pub fn check_applies(g: &Given) -> Result<(), Inapplicable> {
     Ok(())
 }
 
-/// Several levels: not with a bound of one interval, nor (yet) with the quality pass or a
-/// closed-surface input; region names only with them.
+/// Several levels: not with a bound of one interval, nor (yet) with a closed-surface input;
+/// region names only with them.
 fn check_levels(g: &Given) -> Result<(), Inapplicable> {
     if !g.has(Param::Levels) {
         return match g.has(Param::RegionNames) {
@@ -362,13 +362,6 @@ fn check_levels(g: &Given) -> Result<(), Inapplicable> {
         return Err(Inapplicable::Exclusive {
             param,
             other: Param::Levels,
-        });
-    }
-    if g.has(Param::Quality) {
-        return Err(Inapplicable::NotWith {
-            param: Param::Quality,
-            mode: Param::Levels,
-            why: "the quality pass improves one interval; mesh the regions without it",
         });
     }
     match g.input.filter(|p| is_surface(p)) {

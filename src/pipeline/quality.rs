@@ -104,7 +104,10 @@ fn improve_in_pool(
     reporter: &Reporter,
 ) -> Improved {
     let stage = reporter.stage("improving elements", StageKind::Pass);
-    let (alpha, beta) = (job.opts.alpha, job.opts.beta);
+    let levels = job
+        .opts
+        .run_levels()
+        .unwrap_or(crate::Levels::interval(job.opts.alpha, job.opts.beta));
     let classify = job.req.analysis;
     let pool = job
         .opts
@@ -112,7 +115,7 @@ fn improve_in_pool(
         .and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
     let work = |out: &mut MeshOutput| {
         let t = Instant::now();
-        let report = improve_meshed_mapped(out, grid, alpha, beta, opts, map);
+        let report = improve_meshed_mapped(out, grid, &levels, opts, map);
         let pass_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let mesh = &out.mesh;
@@ -120,7 +123,7 @@ fn improve_in_pool(
             "giving a reason for each element below {}°",
             opts.forced_floor
         ));
-        let forced = classify.then(|| classify_forced_mapped(mesh, grid, alpha, beta, opts, map));
+        let forced = classify.then(|| classify_forced_mapped(mesh, grid, &levels, opts, map));
         let outcome = target_counts(mesh, opts, map);
         Improved {
             report,

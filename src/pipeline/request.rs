@@ -189,7 +189,8 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
         beta,
         method: req.method,
         threads: req.threads,
-        warp: if req.quality.is_some() {
+        // Warping snaps grid vertices onto the two levels of one interval only.
+        warp: if req.quality.is_some() && req.levels.as_ref().is_none_or(|l| l.len() <= 2) {
             crate::improve::DEFAULT_WARP
         } else {
             0.0

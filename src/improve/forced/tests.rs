@@ -118,7 +118,8 @@ fn measurer<'a>(g: &'a ScalarGrid, alpha: f64, beta: f64, mesh: &'a TetMesh) -> 
         floor: 5f64.to_radians(),
         target_sine: 15f64.to_radians().sin(),
         tol: 1e-5,
-        labels: Vec::new(),
+        labels: &[],
+        first: 0,
     }
 }
 
@@ -215,7 +216,8 @@ fn the_quick_reasons_are_those_of_the_full_measures() {
         floor: 15f64.to_radians(),
         target_sine: opts.min_angle.to_radians().sin(),
         tol: opts.forced_critical_tol,
-        labels: mesh.vertex_label_bits(),
+        labels: &mesh.vertex_label_bits(),
+        first: 0,
     };
     let (mut by_tol, mut by_neck) = (0, 0);
     for e in &r.elements {
@@ -252,7 +254,8 @@ fn the_neck_width_is_measured_across_the_saddle() {
         floor: 5f64.to_radians(),
         target_sine: 15f64.to_radians().sin(),
         tol: 1e-5,
-        labels: Vec::new(),
+        labels: &[],
+        first: 0,
     };
     let w = c.measured_width([5.5, 5.5, 2.5], 0.01).unwrap();
     assert!((w - 2.0 * 0.02f64.sqrt()).abs() < 1e-5, "{w}");

@@ -8,7 +8,7 @@ use rustc_hash::FxHashMap;
 use super::partition::Source;
 use super::{face_key, tet_edge, EdgeTets, NEW_POINT, NONE};
 use crate::field::Field;
-use crate::improve::constraint::Constraint;
+use crate::improve::constraint::{interface_bits, Constraint};
 use crate::improve::face_grid::FaceGrid;
 use crate::improve::Ctx;
 use crate::levels::Levels;
@@ -46,6 +46,9 @@ pub struct LocalMesh {
     pub tets: Vec<[u32; 4]>,
     /// Whether each tet is still part of the mesh.
     pub alive: Vec<bool>,
+    /// The region of each tet (0 for one interval): operations replace tets only by tets of
+    /// the same region.
+    pub region: Vec<u8>,
     /// Alive tets around each vertex.
     pub star: Vec<Vec<u32>>,
     /// Quality of each tet ([`Ctx::quality`], kept up to date).
@@ -70,7 +73,8 @@ pub struct LocalMesh {
     /// Volume of the region's tets when it was copied out.
     pub volume: f64,
     /// Per vertex: the signed volume that the collapses into it and its moves have added
-    /// (physical units; projections onto the level sets are corrections and do not count).
+    /// (physical units; projections onto the level sets are corrections and do not count); for
+    /// a vertex on an interface, to the region below it ([`LocalMesh::counted_region`]).
     /// The pass gives it back at the end where it can ([`crate::improve::restore`]).
     pub drift: Vec<f64>,
     /// Per vertex: found within the tolerance of its level set since it last moved (so the
@@ -150,7 +154,8 @@ impl LocalMesh {
         lm.low_bar = ctx.target;
         lm.reserve_tets(&local_tets);
         for (t, &g) in local_tets.into_iter().zip(tets) {
-            lm.push_tet(t, copy.quality[g as usize]);
+            let region = mesh.regions.tets.get(g as usize).copied().unwrap_or(0);
+            lm.push_tet(t, copy.quality[g as usize], region);
         }
         // Sized once (the map's order is never used: it is read in key order or summed).
         lm.faces.reserve(faces.len());
@@ -179,6 +184,7 @@ impl LocalMesh {
             global,
             tets: Vec::new(),
             alive: Vec::new(),
+            region: Vec::new(),
             q: Vec::new(),
             weight: 1.0,
             faces: FxHashMap::default(),
@@ -213,6 +219,7 @@ impl LocalMesh {
         }
         self.tets.reserve(tets.len());
         self.alive.reserve(tets.len());
+        self.region.reserve(tets.len());
         self.q.reserve(tets.len());
         self.memo.tet_failed.reserve(tets.len());
     }
@@ -318,19 +325,21 @@ impl LocalMesh {
     /// Sets the constraints of the free vertices from their boundary faces and box planes,
     /// snapping box coordinates exactly onto their plane. Frozen vertices are pinned.
     fn classify(&mut self, field: &Field, levels: &Levels) {
-        let mut labels = vec![0u8; self.global.len()];
+        let mut labels = vec![0; self.global.len()];
         for f in self.faces.values() {
             for v in f.tri {
                 labels[v as usize] |= f.label.bit();
             }
         }
         let dims = field.grid().dims;
+        let interfaces = interface_bits(levels.len());
         for v in 0..self.global.len() {
             if self.frozen[v] {
                 self.con[v].pinned = true;
                 continue;
             }
-            let mut c = Constraint::classify(labels[v], &mut self.u[v], dims);
+            let mut c = Constraint::classify(labels[v], interfaces, &mut self.u[v], dims);
+            c.region = levels.region_of(self.value[v]) as u8;
             // A level vertex must carry its level's value exactly (the clipper's cuts do).
             if c.level.is_some_and(|l| self.value[v] != levels[l as usize]) {
                 c.pinned = true;
@@ -374,16 +383,18 @@ impl LocalMesh {
         id
     }
 
-    /// Appends tet `t` (local ids) and returns its id.
-    pub fn add_tet(&mut self, t: [u32; 4]) -> u32 {
-        self.push_tet(t, biased_min_sine(self.corners(t), self.weight))
+    /// Appends tet `t` (local ids) of region `region` and returns its id.
+    pub fn add_tet(&mut self, t: [u32; 4], region: u8) -> u32 {
+        self.push_tet(t, biased_min_sine(self.corners(t), self.weight), region)
     }
 
-    /// Appends tet `t` (local ids) whose quality (already evaluated) is `q` and returns its id.
-    pub fn push_tet(&mut self, t: [u32; 4], q: f64) -> u32 {
+    /// Appends tet `t` (local ids) of region `region` whose quality (already evaluated) is
+    /// `q` and returns its id.
+    pub fn push_tet(&mut self, t: [u32; 4], q: f64, region: u8) -> u32 {
         let id = self.tets.len() as u32;
         self.tets.push(t);
         self.alive.push(true);
+        self.region.push(region);
         self.q.push(q);
         self.note_low(id);
         self.memo.tet_failed.push([0; 2]);
@@ -527,9 +538,22 @@ impl LocalMesh {
     }
 
     /// Summed signed volume of the tets around `v`.
-    pub fn star_volume(&self, v: u32) -> f64 {
+    /// For a vertex on an interface, the region below it: the region whose volume its drift
+    /// counts (the one above changes by the opposite). `None` for the others, whose drift
+    /// counts their whole star (the domain's volume).
+    #[inline]
+    pub fn counted_region(&self, v: u32) -> Option<u8> {
+        let c = self.con[v as usize];
+        c.level.filter(|_| c.interface).map(|l| l - 1)
+    }
+
+    /// The volume of the tets around `v` that its drift counts
+    /// ([`LocalMesh::counted_region`]).
+    pub fn counted_volume(&self, v: u32) -> f64 {
+        let region = self.counted_region(v);
         self.star[v as usize]
             .iter()
+            .filter(|&&t| region.is_none_or(|r| self.region[t as usize] == r))
             .map(|&t| self.volume_of(t))
             .sum()
     }
@@ -612,7 +636,7 @@ mod tests {
             if lm.alive[t as usize] && round % 3 == 0 {
                 let tet = lm.tets[t as usize];
                 lm.kill_tet(t);
-                lm.push_tet(tet, 0.02);
+                lm.push_tet(tet, 0.02, 0);
             }
             let v = next(lm.u.len()) as u32;
             if lm.is_free(v) && !lm.star[v as usize].is_empty() {

@@ -21,6 +21,9 @@ pub fn splice(
     // Compacted in place: the tets (and their flags) outside every region keep their order.
     retain_outside(&mut mesh.tets, &bookkeeping.of_tet);
     retain_outside(quality, &bookkeeping.of_tet);
+    if !mesh.regions.is_empty() {
+        retain_outside(&mut mesh.regions.tets, &bookkeeping.of_tet);
+    }
     let keep: Vec<bool> = mesh
         .boundary
         .iter()
@@ -52,9 +55,10 @@ pub fn splice(
 
 /// A region in global ids, ready to be appended to the mesh.
 struct Spliced {
-    /// Its alive tets and their qualities.
+    /// Its alive tets, their qualities and regions.
     tets: Vec<[u32; 4]>,
     quality: Vec<f64>,
+    regions: Vec<u8>,
     /// Its boundary faces (sorted by [`face_key`](super::face_key)) and their labels.
     faces: Vec<[u32; 3]>,
     labels: Vec<BoundaryLabel>,
@@ -131,6 +135,7 @@ impl LocalMesh {
         let mut out = Spliced {
             tets: Vec::with_capacity(self.tets.len()),
             quality: Vec::with_capacity(self.tets.len()),
+            regions: Vec::with_capacity(self.tets.len()),
             faces: Vec::with_capacity(self.faces.len()),
             labels: Vec::with_capacity(self.faces.len()),
             points: Vec::new(),
@@ -145,10 +150,17 @@ impl LocalMesh {
                 out.removed.push(gid);
             }
         }
-        for ((t, &a), &q) in self.tets.iter().zip(&self.alive).zip(&self.q) {
+        for (((t, &a), &q), &r) in self
+            .tets
+            .iter()
+            .zip(&self.alive)
+            .zip(&self.q)
+            .zip(&self.region)
+        {
             if a {
                 out.tets.push(t.map(g));
                 out.quality.push(q);
+                out.regions.push(r);
             }
         }
         // In the order of their keys (each face's sorted corners, unique), read from the map
@@ -178,6 +190,9 @@ impl Spliced {
         }
         mesh.tets.extend_from_slice(&self.tets);
         quality.extend_from_slice(&self.quality);
+        if !mesh.regions.is_empty() {
+            mesh.regions.tets.extend_from_slice(&self.regions);
+        }
         mesh.boundary.extend_from_slice(&self.faces);
         mesh.boundary_labels.extend_from_slice(&self.labels);
         removed.extend_from_slice(&self.removed);

@@ -29,11 +29,26 @@ pub struct StarCorners {
 impl StarCorners {
     /// The star of `v` in `lm`.
     pub fn of(lm: &LocalMesh, v: u32) -> Self {
+        Self::of_tets(lm, v, None)
+    }
+
+    /// The part of the star of `v` whose volume its drift counts ([`LocalMesh::drift`]): all
+    /// of it, or for a vertex on an interface, its tets in the region below
+    /// ([`LocalMesh::counted_region`]).
+    pub fn counted(lm: &LocalMesh, v: u32) -> Self {
+        Self::of_tets(lm, v, lm.counted_region(v))
+    }
+
+    /// The tets of the star of `v` (of region `region` only, if given).
+    fn of_tets(lm: &LocalMesh, v: u32, region: Option<u8>) -> Self {
         let mut star = StarCorners {
             corners: StarVec::new(),
             slot: StarVec::new(),
         };
         for &t in &lm.star[v as usize] {
+            if region.is_some_and(|r| lm.region[t as usize] != r) {
+                continue;
+            }
             let tet = lm.tets[t as usize];
             let slot = tet.iter().position(|&w| w == v).unwrap_or(0);
             star.corners.push(lm.corners(tet));
