@@ -146,7 +146,7 @@ fn a_level_between_regions_is_checked_against_the_critical_values() {
 fn bad_levels_are_usage_errors_that_write_nothing() {
     let dir = tempfile::tempdir().unwrap();
     two_balls(dir.path());
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 9] = [
         (
             &["--levels", "1,2", "--region-names", "a"],
             "needs three levels or more",
@@ -155,10 +155,6 @@ fn bad_levels_are_usage_errors_that_write_nothing() {
         (&["--levels", "3"], "1 level(s) given"),
         (&["--levels", "1,inf,9"], "level 2 is infinite"),
         (&["--levels", "1,2", "--alpha", "1"], "exclude each other"),
-        (
-            &["--levels", "1,2,3", "--quality"],
-            "--quality does not apply with --levels",
-        ),
         (
             &["--region-names", "a", "--alpha", "1"],
             "--region-names applies only with --levels",
@@ -183,6 +179,33 @@ fn bad_levels_are_usage_errors_that_write_nothing() {
         assert!(stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
         assert_eq!(listing(dir.path()), ["b.npy"], "{extra:?}");
     }
+}
+
+/// `--quality` with several regions: every region keeps its Betti numbers, the checker
+/// (`--check`: conformity, embedding, interfaces between their regions and on their levels)
+/// passes, and the elements improve.
+#[test]
+fn quality_keeps_every_region_s_topology() {
+    let dir = tempfile::tempdir().unwrap();
+    two_balls(dir.path());
+    let regions = |o: &std::process::Output| -> Vec<String> {
+        stdout(o)
+            .lines()
+            .filter(|l| l.trim_start().starts_with("region "))
+            .map(|l| l.split(", dihedral").next().unwrap().to_string())
+            .map(|l| l.split("tets, volume").nth(1).unwrap().to_string())
+            .map(|l| l.split_once(", ").unwrap().1.to_string())
+            .collect()
+    };
+    let args = ["b.npy", "--levels", "-inf,2.7,3.9,8.45", "-o", "m.msh"];
+    let plain = run_in(dir.path(), &args);
+    assert_ok(&plain);
+    let o = run_in(dir.path(), &[&args[..], &["--quality", "--check"]].concat());
+    assert_ok(&o);
+    let (before, after) = (regions(&plain), regions(&o));
+    assert_eq!(before.len(), 3, "{}", stdout(&plain));
+    assert_eq!(before, after, "{}", stdout(&o));
+    assert!(stdout(&o).contains("after: "), "{}", stdout(&o));
 }
 
 /// An isosurface output of several levels has every level, each its own group (`.obj`) or

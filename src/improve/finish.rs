@@ -120,7 +120,11 @@ pub(super) fn restore_residual(
         if plain.off(mesh) <= RESIDUAL || ctx.out_of_time() {
             return;
         }
-        spread_residual(mesh, residual, &mut state.drift);
+        if mesh.regions.is_empty() {
+            spread_residual(mesh, residual, &mut state.drift);
+        } else {
+            spread_region_residuals(mesh, plain, &mut state.drift);
+        }
         let rung_opts = QualityOptions {
             split_sag,
             ..opts.clone()
@@ -146,6 +150,52 @@ fn spread_residual(mesh: &TetMesh, residual: f64, drift: &mut [f64]) {
     }
     for (v, d) in drift.iter_mut().enumerate() {
         *d = if level(v) { residual / n as f64 } else { 0.0 };
+    }
+}
+
+/// [`spread_residual`] for a mesh of several regions: what each region is off its `plain`
+/// volume is booked on the vertices of its levels, evenly on each level, so that giving back
+/// every level's drift ([`restore::group_of`]) gives every region its volume back. A level's
+/// drift counts for the region below it (for the first level, above), so region `k`'s
+/// residual goes to its upper level, after what the levels below passed up to it; the sum
+/// ends on the last level (the whole mesh's residual). Where the last level has no vertices
+/// (`+inf`) the chain runs from the top down and ends on the first.
+fn spread_region_residuals(mesh: &TetMesh, plain: &Volumes, drift: &mut [f64]) {
+    let residual: Vec<f64> = Volumes::of_regions(mesh)
+        .iter()
+        .zip(&plain.regions)
+        .map(|(now, was)| now - was)
+        .collect();
+    let labels = mesh.vertex_label_bits();
+    let level_of = |v: usize| {
+        let on = labels[v] & LEVEL_BITS;
+        (on.count_ones() == 1).then(|| on.trailing_zeros() as usize)
+    };
+    let n = residual.len() + 1;
+    let mut count = vec![0usize; n];
+    for v in 0..mesh.points.len() {
+        if let Some(l) = level_of(v) {
+            count[l] += 1;
+        }
+    }
+    // The drift booked on each level (a level's counts for the region below it; the first
+    // level's for the region above it).
+    let mut booked = vec![0.0; n];
+    if count[n - 1] > 0 || count[0] == 0 {
+        for k in 0..n - 1 {
+            booked[k + 1] = residual[k] + if k > 0 { booked[k] } else { 0.0 };
+        }
+    } else {
+        for k in (1..n - 1).rev() {
+            booked[k] = if k + 1 < n - 1 { booked[k + 1] } else { 0.0 } - residual[k];
+        }
+        booked[0] = residual[0] - booked.get(1).copied().unwrap_or(0.0);
+    }
+    for (v, d) in drift.iter_mut().enumerate() {
+        *d = match level_of(v) {
+            Some(l) if count[l] > 0 => booked[l] / count[l] as f64,
+            _ => 0.0,
+        };
     }
 }
 

@@ -401,7 +401,7 @@ fn faces_on_edge(lm: &LocalMesh, around: &[u32], a: u32, b: u32) -> Vec<Boundary
             }
         }
     }
-    let label = lm.con[a as usize].level.map(|l| l as u8);
+    let label = lm.con[a as usize].level;
     if out.iter().any(|f| Some(f.label.index() as u8) != label) {
         out.clear();
     }
