@@ -129,6 +129,7 @@ pub(crate) struct Cli {
 
     /// Improve the elements after meshing (collapses, flips, edge removal, smoothing) towards
     /// the target angles, keeping the topology, the labels and the boundary on the level sets
+    /// (with --levels: every region's topology and volume, interface nodes on their levels)
     #[arg(long)]
     pub(crate) quality: bool,
 
