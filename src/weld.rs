@@ -161,9 +161,7 @@ impl ClipSink for Slab {
     }
     #[inline]
     fn triangle(&mut self, points: &[ClipPoint], t: [usize; 3], label: BoundaryLabel) {
-        // A level between two regions is clipped from both sides: its triangles are kept
-        // once, from the region below (normals towards increasing f).
-        if self.tags_regions() && label.level() == Some(self.region as usize) && self.region != 0 {
+        if !self.keeps(label) {
             return;
         }
         let ids = t.map(|i| self.id(&points[i]));
@@ -172,6 +170,12 @@ impl ClipSink for Slab {
         if self.tags_regions() {
             self.tri_regions.push(self.region);
         }
+    }
+    /// A level between two regions is clipped from both sides: its triangles are kept once,
+    /// from the region below (normals towards increasing f).
+    #[inline]
+    fn keeps(&self, label: BoundaryLabel) -> bool {
+        !(self.tags_regions() && self.region != 0 && label.level() == Some(self.region as usize))
     }
 }
 

@@ -1,8 +1,6 @@
 //! Triangulation of one convex clipped piece: coned from its first point in a global order
 //! over the faces not containing it, each face fanned from its own first point.
 
-use std::cmp::Reverse;
-
 use super::piece::Poly;
 use super::{ClipPoint, ClipSink};
 use crate::geom::signed_volume;
@@ -10,7 +8,8 @@ use crate::keys::{split, PointKey};
 use crate::levels::Bounds;
 
 /// Cones the piece from its first point in [`rank`] order over the faces not containing it,
-/// each face fanned from its own first point; boundary faces also go out as triangles.
+/// each face fanned from its own first point; boundary faces also go out as triangles (those
+/// the sink keeps).
 #[inline]
 pub(super) fn cone_and_fan(
     pts: &[ClipPoint],
@@ -19,20 +18,23 @@ pub(super) fn cone_and_fan(
     sink: &mut impl ClipSink,
 ) {
     // Each point is ranked once (a piece has at most 12).
-    let mut ranks = [(false, Reverse(0), 0); 12];
+    let mut ranks = [(0, 0); 12];
     for (r, p) in ranks.iter_mut().zip(pts) {
         *r = rank(p, lv);
     }
     let v0 = (0..pts.len()).min_by_key(|&i| ranks[i]).unwrap_or(0);
     for poly in faces {
         let verts = &poly.v[..poly.n];
-        let r = (0..poly.n).min_by_key(|&i| ranks[verts[i]]).unwrap_or(0);
-        let has_v0 = verts.contains(&v0);
-        let inside_sign = poly.label.map(|_| inside_side(pts, verts));
+        let r = (0..poly.n)
+            .min_by_key(|&i| ranks[usize::from(verts[i])])
+            .unwrap_or(0);
+        let has_v0 = verts.contains(&(v0 as u8));
+        let label = poly.label.filter(|&l| sink.keeps(l));
+        let inside_sign = label.map(|_| inside_side(pts, verts));
         for s in 1..poly.n - 1 {
-            let a = verts[r];
-            let b = verts[(r + s) % poly.n];
-            let c = verts[(r + s + 1) % poly.n];
+            let a = usize::from(verts[r]);
+            let b = usize::from(verts[(r + s) % poly.n]);
+            let c = usize::from(verts[(r + s + 1) % poly.n]);
             if !has_v0 {
                 let vol = signed_volume(pts[v0].pos, pts[a].pos, pts[b].pos, pts[c].pos);
                 if vol > 0.0 {
@@ -41,7 +43,7 @@ pub(super) fn cone_and_fan(
                     sink.tet(pts, [v0, a, c, b]);
                 }
             }
-            if let (Some(label), Some(sign)) = (poly.label, inside_sign) {
+            if let (Some(label), Some(sign)) = (label, inside_sign) {
                 // The fan triangles keep the polygon's winding; outward means the inside is
                 // on the negative side.
                 if sign > 0.0 {
@@ -54,6 +56,9 @@ pub(super) fn cone_and_fan(
     }
 }
 
+/// Depth bits above every depth: [`rank`] stores `DEEPEST - depth` to put deeper first.
+const DEEPEST: u64 = i64::MAX as u64;
+
 /// The order in which a piece's points become cone apexes and fan points: vertices before
 /// cuts, vertices farther from the nearer level first, then by key. A function of the point
 /// alone (its identity and value), so every cell and thread agrees on it and both sides of a
@@ -61,8 +66,11 @@ pub(super) fn cone_and_fan(
 /// fanning from it, keeps the tets away from the flat ones whose four corners lie near the
 /// level surface; it leaves about a quarter fewer tets below 15° than coning by key (noisy
 /// 256³ field, T1 band: docs/QUALITY-LOG.md, *Where the bad tets come from*).
+///
+/// Packed for cheap comparison: the top bit says cut, the other 63 hold `DEEPEST - depth`
+/// (a non-negative depth's bits order as its value and stay below `DEEPEST`), then the key.
 #[inline]
-fn rank(p: &ClipPoint, lv: &Bounds) -> (bool, Reverse<u64>, PointKey) {
+fn rank(p: &ClipPoint, lv: &Bounds) -> (u64, PointKey) {
     let is_cut = split(p.key).1.is_some();
     let mut depth = (p.val - lv.get(0)).abs();
     for i in 1..lv.len() {
@@ -70,15 +78,15 @@ fn rank(p: &ClipPoint, lv: &Bounds) -> (bool, Reverse<u64>, PointKey) {
     }
     // Non-negative (or infinite, for a one-sided interval), so the bits order as the values.
     let depth = if depth.is_nan() { 0 } else { depth.to_bits() };
-    (is_cut, Reverse(depth), p.key)
+    ((u64::from(is_cut) << 63) | (DEEPEST - depth), p.key)
 }
 
 /// For a boundary face: the signed volume over the face's first three points of the piece's
 /// point farthest from the face's plane, whose sign says which side is inside (robust even
 /// for very thin pieces).
 #[inline]
-fn inside_side(pts: &[ClipPoint], verts: &[usize]) -> f64 {
-    let (a, b, c) = (pts[verts[0]].pos, pts[verts[1]].pos, pts[verts[2]].pos);
+fn inside_side(pts: &[ClipPoint], verts: &[u8]) -> f64 {
+    let [a, b, c] = [0, 1, 2].map(|i| pts[usize::from(verts[i])].pos);
     let mut best = 0.0f64;
     for p in pts {
         let v = signed_volume(a, b, c, p.pos);

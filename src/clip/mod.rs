@@ -68,6 +68,12 @@ pub trait ClipSink {
     fn tet(&mut self, points: &[ClipPoint], t: [usize; 4]);
     /// An outward-oriented boundary triangle.
     fn triangle(&mut self, points: &[ClipPoint], t: [usize; 3], label: BoundaryLabel);
+    /// Whether the sink keeps triangles labelled `label` (when not, the clipper may skip
+    /// orienting them; [`ClipSink::triangle`] may still be called and must drop them).
+    #[inline]
+    fn keeps(&self, _label: BoundaryLabel) -> bool {
+        true
+    }
 }
 
 const BELOW: u8 = 1;

@@ -29,11 +29,12 @@ fn cut(a: &ClipVertex, b: &ClipVertex, level: f64, which: u8, lv: &Bounds) -> Cl
     }
 }
 
-/// Small fixed-capacity polygon.
+/// Small fixed-capacity polygon (point indices as bytes: a piece has at most 12 points, and
+/// the faces are copied around).
 #[derive(Clone, Copy)]
 pub(super) struct Poly {
     pub(super) n: usize,
-    pub(super) v: [usize; 8],
+    pub(super) v: [u8; 8],
     pub(super) label: Option<BoundaryLabel>,
 }
 
@@ -46,7 +47,7 @@ impl Poly {
         }
     }
     /// Appends `x` unless it repeats the previous point (a cut that is a snapped vertex).
-    fn push(&mut self, x: usize) {
+    fn push(&mut self, x: u8) {
         if self.n > 0 && self.v[self.n - 1] == x {
             return;
         }
@@ -81,9 +82,9 @@ pub(super) struct CutPoints {
     pub(super) pts: [ClipPoint; 12],
     pub(super) np: usize,
     /// Point index of each inside tet vertex.
-    pub(super) vid: [usize; 4],
+    pub(super) vid: [u8; 4],
     /// Point indices of the cuts of each edge by `[alpha, beta]`.
-    pub(super) cid: [[usize; 2]; 6],
+    pub(super) cid: [[u8; 2]; 6],
 }
 
 /// The piece's points: inside vertices in vertex order, then per edge (in [`EDGES`] order)
@@ -97,13 +98,13 @@ pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], lv: &Bounds) -> Cu
             val: 0.0,
         }; 12],
         np: 0,
-        vid: [usize::MAX; 4],
-        cid: [[usize::MAX; 2]; 6],
+        vid: [u8::MAX; 4],
+        cid: [[u8::MAX; 2]; 6],
     };
     for i in 0..4 {
         if cls[i] == INSIDE {
             c.pts[c.np] = as_point(&tv[i]);
-            c.vid[i] = c.np;
+            c.vid[i] = c.np as u8;
             c.np += 1;
         }
     }
@@ -126,7 +127,7 @@ pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], lv: &Bounds) -> Cu
             } else {
                 c.pts[c.np] = cut(&tv[i], &tv[j], level, lv.global(which), lv);
                 c.np += 1;
-                c.np - 1
+                (c.np - 1) as u8
             };
         }
     }

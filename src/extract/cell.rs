@@ -132,13 +132,27 @@ fn clip_cell(
         });
         match ctx.regions.as_slice() {
             [one] => clip_tet(&tv, one, box_planes, slab),
-            several => {
-                for (k, lv) in several.iter().enumerate() {
-                    slab.region = k as u8;
-                    clip_tet(&tv, lv, box_planes, slab);
-                }
-            }
+            several => clip_regions(&tv, several, box_planes, slab),
         }
+    }
+}
+
+/// Clips tet `tv` into each of `regions` that it reaches, tagging the pieces with the
+/// region. A region whose lower level is above every corner, or whose upper level is below
+/// every corner, would get nothing from [`clip_tet`]: it is skipped after two comparisons
+/// (below and above are monotone in the value). Snapped corners count as inside whatever
+/// their value, so a tet with one is clipped against every region.
+#[inline]
+fn clip_regions(tv: &[ClipVertex; 4], regions: &[Bounds], box_planes: u8, slab: &mut Slab) {
+    let snapped = tv.iter().any(|v| v.snap != SNAP_NONE);
+    let lo = tv.iter().map(|v| v.val).fold(f64::INFINITY, f64::min);
+    let hi = tv.iter().map(|v| v.val).fold(f64::NEG_INFINITY, f64::max);
+    for (k, lv) in regions.iter().enumerate() {
+        if !snapped && (lv.below(0, hi) || lv.above(1, lo)) {
+            continue;
+        }
+        slab.region = k as u8;
+        clip_tet(tv, lv, box_planes, slab);
     }
 }
 
