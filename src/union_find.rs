@@ -69,6 +69,23 @@ impl UnionFind {
         }
     }
 
+    /// Merges the sets of all of `xs`, as [`union`](Self::union) of the first with each of
+    /// the others would, but finding the first's root once (a tet or a triangle: its corners).
+    #[inline]
+    pub fn union_all(&mut self, xs: &[u32]) {
+        let Some((&first, rest)) = xs.split_first() else {
+            return;
+        };
+        let mut r = self.find(first);
+        for &x in rest {
+            let rx = self.find(x);
+            if rx != r {
+                self.parent[r.max(rx) as usize] = r.min(rx);
+                r = r.min(rx);
+            }
+        }
+    }
+
     /// Hangs the set of root `child` under root `root` (which stays the root); both must be
     /// roots of different sets.
     #[inline]
@@ -165,6 +182,20 @@ mod tests {
         assert_eq!(u.find(0), 0);
         assert_eq!(u.count_roots(&[true; 6]), 3);
         assert_eq!(u.count_roots(&[false, true, false, false, false, false]), 1);
+    }
+
+    #[test]
+    fn union_all_merges_like_unions_with_the_first() {
+        let mut u = UnionFind::new(8);
+        u.union(6, 7);
+        u.union_all(&[5, 7, 3]);
+        u.union_all(&[1]);
+        u.union_all(&[]);
+        assert_eq!([5, 6, 7, 3].map(|x| u.find(x)), [3; 4]);
+        assert_eq!(u.find(1), 1);
+        u.union_all(&[0, 1, 1]);
+        assert_eq!(u.find(1), 0);
+        assert_eq!(u.count_roots(&[true; 8]), 4);
     }
 
     #[test]

@@ -31,10 +31,18 @@ pub(super) fn cone_and_fan(
         let has_v0 = verts.contains(&(v0 as u8));
         let label = poly.label.filter(|&l| sink.keeps(l));
         let inside_sign = label.map(|_| inside_side(pts, verts));
+        // Index `r + s` around the polygon (`s < n`; no division).
+        let at = |s: usize| {
+            usize::from(
+                verts[if r + s < poly.n {
+                    r + s
+                } else {
+                    r + s - poly.n
+                }],
+            )
+        };
         for s in 1..poly.n - 1 {
-            let a = usize::from(verts[r]);
-            let b = usize::from(verts[(r + s) % poly.n]);
-            let c = usize::from(verts[(r + s + 1) % poly.n]);
+            let (a, b, c) = (at(0), at(s), at(s + 1));
             if !has_v0 {
                 let vol = signed_volume(pts[v0].pos, pts[a].pos, pts[b].pos, pts[c].pos);
                 if vol > 0.0 {

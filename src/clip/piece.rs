@@ -70,9 +70,20 @@ pub(super) struct Faces {
 }
 
 impl Faces {
-    fn push(&mut self, poly: Poly) {
-        self.polys[self.n] = poly;
-        self.n += 1;
+    /// A new empty face labelled `label`, built in place (after the faces kept so far).
+    fn start(&mut self, label: Option<BoundaryLabel>) -> &mut Poly {
+        let poly = &mut self.polys[self.n];
+        *poly = Poly::new(label);
+        poly
+    }
+
+    /// Closes the face begun by [`Faces::start`] and keeps it if it has three points or more.
+    fn finish(&mut self) {
+        let poly = &mut self.polys[self.n];
+        poly.close();
+        if poly.n >= 3 {
+            self.n += 1;
+        }
     }
 }
 
@@ -138,7 +149,7 @@ pub(super) fn cut_points(tv: &[ClipVertex; 4], cls: &[u8; 4], lv: &Bounds) -> Cu
 #[inline]
 pub(super) fn tet_faces(cls: &[u8; 4], box_face: [bool; 4], cuts: &CutPoints, faces: &mut Faces) {
     for (f, tri) in TET_FACES.iter().enumerate() {
-        let mut poly = Poly::new(box_face[f].then_some(BoundaryLabel::Box));
+        let poly = faces.start(box_face[f].then_some(BoundaryLabel::Box));
         for s in 0..3 {
             let (p, q) = (tri[s], tri[(s + 1) % 3]);
             if cls[p] == INSIDE {
@@ -159,10 +170,7 @@ pub(super) fn tet_faces(cls: &[u8; 4], box_face: [bool; 4], cuts: &CutPoints, fa
                 _ => {}
             }
         }
-        poly.close();
-        if poly.n >= 3 {
-            faces.push(poly);
-        }
+        faces.finish();
     }
 }
 
@@ -187,7 +195,7 @@ pub(super) fn level_faces(cls: &[u8; 4], cuts: &CutPoints, lv: &Bounds, faces: &
         if ni == 0 || ni == 4 {
             continue;
         }
-        let mut poly = Poly::new(Some(label));
+        let poly = faces.start(Some(label));
         let mut push = |x: usize, y: usize| poly.push(cuts.cid[edge_index(x, y)][which]);
         if ni == 2 {
             let (b1, b2, r1, r2) = (ins[0], ins[1], outs[0], outs[1]);
@@ -201,9 +209,6 @@ pub(super) fn level_faces(cls: &[u8; 4], cuts: &CutPoints, lv: &Bounds, faces: &
                 }
             }
         }
-        poly.close();
-        if poly.n >= 3 {
-            faces.push(poly);
-        }
+        faces.finish();
     }
 }

@@ -16,7 +16,7 @@ pub use regions::RegionFacts;
 use crate::mesh::{BoundaryLabel, MeshChunk, MeshSink, INTERVAL_LEVELS};
 use crate::mesh::{TetMesh, NUM_LABELS, VOLUME_BLOCK};
 use crate::quality::{cosine_extremes, cosines_to_degrees, dihedral_range, widest, NO_COSINES};
-use crate::topology::{betti, tet_links, triangle_links};
+use crate::topology::betti;
 use crate::union_find::UnionFind;
 
 /// What the report says about a mesh.
@@ -118,9 +118,7 @@ impl Components {
         for &v in t {
             self.used[v as usize] = true;
         }
-        for (a, b) in tet_links(t) {
-            self.solid.union(a, b);
-        }
+        self.solid.union_all(t);
     }
 
     #[inline]
@@ -128,9 +126,7 @@ impl Components {
         for &v in t {
             self.on_boundary[v as usize] = true;
         }
-        for (a, b) in triangle_links(t) {
-            self.surface.union(a, b);
-        }
+        self.surface.union_all(t);
     }
 
     /// Adds the tets and the outer boundary triangles of `c` (not its interfaces).
