@@ -301,12 +301,20 @@ impl MeshSink for FactsSink {
             false => Vec::new(),
         };
         let levels = self.levels.len().max(INTERVAL_LEVELS);
-        if let Some(comp) = &mut self.components {
-            comp.add(c, levels);
-        }
-        if let Some((_, acc)) = &mut self.regions {
-            acc.add(c, c.first_point + c.points.len(), &vols, &cos);
-        }
+        // The whole mesh's components and the regions' facts are independent.
+        let (components, regions) = (&mut self.components, &mut self.regions);
+        rayon::join(
+            || {
+                if let Some(comp) = components {
+                    comp.add(c, levels);
+                }
+            },
+            || {
+                if let Some((_, acc)) = regions {
+                    acc.add(c, c.first_point + c.points.len(), &vols, &cos);
+                }
+            },
+        );
         Ok(())
     }
 }

@@ -3,6 +3,8 @@
 //! fixed blocks as the whole mesh's), dihedral range and Betti numbers. A region's boundary is
 //! the outer boundary of its tets and the interfaces on its two levels.
 
+use rayon::prelude::*;
+
 use super::Components;
 use crate::mesh::{BoundaryLabel, MeshChunk, TetMesh, VOLUME_BLOCK};
 use crate::quality::{cosines_to_degrees, widest, NO_COSINES};
@@ -34,6 +36,58 @@ struct Acc {
     triangles: usize,
 }
 
+impl Acc {
+    /// Adds the tets of region `k` in chunk `c` (the mesh has `n` points up to it; the
+    /// chunk's tets have volumes and cosine extremes `facts`) and the triangles that bound
+    /// it, in a run of `levels` levels.
+    fn add(
+        &mut self,
+        k: u8,
+        c: &MeshChunk,
+        n: usize,
+        facts: (&[f64], &[(f64, f64)]),
+        levels: usize,
+    ) {
+        let (vols, cos) = facts;
+        if let Some(comp) = &mut self.components {
+            comp.grow(n);
+        }
+        for (t, (&r, &v)) in c.regions.iter().zip(vols).enumerate() {
+            if r != k {
+                continue;
+            }
+            self.tets += 1;
+            self.block.push(v);
+            if self.block.len() == VOLUME_BLOCK {
+                self.partials.push(self.block.iter().sum());
+                self.block.clear();
+            }
+            if let Some(&cr) = cos.get(t) {
+                self.cos_range = widest(self.cos_range, cr);
+            }
+            if let Some(comp) = &mut self.components {
+                comp.add_tet(&c.tets[t]);
+            }
+        }
+        let triangles = c.boundary.iter().zip(&c.boundary_labels);
+        for ((tri, &l), &r) in triangles.zip(&c.boundary_regions) {
+            if bounds(l, r, k, levels) {
+                self.triangles += 1;
+                if let Some(comp) = &mut self.components {
+                    comp.add_triangle(tri);
+                }
+            }
+        }
+    }
+}
+
+/// Whether a triangle labelled `l` of (lower) region `r` bounds region `k`: it bounds its own
+/// region, and an interface also the region above.
+#[inline]
+fn bounds(l: BoundaryLabel, r: u8, k: u8, levels: usize) -> bool {
+    r == k || (r + 1 == k && l.is_interface(levels))
+}
+
 /// The running facts of every region.
 pub(super) struct RegionsAcc {
     levels: usize,
@@ -57,46 +111,12 @@ impl RegionsAcc {
     }
 
     /// Adds chunk `c` (the mesh has `n` points up to it), whose tets have volumes `vols` and
-    /// dihedral cosine extremes `cos` (empty when not analysed).
+    /// dihedral cosine extremes `cos` (empty when not analysed). The regions are independent:
+    /// each takes its own tets and triangles of the chunk, in order, on its own thread.
     pub(super) fn add(&mut self, c: &MeshChunk, n: usize, vols: &[f64], cos: &[(f64, f64)]) {
-        for a in &mut self.acc {
-            if let Some(comp) = &mut a.components {
-                comp.grow(n);
-            }
-        }
-        for (t, (&r, &v)) in c.regions.iter().zip(vols).enumerate() {
-            let a = &mut self.acc[usize::from(r)];
-            a.tets += 1;
-            a.block.push(v);
-            if a.block.len() == VOLUME_BLOCK {
-                a.partials.push(a.block.iter().sum());
-                a.block.clear();
-            }
-            if let Some(&cr) = cos.get(t) {
-                a.cos_range = widest(a.cos_range, cr);
-            }
-            if let Some(comp) = &mut a.components {
-                comp.add_tet(&c.tets[t]);
-            }
-        }
-        let triangles = c.boundary.iter().zip(&c.boundary_labels);
-        for ((tri, &l), &r) in triangles.zip(&c.boundary_regions) {
-            for side in self.sides(l, r) {
-                let a = &mut self.acc[side];
-                a.triangles += 1;
-                if let Some(comp) = &mut a.components {
-                    comp.add_triangle(tri);
-                }
-            }
-        }
-    }
-
-    /// The regions a triangle labelled `l` of (lower) region `r` bounds: its own, and for an
-    /// interface also the region above.
-    fn sides(&self, l: BoundaryLabel, r: u8) -> impl Iterator<Item = usize> {
-        let r = usize::from(r);
-        let interface = l.is_interface(self.levels);
-        std::iter::once(r).chain(interface.then_some(r + 1))
+        let levels = self.levels;
+        (self.acc.par_iter_mut().enumerate())
+            .for_each(|(k, a)| a.add(k as u8, c, n, (vols, cos), levels));
     }
 
     /// The facts of each region, named by `names` and bounded by `levels`.
