@@ -223,10 +223,13 @@ pub fn move_keeps_volume(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> bool
         return true;
     }
     let x = ctx.field.to_physical(u);
-    star_keeps_volume(lm, v, |t| {
+    let (mut before, mut after) = (0.0, 0.0);
+    for &t in &lm.star[v as usize] {
+        before += lm.volume_of(t);
         let p = lm.corners_with(t, v, x);
-        crate::geom::signed_volume(p[0], p[1], p[2], p[3])
-    })
+        after += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
+    }
+    (after - before).abs() <= VOLUME_SHARE * before.abs()
 }
 
 /// Whether merging level vertex `a` into `b` changes the volume of `a`'s star by at most
@@ -236,29 +239,15 @@ pub fn collapse_keeps_volume(lm: &LocalMesh, a: u32, b: u32) -> bool {
         return true;
     }
     let xb = lm.x[b as usize];
-    star_keeps_volume(lm, a, |t| {
-        if lm.tets[t as usize].contains(&b) {
-            0.0
-        } else {
+    let (mut before, mut after) = (0.0, 0.0);
+    for &t in &lm.star[a as usize] {
+        before += lm.volume_of(t);
+        if !lm.tets[t as usize].contains(&b) {
             let p = lm.corners_with(t, a, xb);
-            crate::geom::signed_volume(p[0], p[1], p[2], p[3])
+            after += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
         }
-    })
-}
-
-/// Whether the volume of level vertex `v`'s star changes by at most [`VOLUME_SHARE`] of it
-/// when each of its tets `t` gets volume `after(t)`. For a vertex on a level between two
-/// regions the star's volume does not change (the level is inside the mesh): each region's
-/// part of it is held to the share instead, as a boundary vertex's star is.
-fn star_keeps_volume(lm: &LocalMesh, v: u32, after: impl Fn(u32) -> f64) -> bool {
-    let below = lm.counted_region(v);
-    let (mut before, mut now) = ([0.0; 2], [0.0; 2]);
-    for &t in &lm.star[v as usize] {
-        let side = usize::from(below.is_some_and(|r| lm.region[t as usize] != r));
-        before[side] += lm.volume_of(t);
-        now[side] += after(t);
     }
-    (0..2).all(|s| (now[s] - before[s]).abs() <= VOLUME_SHARE * before[s].abs())
+    (after - before).abs() <= VOLUME_SHARE * before.abs()
 }
 
 /// Whether a face of `new` (faces at `from`, with `from` becoming `to` at index point `u`: a

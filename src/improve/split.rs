@@ -46,10 +46,12 @@ fn midpoint(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// a level set whose chord sags by more than `min_sag` of its length ([`sag`]), where the
 /// boundary bends one way ([`bends`]), in a slab of the grid (along its longest axis) whose
 /// sagging edges bend mostly one way, and on that side ([`dominant_side`]). Elsewhere the
-/// chords' errors cancel, and the splits would cost time for nothing.
+/// chords' errors cancel, and the splits would cost time for nothing. With several regions
+/// each level votes apart ([`group_of`]): the chords of one level do not cancel those of
+/// another, since each moves the volume of other regions.
 pub fn sagging_points(mesh: &TetMesh, ctx: &Ctx, min_sag: f64) -> Vec<bool> {
     use rayon::prelude::*;
-    let edges: Vec<([u32; 2], f64)> = mesh
+    let edges: Vec<([u32; 2], f64, usize)> = mesh
         .boundary
         .par_iter()
         .zip(&mesh.boundary_labels)
@@ -62,21 +64,26 @@ pub fn sagging_points(mesh: &TetMesh, ctx: &Ctx, min_sag: f64) -> Vec<bool> {
                 (a < b)
                     .then_some(level)
                     .flatten()
-                    .map(|l| ([a, b], sag(ctx, u(a), u(b), l)))
+                    .map(|l| ([a, b], sag(ctx, u(a), u(b), l), group_of(ctx, l as u8)))
             })
         })
         .collect();
-    let bend = bends(mesh.points.len(), &edges, min_sag);
-    let sagging: Vec<([u32; 2], f64)> = edges
+    let groups = edges.iter().map(|&(_, _, g)| g + 1).max().unwrap_or(1);
+    let sags: Vec<([u32; 2], f64)> = edges.iter().map(|&(e, s, _)| (e, s)).collect();
+    let bend = bends(mesh.points.len(), &sags, min_sag);
+    let (sagging, group): (Vec<([u32; 2], f64)>, Vec<usize>) = edges
         .into_iter()
-        .filter(|&(e, s)| one_way(&bend, e, s, min_sag))
-        .collect();
+        .filter(|&(e, s, _)| one_way(&bend, e, s, min_sag))
+        .map(|(e, s, g)| ((e, s), g))
+        .unzip();
     let axis = super::region::longest_axis(&ctx.field);
+    // The vote of each slab, and with several regions of each level in it.
     let slab: Vec<usize> = sagging
         .iter()
-        .map(|&(e, _)| {
+        .zip(&group)
+        .map(|(&(e, _), &g)| {
             let u = ctx.field.to_index(mesh.points[e[0] as usize])[axis];
-            (u / SLAB).floor().max(0.0) as usize
+            (u / SLAB).floor().max(0.0) as usize * groups + g
         })
         .collect();
     let side = dominant_side(mesh, &sagging, &slab);
