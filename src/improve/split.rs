@@ -69,8 +69,11 @@ pub fn sagging_points(mesh: &TetMesh, ctx: &Ctx, min_sag: f64) -> Vec<bool> {
         })
         .collect();
     let groups = edges.iter().map(|&(_, _, g)| g + 1).max().unwrap_or(1);
-    let sags: Vec<([u32; 2], f64)> = edges.iter().map(|&(e, s, _)| (e, s)).collect();
-    let bend = bends(mesh.points.len(), &sags, min_sag);
+    let bend = bends(
+        mesh.points.len(),
+        edges.iter().map(|&(e, s, _)| (e, s)),
+        min_sag,
+    );
     let (sagging, group): (Vec<([u32; 2], f64)>, Vec<usize>) = edges
         .into_iter()
         .filter(|&(e, s, _)| one_way(&bend, e, s, min_sag))
@@ -137,9 +140,9 @@ const BOTH_WAYS: u8 = 3;
 
 /// Per vertex of `n`: bit 0 if a boundary edge at it (of `edges`, with their [`sag`]) sags
 /// inwards by more than `min_sag`, bit 1 if one sags outwards.
-fn bends(n: usize, edges: &[([u32; 2], f64)], min_sag: f64) -> Vec<u8> {
+fn bends(n: usize, edges: impl IntoIterator<Item = ([u32; 2], f64)>, min_sag: f64) -> Vec<u8> {
     let mut bend = vec![0u8; n];
-    for &(e, s) in edges {
+    for (e, s) in edges {
         if s.abs() > min_sag {
             let bit = if s > 0.0 { 1 } else { 2 };
             for v in e {
@@ -236,7 +239,7 @@ fn candidates(lm: &LocalMesh, ctx: &Ctx, min_sag: f64, sagging: Option<&[bool]>)
         .iter()
         .map(|&(a, b, l)| ([a, b], sag(ctx, lm.u[a as usize], lm.u[b as usize], l)))
         .collect();
-    let bend = bends(lm.u.len(), &sags, min_sag);
+    let bend = bends(lm.u.len(), sags.iter().copied(), min_sag);
     let mut out: Vec<Candidate> = sags
         .into_iter()
         .filter(|&(e, s)| one_way(&bend, e, s, min_sag))
