@@ -1,7 +1,8 @@
 //! The meshing run as a library call ([`tptd::pipeline::mesh_file`]), without the binary:
 //! the stages reach the progress receiver in order and each one ends, the warnings reach it
 //! as they occur and come back in the report, errors are one line with their kind, and a
-//! failed run leaves no output.
+//! failed run leaves no output. The same run on a grid in memory ([`mesh_grid`]) gives the
+//! same mesh and writes nothing.
 
 mod common;
 
@@ -10,9 +11,11 @@ use std::sync::Mutex;
 
 use common::files::write_npy;
 use tptd::pipeline::{
-    mesh_file, MeshRequest, NoProgress, PipelineError, Progress, QualityRequest, StageKind,
+    mesh_file, mesh_grid, MeshRequest, NoProgress, PipelineError, Progress, QualityRequest,
+    StageKind,
 };
 use tptd::sdf::SurfaceGridOptions;
+use tptd::ScalarGrid;
 
 /// A [`Progress`] that records every call, one line each.
 #[derive(Default)]
@@ -260,4 +263,67 @@ fn a_closed_surface_is_sampled_as_a_stage_of_its_own() {
         e.is_usage() && e.message().contains("resolution applies only"),
         "{e}"
     );
+}
+
+#[test]
+fn a_grid_in_memory_meshes_as_its_file_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("steps.npy");
+    let f = |i: usize, j: usize, k: usize| ((i * 7 + j * 3 + k * 5) % 11) as f64 + 0.25;
+    write_npy(&input, [9, 8, 7], f);
+    let req = MeshRequest {
+        input: Some(input.clone()),
+        levels: Some(vec![2.0, 5.5, 9.0]),
+        spacing: Some([0.5, 1.0, 2.0]),
+        check: true,
+        output: Some(dir.path().join("steps.msh")),
+        ..MeshRequest::default()
+    };
+    let from_file = mesh_file(&req, &NoProgress).unwrap();
+    let mut values = Vec::new();
+    for k in 0..7 {
+        for j in 0..8 {
+            for i in 0..9 {
+                values.push(f(i, j, k));
+            }
+        }
+    }
+    let grid = ScalarGrid::new([9, 8, 7], values).unwrap();
+    let memory = MeshRequest {
+        output: None,
+        ..req.clone()
+    };
+    std::fs::remove_file(dir.path().join("steps.msh")).unwrap();
+    let in_memory = mesh_grid(grid, "volume", &memory, &NoProgress).unwrap();
+    let (a, b) = (from_file.mesh.unwrap(), in_memory.mesh.unwrap());
+    assert_eq!(a.mesh, b.mesh);
+    assert_eq!(from_file.report.tets, in_memory.report.tets);
+    assert!(in_memory.report.check.is_some_and(|c| c.valid));
+    assert!(
+        !dir.path().join("steps.msh").exists(),
+        "an in-memory run wrote"
+    );
+
+    let bad = MeshRequest {
+        alpha: Some(3.0),
+        ..memory
+    };
+    let grid = ScalarGrid::new([2, 2, 2], vec![0.0; 8]).unwrap();
+    let e = mesh_grid(grid, "volume", &bad, &NoProgress).err().unwrap();
+    assert!(e.message().starts_with("volume: "), "{e}");
+    assert!(!e.is_io());
+}
+
+#[test]
+fn a_missing_input_is_an_error_of_the_system() {
+    let dir = tempfile::tempdir().unwrap();
+    let req = MeshRequest {
+        input: Some(dir.path().join("missing.npy")),
+        alpha: Some(1.0),
+        output: Some(dir.path().join("m.vtu")),
+        ..MeshRequest::default()
+    };
+    let e = fails(&req, dir.path(), &[]);
+    assert!(e.is_io() && !e.is_usage(), "{e}");
+    assert!(e.message().contains("missing.npy"), "{e}");
 }

@@ -279,6 +279,15 @@ const MESH_ONLY: [Param; 17] = [
     Param::VoxelSize,
 ];
 
+/// Parameters of the quality pass, which apply only with it.
+const QUALITY_ONLY: [Param; 5] = [
+    Param::MinAngle,
+    Param::MaxAngle,
+    Param::QualityTime,
+    Param::BoundaryCollapseRatio,
+    Param::SplitSag,
+];
+
 /// Parameters that apply to an inspection.
 const INSPECT_OPTIONS: [Param; 9] = [
     Param::Inspect,
@@ -333,6 +342,9 @@ pub fn check_applies(g: &Given) -> Result<(), Inapplicable> {
     }
     if let Some(param) = g.first(&CRITICAL_ONLY) {
         return only_with(param, &[Param::Critical]);
+    }
+    if let (false, Some(param)) = (g.has(Param::Quality), g.first(&QUALITY_ONLY)) {
+        return only_with(param, &[Param::Quality]);
     }
     check_output(g, g.output.unwrap_or(Path::new(DEMO_OUTPUT)))?;
     check_input(g)?;

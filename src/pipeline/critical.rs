@@ -186,7 +186,7 @@ pub fn critical_file(
 /// is the same file as a file of the input or as another output. A clash is a usage error.
 fn check_files(req: &CriticalRequest) -> Result<(), PipelineError> {
     let inputs = match &req.input {
-        Some(input) => input_run_files(input, None).map_err(PipelineError::other)?,
+        Some(input) => input_run_files(input, None).map_err(PipelineError::from)?,
         None => Vec::new(),
     };
     let n = req.names;

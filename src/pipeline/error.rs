@@ -1,9 +1,10 @@
-//! The error of a run: one line `{file}: {problem}`, and whether it is a usage error (an
-//! output that would replace an input or another output, found before any work).
+//! The error of a run: one line `{file}: {problem}`, whether it is a usage error (an
+//! output that would replace an input or another output, found before any work), and
+//! whether the system refused a file (missing, unreadable, not writable).
 
 use std::fmt;
 
-use crate::io::{FileClash, WriteError};
+use crate::io::{FileClash, ReadError, WriteError};
 
 /// Why a run failed: displays as one line naming the file (or the demo input, or the
 /// option) and the problem.
@@ -11,6 +12,7 @@ use crate::io::{FileClash, WriteError};
 pub struct PipelineError {
     message: String,
     usage: bool,
+    io: bool,
 }
 
 impl PipelineError {
@@ -19,6 +21,7 @@ impl PipelineError {
         PipelineError {
             message: format!("{file}: {problem}"),
             usage: false,
+            io: false,
         }
     }
 
@@ -36,6 +39,15 @@ impl PipelineError {
         PipelineError {
             message: error.to_string(),
             usage: false,
+            io: false,
+        }
+    }
+
+    /// An error whose message is `error`'s own, where the system refused a file.
+    fn io(error: impl fmt::Display) -> Self {
+        PipelineError {
+            io: true,
+            ..Self::other(error)
         }
     }
 
@@ -43,6 +55,13 @@ impl PipelineError {
     /// then) rather than failing in the work.
     pub fn is_usage(&self) -> bool {
         self.usage
+    }
+
+    /// Whether the system refused a file of the run (missing, unreadable, a missing
+    /// directory, not writable), rather than its content or the request being wrong (a
+    /// binding raises `OSError` then).
+    pub fn is_io(&self) -> bool {
+        self.io
     }
 
     /// The message (as displayed).
@@ -65,6 +84,7 @@ impl From<FileClash> for PipelineError {
         PipelineError {
             message: e.to_string(),
             usage: true,
+            io: false,
         }
     }
 }
@@ -73,7 +93,9 @@ impl From<WriteError> for PipelineError {
     /// Rewrites a [`WriteError`] as `{file}: {problem}`.
     fn from(e: WriteError) -> Self {
         match e {
-            WriteError::IsDirectory { path } => Self::file(path.display(), "is a directory"),
+            WriteError::IsDirectory { path } => {
+                Self::io(format_args!("{}: is a directory", path.display()))
+            }
             WriteError::NotRegularFile { path } => {
                 Self::file(path.display(), "exists and is not a regular file")
             }
@@ -83,13 +105,24 @@ impl From<WriteError> for PipelineError {
                 "unknown output format; use a .msh, .inp or .vtu (tetrahedra) or .obj, .ply or \
                  .stl (isosurface) extension",
             ),
-            WriteError::MissingDirectory { path, dir } => Self::file(
+            WriteError::MissingDirectory { path, dir } => Self::io(format_args!(
+                "{}: cannot write: directory '{}' does not exist",
                 path.display(),
-                format_args!("cannot write: directory '{}' does not exist", dir.display()),
-            ),
+                dir.display()
+            )),
             WriteError::Io { path, source } => {
-                Self::file(path.display(), format_args!("cannot write: {source}"))
+                Self::io(format_args!("{}: cannot write: {source}", path.display()))
             }
+        }
+    }
+}
+
+impl From<ReadError> for PipelineError {
+    /// The reader's message; a file the system refused is marked ([`PipelineError::is_io`]).
+    fn from(e: ReadError) -> Self {
+        match e {
+            ReadError::Io { .. } => Self::io(e),
+            e => Self::other(e),
         }
     }
 }

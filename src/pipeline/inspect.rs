@@ -114,7 +114,7 @@ pub fn inspect_files(
 /// is a usage error.
 fn check_files(req: &InspectRequest) -> Result<(), PipelineError> {
     let mut inputs = match &req.volume {
-        Some(volume) => input_run_files(volume, None).map_err(PipelineError::other)?,
+        Some(volume) => input_run_files(volume, None).map_err(PipelineError::from)?,
         None => Vec::new(),
     };
     for mesh in &req.meshes {
@@ -135,7 +135,7 @@ fn read_reference(
     let name = path.display().to_string();
     let n = req.names;
     let stage = reporter.stage(&format!("reading {name}"), StageKind::Step);
-    let mut grid = read_volume(path).map_err(PipelineError::other)?;
+    let mut grid = read_volume(path).map_err(PipelineError::from)?;
     if let Some(s) = req.spacing {
         grid = ScalarGrid::with_geometry(grid.dims, s, grid.origin, grid.direction, grid.values)
             .map_err(|e| {

@@ -1,6 +1,8 @@
 //! The choice between streaming the mesh to disk and holding it in memory, and the memory
 //! estimate of the run, checked against the limit before the work (see [`crate::memory`]).
 
+use std::path::Path;
+
 use crate::io::SurfaceFormat;
 use crate::memory::{estimate_tets, mesh_bytes, stream_bytes};
 use crate::ScalarGrid;
@@ -10,14 +12,16 @@ use super::text::fmt_interval;
 use super::{Mode, Param, ParamNames, PipelineError};
 use crate::allocator::OutOfMemory;
 
-/// Whether the mesh goes straight to disk slab by slab: a volume mesh output without the
+/// The output the mesh goes straight to, slab by slab: a volume mesh output without the
 /// quality pass (which needs the whole mesh), a curvilinear mapping or the check (which reads
-/// the whole mesh).
-pub(crate) fn streams(job: &Job, curvilinear: bool) -> bool {
-    job.req.quality.is_none()
+/// the whole mesh). `None`: the mesh is held in memory.
+pub(crate) fn streams<'a>(job: &'a Job, curvilinear: bool) -> Option<&'a Path> {
+    let output = job.output.as_deref()?;
+    let stream = job.req.quality.is_none()
         && !job.req.check
         && !curvilinear
-        && SurfaceFormat::from_path(&job.output).is_none()
+        && SurfaceFormat::from_path(output).is_none();
+    stream.then_some(output)
 }
 
 /// Checks the memory estimate of meshing, analysis, the quality pass and the check before

@@ -16,6 +16,10 @@
 //!    check, and writes the output under a temporary name;
 //! 6. builds the report (`report.rs`), writes it and renames both files onto their names.
 //!
+//! [`mesh_grid`] is the same run on a volume given in memory (a binding's array) instead of
+//! an input file: steps 1 and 3 to 6, the output optional (without one the mesh is only
+//! returned).
+//!
 //! The result ([`MeshRun`]) holds the report, with every warning given on the way; the
 //! warnings also go to [`Progress::warn`] as they occur. Nothing here prints. Every failure
 //! is a [`PipelineError`]: one line naming the file and the problem, and whether the run was
@@ -100,27 +104,72 @@ pub fn mesh_file(req: &MeshRequest, progress: &dyn Progress) -> Result<MeshRun, 
     let t_total = Instant::now();
     crate::memory::set_limit(req.memory_limit);
     let reporter = Reporter::new(progress);
-    let job = request::check_request(req)?;
+    let job = request::check_request(req, None)?;
     let t_args = secs(t_total);
-
     let t = Instant::now();
     let input = read::read_input(&job, &reporter)?;
-    let (grid, curvilinear) = (&input.grid, input.curvilinear.as_ref());
     let t_read = secs(t);
+    run_job(&job, input, &reporter, (t_total, t_args, t_read))
+}
+
+/// Runs `req` on `grid`, a volume given in memory and named `name` in messages, as
+/// [`mesh_file`] runs it on its input file: the same checks, warnings, meshing, quality
+/// pass, analysis and check. The request's input (and its function, field and surface grid)
+/// is not read; its spacing, if given, replaces the grid's. Without an output in the request
+/// the mesh is held in memory and returned in [`MeshRun::mesh`], and nothing is written
+/// (except the report, if a path is given); with one, the run writes it as `mesh_file` does.
+///
+/// # Errors
+/// The first failure, as one line naming `name` (or the file written).
+pub fn mesh_grid(
+    grid: ScalarGrid,
+    name: &str,
+    req: &MeshRequest,
+    progress: &dyn Progress,
+) -> Result<MeshRun, PipelineError> {
+    let t_total = Instant::now();
+    crate::memory::set_limit(req.memory_limit);
+    let reporter = Reporter::new(progress);
+    let req = MeshRequest {
+        input: None,
+        function: None,
+        field: None,
+        surface_grid: Default::default(),
+        ..req.clone()
+    };
+    let job = request::check_request(&req, Some(name))?;
+    let grid = read::with_spacing(grid, req.spacing, name, req.names)?;
+    let t_args = secs(t_total);
+    let input = read::Input {
+        grid,
+        curvilinear: None,
+        surface: None,
+    };
+    run_job(&job, input, &reporter, (t_total, t_args, 0.0))
+}
+
+/// The run of a checked request on its input, read (`mesh_file`) or given (`mesh_grid`),
+/// after the seconds `(start, checking the arguments, reading)`.
+fn run_job(
+    job: &request::Job,
+    input: read::Input,
+    reporter: &Reporter,
+    (t_total, t_args, t_read): (Instant, f64, f64),
+) -> Result<MeshRun, PipelineError> {
+    let (grid, curvilinear) = (&input.grid, input.curvilinear.as_ref());
     let t = Instant::now();
-    let streaming = memory::streams(&job, curvilinear.is_some());
-    bounds::warn_input(grid, &job, curvilinear.is_some(), &reporter);
-    memory::check_memory(grid, &job, streaming)?;
+    let stream_to = memory::streams(job, curvilinear.is_some());
+    bounds::warn_input(grid, job, curvilinear.is_some(), reporter);
+    memory::check_memory(grid, job, stream_to.is_some())?;
     let t_checks = t_args + secs(t);
 
-    let mut w = if streaming {
-        run::stream_to_disk(&job, grid, &reporter)?
-    } else {
-        run::mesh_in_memory(&job, grid, curvilinear, &reporter)?
+    let mut w = match stream_to {
+        Some(output) => run::stream_to_disk(job, output, grid, reporter)?,
+        None => run::mesh_in_memory(job, grid, curvilinear, reporter)?,
     };
     let t_quality = w.t_quality.take();
     let mut timings = Timings {
-        streamed: streaming,
+        streamed: stream_to.is_some(),
         read: t_read,
         checks: t_checks,
         mesh: w.t_mesh,
@@ -134,10 +183,10 @@ pub fn mesh_file(req: &MeshRequest, progress: &dyn Progress) -> Result<MeshRun, 
         total: secs(t_total),
     };
     timings.close();
-    let mut report = report::make_report(&job, grid, &mut w, timings);
-    read::warn_sampling(&job, &input, &report, &reporter);
+    let mut report = report::make_report(job, grid, &mut w, timings);
+    read::warn_sampling(job, &input, &report, reporter);
     report.warnings = reporter.take_warnings();
-    report::commit(&report, req.report.as_deref(), w.file)?;
+    report::commit(&report, job.req.report.as_deref(), w.file)?;
     Ok(MeshRun {
         report,
         comparison: w.comparison,

@@ -94,7 +94,7 @@ fn read_surface_input(
         ));
     }
     let stage = reporter.stage(&format!("reading {name}"), StageKind::Step);
-    let soup = read_surface(path).map_err(PipelineError::other)?;
+    let soup = read_surface(path).map_err(PipelineError::from)?;
     stage.finish();
     let (grid, facts) = sample_surface(job, &soup, reporter).map_err(|e| sdf_error(job, e))?;
     for w in facts.warnings() {
@@ -153,7 +153,7 @@ fn read_curvilinear_input(job: &Job) -> Result<Option<CurvilinearGrid>, Pipeline
         return Ok(None);
     };
     let grid = read_curvilinear(path, req.function.as_deref(), req.field.as_deref())
-        .map_err(PipelineError::other)?;
+        .map_err(PipelineError::from)?;
     Ok(Some(grid))
 }
 
@@ -167,25 +167,38 @@ pub fn read_grid(
     spacing: Option<[f64; 3]>,
     names: ParamNames,
 ) -> Result<ScalarGrid, PipelineError> {
-    let mut grid = match input {
+    let grid = match input {
         Some(p) if is_surface(p) => {
             return Err(PipelineError::file(
                 p.display(),
                 "a closed surface is meshed as a solid, not read as a volume here",
             ))
         }
-        Some(p) => read_volume(p).map_err(PipelineError::other)?,
+        Some(p) => read_volume(p).map_err(PipelineError::from)?,
         None => demo_volume(),
     };
-    if let Some(s) = spacing {
-        let input_name = input.map_or("demo".to_string(), |p| p.display().to_string());
-        grid = ScalarGrid::with_geometry(grid.dims, s, grid.origin, grid.direction, grid.values)
-            .map_err(|e| {
-                PipelineError::file(
-                    input_name,
-                    format_args!("{}: {e}", names.of(Param::Spacing)),
-                )
-            })?;
-    }
-    Ok(grid)
+    let input_name = input.map_or("demo".to_string(), |p| p.display().to_string());
+    with_spacing(grid, spacing, &input_name, names)
+}
+
+/// `grid` with `spacing` instead of its own, if given (its origin and direction kept).
+///
+/// # Errors
+/// `{input_name}: {spacing}: …` for a spacing the grid refuses (the parameter named by
+/// `names`).
+pub(crate) fn with_spacing(
+    grid: ScalarGrid,
+    spacing: Option<[f64; 3]>,
+    input_name: &str,
+    names: ParamNames,
+) -> Result<ScalarGrid, PipelineError> {
+    let Some(s) = spacing else {
+        return Ok(grid);
+    };
+    ScalarGrid::with_geometry(grid.dims, s, grid.origin, grid.direction, grid.values).map_err(|e| {
+        PipelineError::file(
+            input_name,
+            format_args!("{}: {e}", names.of(Param::Spacing)),
+        )
+    })
 }

@@ -23,7 +23,10 @@ pub(crate) fn make_report(
         .threads
         .unwrap_or_else(rayon::current_num_threads)
         .max(1);
-    let output_name = job.output.display().to_string();
+    let output_name = job
+        .output
+        .as_ref()
+        .map_or(String::new(), |p| p.display().to_string());
     let mut report = build_report(
         &RunInfo {
             input: &job.input_name,
@@ -47,13 +50,13 @@ pub(crate) fn make_report(
     report
 }
 
-/// Writes the JSON report (to `path`, if any), then renames the output and the report onto
-/// their names. When the report cannot be written, neither file is: dropping `output`
-/// removes its temporary.
+/// Writes the JSON report (to `path`, if any), then renames the output (if any) and the
+/// report onto their names. When the report cannot be written, neither file is: dropping
+/// `output` removes its temporary.
 pub(crate) fn commit(
     report: &Report,
     path: Option<&Path>,
-    output: PendingFile,
+    output: Option<PendingFile>,
 ) -> Result<(), PipelineError> {
     let report_file = match path {
         Some(path) => {
@@ -63,7 +66,9 @@ pub(crate) fn commit(
         }
         None => None,
     };
-    output.commit()?;
+    if let Some(output) = output {
+        output.commit()?;
+    }
     if let Some(f) = report_file {
         f.commit()?;
     }

@@ -56,7 +56,8 @@ pub struct MeshRequest {
     /// Worker threads (`None`: all cores).
     pub threads: Option<usize>,
     /// The output: a mesh (`.msh`, `.inp`, `.vtu`) or the level sets (`.obj`, `.ply`,
-    /// `.stl`); `None` only for the demo, which writes [`DEMO_OUTPUT`].
+    /// `.stl`); `None` only for the demo, which writes [`DEMO_OUTPUT`], and for a grid given
+    /// in memory ([`super::mesh_grid`]), whose mesh is then held and not written.
     pub output: Option<PathBuf>,
     /// Where to write the JSON report, if anywhere.
     pub report: Option<PathBuf>,
@@ -146,8 +147,10 @@ pub(crate) struct Job<'a> {
     pub(crate) req: &'a MeshRequest,
     /// The input as named in messages (`demo` for the demo volume).
     pub(crate) input_name: String,
-    /// The output path.
-    pub(crate) output: PathBuf,
+    /// Whether the grid was given in memory (not read from the request's input).
+    pub(crate) in_memory: bool,
+    /// The output path (`None`: a grid given in memory, meshed without writing).
+    pub(crate) output: Option<PathBuf>,
     /// The meshing options.
     pub(crate) opts: MeshOptions,
 }
@@ -155,35 +158,49 @@ pub(crate) struct Job<'a> {
 impl Job<'_> {
     /// Whether the input is the demo volume.
     pub(crate) fn demo(&self) -> bool {
-        self.req.input.is_none()
+        self.req.input.is_none() && !self.in_memory
     }
 
     /// Whether the input is a closed surface (`.obj`, `.stl`, `.ply`).
     pub(crate) fn surface(&self) -> bool {
         self.req.input.as_deref().is_some_and(is_surface)
     }
+
+    /// The output as named in messages (the input's name when nothing is written).
+    pub(crate) fn output_name(&self) -> String {
+        match &self.output {
+            Some(p) => p.display().to_string(),
+            None => self.input_name.clone(),
+        }
+    }
 }
 
 /// Checks the request before any work: the interval, the thread count, the output format
-/// and that the outputs can be written.
-pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError> {
-    let demo = req.input.is_none();
-    let input_name = match &req.input {
-        Some(p) => p.display().to_string(),
-        None => "demo".to_string(),
+/// and that the outputs can be written. `in_memory` names a grid given in memory (the
+/// request's input is then not read, and an output is optional).
+pub(crate) fn check_request<'a>(
+    req: &'a MeshRequest,
+    in_memory: Option<&str>,
+) -> Result<Job<'a>, PipelineError> {
+    let demo = req.input.is_none() && in_memory.is_none();
+    let input_name = match (in_memory, &req.input) {
+        (Some(name), _) => name.to_string(),
+        (None, Some(p)) => p.display().to_string(),
+        (None, None) => "demo".to_string(),
     };
     let output = match (&req.output, demo) {
-        (Some(p), _) => p.clone(),
-        (None, true) => PathBuf::from(DEMO_OUTPUT),
+        (Some(p), _) => Some(p.clone()),
+        (None, true) => Some(PathBuf::from(DEMO_OUTPUT)),
+        (None, false) if in_memory.is_some() => None,
         (None, false) => return Err(PipelineError::file(&input_name, "no output given")),
     };
     let (alpha, beta) = match &req.levels {
         Some(levels) => run_levels(req, levels, &input_name)?,
-        None => interval(req, &input_name)?,
+        None => interval(req, &input_name, demo)?,
     };
     check_surface_grid(req, &input_name)?;
     check_threads(req.threads, req.names)?;
-    check_outputs(req, &output)?;
+    check_outputs(req, output.as_deref())?;
     let opts = MeshOptions {
         alpha,
         beta,
@@ -201,6 +218,7 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
     Ok(Job {
         req,
         input_name,
+        in_memory: in_memory.is_some(),
         output,
         opts,
     })
@@ -208,11 +226,11 @@ pub(crate) fn check_request(req: &MeshRequest) -> Result<Job<'_>, PipelineError>
 
 /// The interval `(alpha, beta)` of the request (the demo's without both bounds; for a
 /// closed surface, a bound not given is `-inf` or `0`), which must not be empty.
-fn interval(req: &MeshRequest, input_name: &str) -> Result<(f64, f64), PipelineError> {
+fn interval(req: &MeshRequest, input_name: &str, demo: bool) -> Result<(f64, f64), PipelineError> {
     let n = req.names;
     let surface = req.input.as_deref().is_some_and(is_surface);
     let (alpha, beta) = match (req.alpha, req.beta) {
-        (None, None) if req.input.is_none() => (DEMO_ALPHA, DEMO_BETA),
+        (None, None) if demo => (DEMO_ALPHA, DEMO_BETA),
         (a, b) if surface => (a.unwrap_or(f64::NEG_INFINITY), b.unwrap_or(INSIDE_LEVEL)),
         (None, None) => {
             return Err(PipelineError::file(
@@ -357,14 +375,16 @@ pub(super) fn too_many_threads(n: usize) -> Option<(usize, usize, usize)> {
     (n > max).then_some((n, max, cores))
 }
 
-/// Checks the output (a known mesh or surface format, writable) and the report output
+/// Checks the output, if any (a known mesh or surface format, writable) and the report output
 /// (writable), then that no output is an input file or another output (compared by
 /// identity, not spelling).
-fn check_outputs(req: &MeshRequest, output: &Path) -> Result<(), PipelineError> {
-    if SurfaceFormat::from_path(output).is_none() {
-        MeshFormat::from_path(output)?;
+fn check_outputs(req: &MeshRequest, output: Option<&Path>) -> Result<(), PipelineError> {
+    if let Some(output) = output {
+        if SurfaceFormat::from_path(output).is_none() {
+            MeshFormat::from_path(output)?;
+        }
+        check_writable(output)?;
     }
-    check_writable(output)?;
     if let Some(r) = &req.report {
         check_writable(r)?;
     }
@@ -374,16 +394,16 @@ fn check_outputs(req: &MeshRequest, output: &Path) -> Result<(), PipelineError> 
 /// Refuses, before any sample is read, an output (the mesh, the report) that is the same file
 /// as a file of the input (the volume and the files read with it) or as the other output. A
 /// clash is a usage error.
-fn check_files(req: &MeshRequest, output: &Path) -> Result<(), PipelineError> {
+fn check_files(req: &MeshRequest, output: Option<&Path>) -> Result<(), PipelineError> {
     let inputs = match &req.input {
         Some(input) => {
-            input_run_files(input, req.function.as_deref()).map_err(PipelineError::other)?
+            input_run_files(input, req.function.as_deref()).map_err(PipelineError::from)?
         }
         None => Vec::new(),
     };
     let n = req.names;
     let outputs = output_run_files(&[
-        (n.of(Param::Output), Some(output)),
+        (n.of(Param::Output), output),
         (n.of(Param::Report), req.report.as_deref()),
     ]);
     check_clashes(&inputs, &outputs)?;

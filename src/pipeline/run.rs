@@ -2,6 +2,7 @@
 //! curvilinear map, the analysis and the check), and writing the output under a temporary
 //! name.
 
+use std::path::Path;
 use std::time::Instant;
 
 use crate::check::{check_mesh, CheckOptions, CheckReport};
@@ -34,7 +35,8 @@ pub(crate) struct Written {
     pub(crate) surface: Option<SurfaceAnalysis>,
     pub(crate) comparison: Option<DemoComparison>,
     pub(crate) check: Option<CheckReport>,
-    pub(crate) file: PendingFile,
+    /// The output under its temporary name (`None`: nothing written).
+    pub(crate) file: Option<PendingFile>,
     /// The mesh (when it was held in memory).
     pub(crate) mesh: Option<MeshOutput>,
     /// Seconds of meshing, analysis (with the demo's comparison), the quality step (by part),
@@ -52,16 +54,17 @@ pub(crate) fn secs(t: Instant) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
-/// Meshes slab by slab into spill files next to the output, gathering the facts on the way,
-/// then writes the output from the spill files: memory stays the grid plus a few slabs.
+/// Meshes slab by slab into spill files next to `output`, gathering the facts on the way,
+/// then writes `output` from the spill files: memory stays the grid plus a few slabs.
 pub(crate) fn stream_to_disk(
     job: &Job,
+    output: &Path,
     grid: &ScalarGrid,
     reporter: &Reporter,
 ) -> Result<Written, PipelineError> {
     let t = Instant::now();
     let levels = job.opts.levels.len().max(crate::mesh::INTERVAL_LEVELS);
-    let mut spill = spill_for_levels(&job.output, levels, job.req.region_names.clone())?;
+    let mut spill = spill_for_levels(output, levels, job.req.region_names.clone())?;
     let mut facts = FactsSink::new(job.req.analysis)
         .with_regions(&job.opts.levels, job.req.region_names.clone());
     let stage = reporter.stage("meshing", meshing(grid));
@@ -73,18 +76,15 @@ pub(crate) fn stream_to_disk(
     );
     stage.finish();
     let stats = stats.map_err(|e| match e {
-        MeshError::Output(e) => PipelineError::file(job.output.display(), e),
+        MeshError::Output(e) => PipelineError::file(output.display(), e),
         e => PipelineError::file(&job.input_name, e),
     })?;
     let facts = facts.finish();
     check_not_empty(grid, job, facts.tets)?;
     let t_mesh = secs(t);
     let t = Instant::now();
-    let stage = reporter.stage(
-        &format!("writing {}", job.output.display()),
-        StageKind::Step,
-    );
-    let file = write_spilled_pending(&job.output, &mut spill, &job.req.write);
+    let stage = reporter.stage(&format!("writing {}", output.display()), StageKind::Step);
+    let file = write_spilled_pending(output, &mut spill, &job.req.write);
     stage.finish();
     let t_write = secs(t);
     let t = Instant::now();
@@ -98,7 +98,7 @@ pub(crate) fn stream_to_disk(
         surface: None,
         comparison,
         check: None,
-        file: file?,
+        file: Some(file?),
         mesh: None,
         t_mesh,
         t_analysis,
@@ -117,7 +117,7 @@ fn meshing(grid: &ScalarGrid) -> StageKind {
 }
 
 /// Meshes into memory, improves (quality pass), maps (curvilinear), analyses, checks and
-/// writes.
+/// writes (when there is an output).
 pub(crate) fn mesh_in_memory(
     job: &Job,
     grid: &ScalarGrid,
@@ -209,7 +209,7 @@ fn check_output(
             _ => String::new(),
         };
         return Err(PipelineError::file(
-            job.output.display(),
+            job.output_name(),
             format_args!(
                 "the mesh fails {} ({}{how_far}); nothing written",
                 job.req.names.of(Param::Check),
@@ -221,28 +221,28 @@ fn check_output(
 }
 
 /// Writes the mesh (or, for a surface extension, the level sets, with their analysis) under
-/// a temporary name.
+/// a temporary name; without an output, nothing.
 fn write_output(
     job: &Job,
     out: &MeshOutput,
     reporter: &Reporter,
-) -> Result<(Option<SurfaceAnalysis>, PendingFile), PipelineError> {
-    let stage = reporter.stage(
-        &format!("writing {}", job.output.display()),
-        StageKind::Step,
-    );
+) -> Result<(Option<SurfaceAnalysis>, Option<PendingFile>), PipelineError> {
+    let Some(output) = job.output.as_deref() else {
+        return Ok((None, None));
+    };
+    let stage = reporter.stage(&format!("writing {}", output.display()), StageKind::Step);
     let write = &job.req.write;
-    let written = match SurfaceFormat::from_path(&job.output) {
+    let written = match SurfaceFormat::from_path(output) {
         Some(_) => {
             let opts = SurfaceOptions {
                 caps: job.req.caps,
                 beta: job.opts.beta,
             };
             let s = level_surface(&out.mesh, &opts);
-            let file = write_surface_pending(&job.output, &s, write)?;
-            (Some(analyse_surface(&s)), file)
+            let file = write_surface_pending(output, &s, write)?;
+            (Some(analyse_surface(&s)), Some(file))
         }
-        None => (None, write_mesh_pending(&job.output, &out.mesh, write)?),
+        None => (None, Some(write_mesh_pending(output, &out.mesh, write)?)),
     };
     stage.finish();
     Ok(written)
