@@ -16,9 +16,9 @@
 //!    check, and writes the output under a temporary name;
 //! 6. builds the report (`report.rs`), writes it and renames both files onto their names.
 //!
-//! [`mesh_grid`] is the same run on a volume given in memory (a binding's array) instead of
-//! an input file: steps 1 and 3 to 6, the output optional (without one the mesh is only
-//! returned).
+//! Without an output the mesh is held in memory and only returned. [`mesh_grid`] is the same
+//! run on a volume given in memory (a binding's array) instead of an input file: steps 1 and
+//! 3 to 6.
 //!
 //! The result ([`MeshRun`]) holds the report, with every warning given on the way; the
 //! warnings also go to [`Progress::warn`] as they occur. Nothing here prints. Every failure
@@ -97,6 +97,8 @@ impl MeshRun {
 /// Runs `req`: checks it, reads the input, warns about the bounds, checks the memory
 /// estimate, meshes (streamed or in memory), improves, analyses, checks and writes the output
 /// and the report. Stages, meshing progress and warnings go to `progress` as they happen.
+/// Without an output (and not on the demo volume) the mesh is held in memory, returned in
+/// [`MeshRun::mesh`] and not written.
 ///
 /// # Errors
 /// The first failure, as one line naming the file; no output is left behind.
@@ -114,10 +116,8 @@ pub fn mesh_file(req: &MeshRequest, progress: &dyn Progress) -> Result<MeshRun, 
 
 /// Runs `req` on `grid`, a volume given in memory and named `name` in messages, as
 /// [`mesh_file`] runs it on its input file: the same checks, warnings, meshing, quality
-/// pass, analysis and check. The request's input (and its function, field and surface grid)
-/// is not read; its spacing, if given, replaces the grid's. Without an output in the request
-/// the mesh is held in memory and returned in [`MeshRun::mesh`], and nothing is written
-/// (except the report, if a path is given); with one, the run writes it as `mesh_file` does.
+/// pass, analysis, check and output. The request's input (and its function, field and
+/// surface grid) is not read; its spacing, if given, replaces the grid's.
 ///
 /// # Errors
 /// The first failure, as one line naming `name` (or the file written).

@@ -56,8 +56,8 @@ pub struct MeshRequest {
     /// Worker threads (`None`: all cores).
     pub threads: Option<usize>,
     /// The output: a mesh (`.msh`, `.inp`, `.vtu`) or the level sets (`.obj`, `.ply`,
-    /// `.stl`); `None` only for the demo, which writes [`DEMO_OUTPUT`], and for a grid given
-    /// in memory ([`super::mesh_grid`]), whose mesh is then held and not written.
+    /// `.stl`); `None`: the mesh is held in memory ([`super::MeshRun::mesh`]) and not
+    /// written, except for the demo volume, which writes [`DEMO_OUTPUT`].
     pub output: Option<PathBuf>,
     /// Where to write the JSON report, if anywhere.
     pub report: Option<PathBuf>,
@@ -149,7 +149,7 @@ pub(crate) struct Job<'a> {
     pub(crate) input_name: String,
     /// Whether the grid was given in memory (not read from the request's input).
     pub(crate) in_memory: bool,
-    /// The output path (`None`: a grid given in memory, meshed without writing).
+    /// The output path (`None`: the mesh is held in memory, nothing written).
     pub(crate) output: Option<PathBuf>,
     /// The meshing options.
     pub(crate) opts: MeshOptions,
@@ -177,7 +177,7 @@ impl Job<'_> {
 
 /// Checks the request before any work: the interval, the thread count, the output format
 /// and that the outputs can be written. `in_memory` names a grid given in memory (the
-/// request's input is then not read, and an output is optional).
+/// request's input is then not read).
 pub(crate) fn check_request<'a>(
     req: &'a MeshRequest,
     in_memory: Option<&str>,
@@ -191,8 +191,7 @@ pub(crate) fn check_request<'a>(
     let output = match (&req.output, demo) {
         (Some(p), _) => Some(p.clone()),
         (None, true) => Some(PathBuf::from(DEMO_OUTPUT)),
-        (None, false) if in_memory.is_some() => None,
-        (None, false) => return Err(PipelineError::file(&input_name, "no output given")),
+        (None, false) => None,
     };
     let (alpha, beta) = match &req.levels {
         Some(levels) => run_levels(req, levels, &input_name)?,

@@ -1,0 +1,232 @@
+//! The keyword arguments of `tptd.mesh` and `tptd.mesh_file` as the library's request: each
+//! value checked by the library's parser for it ([`tptd::pipeline::values`]), then the
+//! library's check that every argument given applies ([`check_applies`]), every message
+//! naming the parameters the Python way ([`PY_NAMES`]).
+
+use std::path::PathBuf;
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use tptd::improve::QualityOptions;
+use tptd::pipeline::values;
+use tptd::pipeline::{check_applies, Given, MeshRequest, Mode, Param, ParamNames, QualityRequest};
+use tptd::sdf::SurfaceGridOptions;
+use tptd::Method;
+
+/// Python spells every parameter by its neutral name, except the input file: `path`.
+fn py_name(p: Param) -> &'static str {
+    match p {
+        Param::Input => "path",
+        p => p.name(),
+    }
+}
+
+/// The library's messages name the parameters as the Python functions do.
+pub(crate) const PY_NAMES: ParamNames = ParamNames(py_name);
+
+/// The methods, by name.
+const METHODS: [Method; 5] = [
+    Method::Ctd,
+    Method::Tptd,
+    Method::Std,
+    Method::Six,
+    Method::Five,
+];
+
+/// The keyword arguments, as `tptd/__init__.py` passes them (every key present; `None` for
+/// one not given).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub(crate) struct Options {
+    pub(crate) alpha: Option<f64>,
+    pub(crate) beta: Option<f64>,
+    pub(crate) levels: Option<Vec<f64>>,
+    pub(crate) region_names: Option<Vec<String>>,
+    pub(crate) spacing: Option<[f64; 3]>,
+    pub(crate) origin: [f64; 3],
+    pub(crate) affine: Option<[[f64; 4]; 4]>,
+    pub(crate) method: String,
+    pub(crate) quality: bool,
+    pub(crate) min_angle: f64,
+    pub(crate) max_angle: f64,
+    pub(crate) quality_time: Option<f64>,
+    pub(crate) check: bool,
+    pub(crate) threads: Option<i64>,
+    pub(crate) field: Option<String>,
+    pub(crate) function: Option<PathBuf>,
+    pub(crate) resolution: Option<i64>,
+    pub(crate) voxel_size: Option<f64>,
+}
+
+/// `invalid value '{value}' for {param}: {problem}`, as the command line says it.
+fn invalid(value: impl std::fmt::Display, p: Param, problem: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(format!(
+        "invalid value '{value}' for {}: {problem}",
+        py_name(p)
+    ))
+}
+
+/// `v` through the library's parser of the parameter `p` (given its text).
+fn parsed<T>(v: f64, p: Param, parse: fn(&str) -> Result<T, String>) -> PyResult<T> {
+    let text = v.to_string();
+    parse(&text).map_err(|e| invalid(&text, p, e))
+}
+
+impl Options {
+    /// The parameters given (not left at their defaults).
+    fn given(&self) -> Vec<Param> {
+        let q = QualityOptions::default();
+        let set = [
+            (Param::Alpha, self.alpha.is_some()),
+            (Param::Beta, self.beta.is_some()),
+            (Param::Levels, self.levels.is_some()),
+            (Param::RegionNames, self.region_names.is_some()),
+            (Param::Spacing, self.spacing.is_some()),
+            (Param::Method, self.method != "ctd"),
+            (Param::Quality, self.quality),
+            (Param::MinAngle, self.min_angle != q.min_angle),
+            (Param::MaxAngle, self.max_angle != q.max_angle),
+            (Param::QualityTime, self.quality_time.is_some()),
+            (Param::Check, self.check),
+            (Param::Threads, self.threads.is_some()),
+            (Param::Field, self.field.is_some()),
+            (Param::Function, self.function.is_some()),
+            (Param::Resolution, self.resolution.is_some()),
+            (Param::VoxelSize, self.voxel_size.is_some()),
+        ];
+        set.into_iter()
+            .filter(|&(_, s)| s)
+            .map(|(p, _)| p)
+            .collect()
+    }
+
+    /// The request of the arguments (`input`: the file of `mesh_file`, `None` for an array),
+    /// each value and then the whole checked as the command line checks them.
+    ///
+    /// # Errors
+    /// `ValueError` with the library's message.
+    pub(crate) fn request(&self, input: Option<PathBuf>) -> PyResult<MeshRequest> {
+        let threads = self.threads()?;
+        let method = self.method()?;
+        if self.affine.is_some() && self.spacing.is_some() {
+            return Err(PyValueError::new_err(
+                "affine and spacing exclude each other: give one",
+            ));
+        }
+        let given = self.given();
+        check_applies(&Given {
+            mode: Mode::Mesh,
+            params: &given,
+            input: input.as_deref(),
+            output: None,
+            transfer: None,
+            threads,
+        })
+        .map_err(|e| PyValueError::new_err(e.render(PY_NAMES)))?;
+        Ok(MeshRequest {
+            input,
+            function: self.function.clone(),
+            field: self.field.clone(),
+            spacing: self.spacing()?,
+            surface_grid: self.surface_grid()?,
+            alpha: self.bound(self.alpha, Param::Alpha)?,
+            beta: self.bound(self.beta, Param::Beta)?,
+            levels: self.levels()?,
+            region_names: self.region_names.clone().unwrap_or_default(),
+            method,
+            threads,
+            quality: self.quality()?,
+            check: self.check,
+            names: PY_NAMES,
+            ..MeshRequest::default()
+        })
+    }
+
+    fn bound(&self, v: Option<f64>, p: Param) -> PyResult<Option<f64>> {
+        v.map(|v| parsed(v, p, values::bound)).transpose()
+    }
+
+    fn levels(&self) -> PyResult<Option<Vec<f64>>> {
+        let Some(levels) = &self.levels else {
+            return Ok(None);
+        };
+        let checked: PyResult<Vec<f64>> = levels
+            .iter()
+            .map(|&l| parsed(l, Param::Levels, values::bound))
+            .collect();
+        checked.map(Some)
+    }
+
+    fn spacing(&self) -> PyResult<Option<[f64; 3]>> {
+        let Some([x, y, z]) = self.spacing else {
+            return Ok(None);
+        };
+        let text = format!("{x},{y},{z}");
+        values::spacing(&text)
+            .map(Some)
+            .map_err(|e| invalid(&text, Param::Spacing, e))
+    }
+
+    fn method(&self) -> PyResult<Method> {
+        METHODS
+            .into_iter()
+            .find(|m| m.name() == self.method)
+            .ok_or_else(|| {
+                let names: Vec<&str> = METHODS.iter().map(|m| m.name()).collect();
+                invalid(
+                    &self.method,
+                    Param::Method,
+                    format!("possible values: {}", names.join(", ")),
+                )
+            })
+    }
+
+    fn threads(&self) -> PyResult<Option<usize>> {
+        match self.threads {
+            None => Ok(None),
+            Some(n) if n >= 1 => Ok(Some(n as usize)),
+            Some(n) => Err(invalid(
+                n,
+                Param::Threads,
+                "expected 1 or more worker threads",
+            )),
+        }
+    }
+
+    fn quality(&self) -> PyResult<Option<QualityRequest>> {
+        if !self.quality {
+            return Ok(None);
+        }
+        let seconds = self
+            .quality_time
+            .map(|t| parsed(t, Param::QualityTime, values::seconds))
+            .transpose()?;
+        Ok(Some(QualityRequest {
+            options: QualityOptions {
+                min_angle: parsed(self.min_angle, Param::MinAngle, values::min_angle)?,
+                max_angle: parsed(self.max_angle, Param::MaxAngle, values::max_angle)?,
+                time_budget: None,
+                ..QualityOptions::default()
+            },
+            seconds,
+        }))
+    }
+
+    fn surface_grid(&self) -> PyResult<SurfaceGridOptions> {
+        let resolution = match self.resolution {
+            Some(n) if n < 1 => {
+                return Err(invalid(n, Param::Resolution, "expected 1 or more voxels"))
+            }
+            n => n.map(|n| n as usize),
+        };
+        let voxel_size = self
+            .voxel_size
+            .map(|h| parsed(h, Param::VoxelSize, values::positive))
+            .transpose()?;
+        Ok(SurfaceGridOptions {
+            resolution,
+            voxel_size,
+            ..SurfaceGridOptions::default()
+        })
+    }
+}

@@ -1,0 +1,134 @@
+//! A run's mesh as numpy arrays, in a dict the package's `__init__.py` makes a `meshio.Mesh`
+//! of: points and field, tetrahedra with their region and Gmsh tags, the labelled triangles
+//! (the boundary, then the interfaces between regions) with theirs, the group names, the
+//! report (JSON) and the warnings. Tags and names are the `.msh` writer's
+//! ([`tptd::io::msh`]), so that `meshio.write("x.msh", mesh)` keeps the groups.
+
+use numpy::{Element, PyArray1, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use tptd::io::msh::{label_tag, DOMAIN_PHYSICAL_TAG};
+use tptd::pipeline::MeshRun;
+use tptd::{BoundaryLabel, TetMesh};
+
+/// Elementary tag of the one volume of a mesh of one interval (as the `.msh` writer's).
+const VOLUME_ENTITY: i32 = 1;
+
+/// The arrays of a mesh, flat, in the types they are handed to numpy in.
+struct Arrays {
+    points: Vec<f64>,
+    values: Vec<f64>,
+    tets: Vec<i64>,
+    tet_region: Vec<i32>,
+    tet_tag: Vec<i32>,
+    tet_entity: Vec<i32>,
+    triangles: Vec<i64>,
+    triangle_region: Vec<i32>,
+    triangle_tag: Vec<i32>,
+    /// `(name, tag, dimension)` of every group: the labels that occur, then the volumes.
+    names: Vec<(String, i32, i32)>,
+}
+
+impl Arrays {
+    /// The arrays of `mesh` (which they replace, to bound the memory held at once).
+    fn of(mesh: TetMesh) -> Arrays {
+        let levels = mesh.level_count();
+        let regions = &mesh.regions;
+        let one = regions.is_empty();
+        let tet_region: Vec<i32> = match one {
+            true => vec![0; mesh.tets.len()],
+            false => regions.tets.iter().map(|&k| i32::from(k)).collect(),
+        };
+        let (tet_tag, tet_entity) = match one {
+            true => (
+                vec![DOMAIN_PHYSICAL_TAG as i32; mesh.tets.len()],
+                vec![VOLUME_ENTITY; mesh.tets.len()],
+            ),
+            false => {
+                let tags: Vec<i32> = tet_region.iter().map(|k| k + 1).collect();
+                (tags.clone(), tags)
+            }
+        };
+        let tag = |l: BoundaryLabel| label_tag(l, levels) as i32;
+        let boundary_region = |b: usize| regions.boundary.get(b).map_or(0, |&k| i32::from(k));
+        // An interface triangle on level i is a face of region i - 1 (below) and i (above).
+        let below = |l: BoundaryLabel| l.level().map_or(0, |i| i as i32 - 1);
+        let mut triangle_region: Vec<i32> = (0..mesh.boundary.len()).map(boundary_region).collect();
+        triangle_region.extend(regions.interface_labels.iter().map(|&l| below(l)));
+        let mut triangle_tag: Vec<i32> = mesh.boundary_labels.iter().map(|&l| tag(l)).collect();
+        triangle_tag.extend(regions.interface_labels.iter().map(|&l| tag(l)));
+        let mut present = [false; tptd::mesh::NUM_LABELS];
+        for &l in mesh.boundary_labels.iter().chain(&regions.interface_labels) {
+            present[l.index()] = true;
+        }
+        let mut names: Vec<(String, i32, i32)> = BoundaryLabel::of_levels(levels)
+            .filter(|l| present[l.index()])
+            .map(|l| (l.name_in(levels), tag(l), 2))
+            .collect();
+        match one {
+            true => names.push(("domain".into(), DOMAIN_PHYSICAL_TAG as i32, 3)),
+            false => names.extend((0..regions.count()).map(|k| (regions.name(k), k as i32 + 1, 3))),
+        }
+        let triangles = mesh
+            .boundary
+            .iter()
+            .chain(&regions.interfaces)
+            .flat_map(|t| t.map(i64::from))
+            .collect();
+        Arrays {
+            points: mesh.points.iter().flatten().copied().collect(),
+            values: mesh.values,
+            tets: mesh.tets.iter().flat_map(|t| t.map(i64::from)).collect(),
+            tet_region,
+            tet_tag,
+            tet_entity,
+            triangles,
+            triangle_region,
+            triangle_tag,
+            names,
+        }
+    }
+}
+
+/// `v` as a numpy array (no copy) of `columns` columns.
+fn array<'py, T: Element>(
+    py: Python<'py>,
+    v: Vec<T>,
+    columns: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let rows = v.len() / columns.max(1);
+    let flat = PyArray1::from_vec(py, v);
+    match columns {
+        1 => Ok(flat.into_any()),
+        c => Ok(flat.reshape([rows, c])?.into_any()),
+    }
+}
+
+/// The dict of a run's mesh: `points`, `f`, `tetra`, `tetra_region`, `tetra_tag`,
+/// `tetra_entity`, `triangle`, `triangle_region`, `triangle_tag`, `names`, `report` (JSON
+/// text) and `warnings`.
+pub(crate) fn mesh_dict(py: Python<'_>, run: MeshRun) -> PyResult<Bound<'_, PyDict>> {
+    let report = run.report.to_json_pretty();
+    let warnings = run.report.warnings.clone();
+    let Some(out) = run.mesh else {
+        return Err(PyValueError::new_err(
+            "the run wrote its mesh instead of holding it",
+        ));
+    };
+    let a = py.detach(move || Arrays::of(out.mesh));
+    let d = PyDict::new(py);
+    d.set_item("points", array(py, a.points, 3)?)?;
+    d.set_item("f", array(py, a.values, 1)?)?;
+    d.set_item("tetra", array(py, a.tets, 4)?)?;
+    d.set_item("tetra_region", array(py, a.tet_region, 1)?)?;
+    d.set_item("tetra_tag", array(py, a.tet_tag, 1)?)?;
+    d.set_item("tetra_entity", array(py, a.tet_entity, 1)?)?;
+    d.set_item("triangle", array(py, a.triangles, 3)?)?;
+    d.set_item("triangle_region", array(py, a.triangle_region, 1)?)?;
+    d.set_item("triangle_tag", array(py, a.triangle_tag, 1)?)?;
+    d.set_item("names", a.names)?;
+    d.set_item("report", report)?;
+    d.set_item("warnings", warnings)?;
+    Ok(d)
+}
