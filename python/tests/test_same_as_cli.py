@@ -1,0 +1,118 @@
+"""Python meshes equal tptd-mesh's for the same input: points, field, tets and regions
+identical (arrays compared, not files), and the library's checker passes both."""
+
+import meshio
+import numpy as np
+import pytest
+
+import tptd
+from conftest import assert_same, assert_valid, cli_mesh, ring, run_cli
+
+
+def test_an_array_meshes_as_its_npy_file(tmp_path, scan):
+    cli, report = cli_mesh(tmp_path, "scan.npy", "--alpha", 120.3, "--beta", 180.7)
+    py = tptd.mesh(scan, 120.3, 180.7, check=True)
+    assert_same(py, cli)
+    assert py.info["tets"] == report["tets"] == len(py.cells_dict["tetra"])
+    assert py.info["volume"] == report["volume"]
+    assert py.info["betti"] == report["betti"]
+    assert_valid(py, report)
+
+
+def test_fortran_and_c_order_give_the_same_mesh(scan):
+    c = tptd.mesh(scan, 120.3)
+    f = tptd.mesh(np.asfortranarray(scan), 120.3)
+    strided = tptd.mesh(np.ascontiguousarray(np.pad(scan, 1)[1:-1, 1:-1, 1:-1]), 120.3)
+    view = tptd.mesh(np.pad(scan, ((0, 0), (0, 0), (0, 3)))[:, :, :-3], 120.3)
+    for m in (f, strided, view):
+        assert_same(m, c)
+    assert_valid(c)
+
+
+@pytest.mark.parametrize(
+    "dtype",
+    ["uint8", "int8", "int16", "uint16", "int32", "uint32", "int64", "uint64", "float32",
+     "float64"],
+)
+def test_every_dtype_as_the_cli(tmp_path, dtype):
+    img = ring((14, 13, 12))
+    img = (img // 2 if dtype == "int8" else img).astype(dtype)
+    np.save(tmp_path / "v.npy", img)
+    cli, report = cli_mesh(tmp_path, "v.npy", "--alpha", 90.3)
+    py = tptd.mesh(img, 90.3, check=True)
+    assert_same(py, cli)
+    assert py.info["samples"] == report["samples"]
+    assert_valid(py, report)
+
+
+def test_spacing_as_the_cli(tmp_path, scan):
+    cli, report = cli_mesh(tmp_path, "scan.npy", "--alpha", 120.3, "--spacing", "0.5,1,2")
+    py = tptd.mesh(scan, 120.3, spacing=(0.5, 1, 2), check=True)
+    assert_same(py, cli)
+    assert_valid(py, report)
+    moved = tptd.mesh(scan, 120.3, spacing=(0.5, 1, 2), origin=(10, -5, 3))
+    assert np.allclose(moved.points, py.points + [10, -5, 3], rtol=0, atol=1e-12)
+
+
+def test_regions_as_the_cli_and_kept_by_meshio_msh(tmp_path, scan):
+    levels = ["--levels", "60.3,120.3,180.7", "--region-names", "outer,inner"]
+    cli, report = cli_mesh(tmp_path, "scan.npy", *levels)
+    py = tptd.mesh(scan, levels=[60.3, 120.3, 180.7], region_names=["outer", "inner"],
+                   check=True)
+    assert_same(py, cli)
+    regions = py.cell_data_dict["region"]["tetra"]
+    assert set(regions) == {0, 1}
+    assert [r["tets"] for r in py.info["regions"]] == [(regions == k).sum() for k in (0, 1)]
+    assert py.info["regions"] == report["regions"]
+    assert_valid(py, report)
+    # meshio's Gmsh 2.2 writer keeps the groups: a volume per region, a surface per level
+    # (without the extra `region` data, which meshio cannot read back from a .msh)
+    del py.cell_data["region"]
+    meshio.write(tmp_path / "py.msh", py, file_format="gmsh22")
+    back = meshio.read(tmp_path / "py.msh")
+    assert {"outer", "inner", "level1", "level2", "level3"} <= set(back.field_data)
+    tags = back.cell_data_dict["gmsh:physical"]["tetra"]
+    assert np.array_equal(tags, regions + 1)
+    # the CLI's own .msh names the same groups with the same tags
+    msh = tmp_path / "cli.msh"
+    assert run_cli("scan.npy", *levels, "-o", msh, cwd=tmp_path).returncode == 0
+    ours = meshio.read(msh)
+    for name in ("outer", "inner", "level1", "level2", "level3"):
+        assert back.field_data[name][0] == ours.field_data[name][0], name
+
+
+def test_boundary_triangles_are_the_labelled_faces(scan):
+    m = tptd.mesh(scan, 120.3, 180.7)
+    tris = m.cells_dict["triangle"]
+    assert set(m.field_data) == {"alpha", "beta", "domain"}
+    tags = m.cell_data_dict["gmsh:physical"]["triangle"]
+    assert set(tags) == {m.field_data["alpha"][0], m.field_data["beta"][0]}
+    counts = {k: v for k, v in m.info["boundary_triangles"].items() if v}
+    assert counts == {"alpha": (tags == 1).sum(), "beta": (tags == 2).sum()}
+    # every triangle is a face of exactly one tet (the boundary is closed)
+    faces = np.sort(m.cells_dict["tetra"][:, [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]],
+                    axis=2).reshape(-1, 3)
+    _, counts = np.unique(faces, axis=0, return_counts=True)
+    assert (counts == 1).sum() == len(tris)
+    assert len(tptd.mesh(scan, 120.3, 180.7, boundary=False).cells) == 1
+
+
+def test_quality_as_the_cli(tmp_path, scan):
+    cli, report = cli_mesh(tmp_path, "scan.npy", "--alpha", 120.3, "--beta", 180.7,
+                           "--quality", "--min-angle", 20)
+    py = tptd.mesh(scan, 120.3, 180.7, quality=True, min_angle=20, check=True)
+    assert_same(py, cli)
+    assert py.info["quality"]["after"] == report["quality"]["after"]
+    assert_valid(py, report)
+
+
+def test_mesh_file_and_read_volume_as_the_cli(tmp_path, scan):
+    cli, report = cli_mesh(tmp_path, "scan.npy", "--alpha", 120.3, "--method", "tptd")
+    py = tptd.mesh_file(tmp_path / "scan.npy", 120.3, method="tptd", check=True)
+    assert_same(py, cli)
+    assert_valid(py, report)
+    array, affine = tptd.read_volume(tmp_path / "scan.npy")
+    assert array.dtype == np.uint8 and np.array_equal(array, scan)
+    assert array.flags.f_contiguous
+    assert np.array_equal(affine, np.eye(4))
+    assert_same(tptd.mesh(array, 120.3, method="tptd", affine=affine), cli)
