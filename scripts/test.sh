@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# The module layering (scripts/check_layers.py), the full test suite, then the README's commands.
+# The module layering (scripts/check_layers.py), the full test suite, the Python package's tests,
+# then the README's commands.
 # Installs what the tests need when it is missing: gmsh and CalculiX (Debian packages), numpy,
-# meshio and VTK (PyPI), and for the comparison with TetGen and fTetWild (tests/compare_peers.rs)
-# tetgen, pytetwild, scikit-image, nilearn, nibabel and pyvista (PyPI).
+# meshio and VTK (PyPI), for the comparison with TetGen and fTetWild (tests/compare_peers.rs)
+# tetgen, pytetwild, scikit-image, nilearn, nibabel and pyvista (PyPI), and for the Python
+# package maturin and pytest (PyPI).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -28,6 +30,15 @@ fi
 python3 scripts/check_layers.py
 
 cargo test --all-targets "$@"
+
+# The Python package (python/): built by maturin through pip, then its tests, which compare it
+# with the tptd-mesh binary just built.
+if ! python3 -c "import maturin, pytest" >/dev/null 2>&1; then
+  echo "installing maturin pytest (pip)"
+  python3 -m pip install -q maturin pytest
+fi
+python3 -m pip install -q --no-build-isolation ./python
+python3 -m pytest -q python/tests
 
 # Every command of the README, on small generated data (scripts/check_readme.sh).
 scripts/check_readme.sh
