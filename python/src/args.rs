@@ -13,10 +13,12 @@ use tptd::pipeline::{check_applies, Given, MeshRequest, Mode, Param, ParamNames,
 use tptd::sdf::SurfaceGridOptions;
 use tptd::Method;
 
-/// Python spells every parameter by its neutral name, except the input file: `path`.
+/// Python spells every parameter by its neutral name, except the input file (`path`) and the
+/// analysis switched off (`analysis=False`).
 fn py_name(p: Param) -> &'static str {
     match p {
         Param::Input => "path",
+        Param::NoAnalysis => "analysis=False",
         p => p.name(),
     }
 }
@@ -51,6 +53,7 @@ pub(crate) struct Options {
     pub(crate) max_angle: f64,
     pub(crate) quality_time: Option<f64>,
     pub(crate) check: bool,
+    pub(crate) analysis: bool,
     pub(crate) threads: Option<i64>,
     pub(crate) field: Option<String>,
     pub(crate) function: Option<PathBuf>,
@@ -88,6 +91,7 @@ impl Options {
             (Param::MaxAngle, self.max_angle != q.max_angle),
             (Param::QualityTime, self.quality_time.is_some()),
             (Param::Check, self.check),
+            (Param::NoAnalysis, !self.analysis),
             (Param::Threads, self.threads.is_some()),
             (Param::Field, self.field.is_some()),
             (Param::Function, self.function.is_some()),
@@ -137,6 +141,7 @@ impl Options {
             threads,
             quality: self.quality()?,
             check: self.check,
+            analysis: self.analysis,
             names: PY_NAMES,
             ..MeshRequest::default()
         })

@@ -116,3 +116,11 @@ def test_mesh_file_and_read_volume_as_the_cli(tmp_path, scan):
     assert array.flags.f_contiguous
     assert np.array_equal(affine, np.eye(4))
     assert_same(tptd.mesh(array, 120.3, method="tptd", affine=affine), cli)
+
+
+def test_no_analysis_as_the_cli(tmp_path, scan):
+    cli, report = cli_mesh(tmp_path, "scan.npy", "--alpha", 120.3, "--no-analysis")
+    py = tptd.mesh(scan, 120.3, analysis=False, check=True)
+    assert_same(py, cli)
+    assert py.info["betti"] is None and report["betti"] is None
+    assert_valid(py, report)

@@ -33,8 +33,8 @@ class MeshWarning(UserWarning):
 
 def _options(
     alpha, beta, levels, region_names, spacing, origin, affine, method, quality, min_angle,
-    max_angle, quality_time, check, threads, field=None, function=None, resolution=None,
-    voxel_size=None,
+    max_angle, quality_time, check, analysis, threads, field=None, function=None,
+    resolution=None, voxel_size=None,
 ) -> dict:
     def floats(v, n=None):
         return None if v is None else [float(x) for x in v]
@@ -53,6 +53,7 @@ def _options(
         "max_angle": float(max_angle),
         "quality_time": None if quality_time is None else float(quality_time),
         "check": bool(check),
+        "analysis": bool(analysis),
         "threads": None if threads is None else int(threads),
         "field": field,
         "function": None if function is None else os.fspath(function),
@@ -102,6 +103,7 @@ def mesh(
     max_angle: float = 155.0,
     quality_time: Optional[float] = None,
     check: bool = False,
+    analysis: bool = True,
     threads: Optional[int] = None,
     boundary: bool = True,
     progress: Optional[Progress] = None,
@@ -120,7 +122,8 @@ def mesh(
     named by ``region_names``. ``method``: ``ctd`` (default), ``tptd``, ``std``, ``six``,
     ``five``. ``quality=True`` runs the quality pass towards dihedral angles in
     ``[min_angle, max_angle]`` (``quality_time`` seconds at most); ``check=True`` runs the
-    library's checker and raises ``ValueError`` if the mesh fails it. ``threads``: worker
+    library's checker and raises ``ValueError`` if the mesh fails it; ``analysis=False``
+    skips the Betti numbers and angles of the report (faster). ``threads``: worker
     threads (default: all cores). ``progress(stage, fraction)`` is called at the start (0.0)
     and end (1.0) of each stage and as meshing goes; an exception it raises is raised when
     the run ends. The GIL is released while meshing.
@@ -147,7 +150,7 @@ def mesh(
     opts = _options(
         alpha, beta, levels, region_names,
         None if affine is not None else spacing, origin, affine, method, quality, min_angle,
-        max_angle, quality_time, check, threads,
+        max_angle, quality_time, check, analysis, threads,
     )
     return _to_meshio(_tptd.mesh_volume(volume, opts, progress), boundary)
 
@@ -166,6 +169,7 @@ def mesh_file(
     max_angle: float = 155.0,
     quality_time: Optional[float] = None,
     check: bool = False,
+    analysis: bool = True,
     threads: Optional[int] = None,
     field: Optional[str] = None,
     function=None,
@@ -184,8 +188,8 @@ def mesh_file(
     """
     opts = _options(
         alpha, beta, levels, region_names, spacing, (0.0, 0.0, 0.0), None, method, quality,
-        min_angle, max_angle, quality_time, check, threads, field, function, resolution,
-        voxel_size,
+        min_angle, max_angle, quality_time, check, analysis, threads, field, function,
+        resolution, voxel_size,
     )
     return _to_meshio(_tptd.mesh_path(os.fspath(path), opts, progress), boundary)
 
