@@ -76,10 +76,14 @@ impl Arrays {
             .chain(&regions.interfaces)
             .flat_map(|t| t.map(i64::from))
             .collect();
+        // Each array of the mesh is freed once converted, so that the two copies of the
+        // largest one only are held at once.
+        let points = flat(mesh.points, |p| p);
+        let tets = flat(mesh.tets, |t| t.map(i64::from));
         Arrays {
-            points: mesh.points.iter().flatten().copied().collect(),
+            points,
             values: mesh.values,
-            tets: mesh.tets.iter().flat_map(|t| t.map(i64::from)).collect(),
+            tets,
             tet_region,
             tet_tag,
             tet_entity,
@@ -89,6 +93,18 @@ impl Arrays {
             names,
         }
     }
+}
+
+/// The rows of `v` converted by `f` into one flat vector; `v` is freed.
+fn flat<T, U: Copy, const N: usize>(v: Vec<[T; N]>, f: impl Fn([T; N]) -> [U; N]) -> Vec<U>
+where
+    T: Copy,
+{
+    let mut out = Vec::with_capacity(v.len() * N);
+    for &row in &v {
+        out.extend_from_slice(&f(row));
+    }
+    out
 }
 
 /// `v` as a numpy array (no copy) of `columns` columns.

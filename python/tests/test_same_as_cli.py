@@ -124,3 +124,24 @@ def test_no_analysis_as_the_cli(tmp_path, scan):
     assert_same(py, cli)
     assert py.info["betti"] is None and report["betti"] is None
     assert_valid(py, report)
+
+
+def test_a_closed_surface_and_a_curvilinear_grid_as_the_cli(tmp_path, scan):
+    assert run_cli("scan.npy", "--alpha", 120.3, "-o", "ring.obj", cwd=tmp_path).returncode == 0
+    cli, report = cli_mesh(tmp_path, "ring.obj", "--resolution", 24)
+    with pytest.warns(tptd.MeshWarning, match="the triangles face inwards"):
+        py = tptd.mesh_file(tmp_path / "ring.obj", resolution=24, check=True)
+    assert_same(py, cli)
+    assert_valid(py, report)
+    # a quarter of a thick ring as Plot3D files (the README's duct, smaller)
+    n = (9, 16, 6)
+    r, t, z = np.meshgrid(10 + np.arange(n[0]) / 2, np.arange(n[1]) / 10, np.arange(n[2]) / 2,
+                          indexing="ij")
+    xyz = np.stack([r * np.cos(t), r * np.sin(t), z]).astype("<f4").transpose(0, 3, 2, 1)
+    f = (np.sin(r / 2) * np.cos(3 * t) + z / 7).astype("<f4").T
+    (tmp_path / "duct.xyz").write_bytes(np.array(n, "<i4").tobytes() + xyz.tobytes())
+    (tmp_path / "duct.f").write_bytes(np.array(n + (1,), "<i4").tobytes() + f.tobytes())
+    cli, report = cli_mesh(tmp_path, "duct.xyz", "--alpha", 0.3, "--beta", 0.7)
+    py = tptd.mesh_file(tmp_path / "duct.xyz", 0.3, 0.7, check=True)
+    assert_same(py, cli)
+    assert_valid(py, report)
