@@ -45,6 +45,12 @@ def test_every_dtype_as_the_cli(tmp_path, dtype):
     assert_valid(py, report)
 
 
+def test_big_endian_and_float16_arrays(scan):
+    native = tptd.mesh(scan.astype("<f4"), 120.3)
+    assert_same(tptd.mesh(scan.astype(">f4"), 120.3), native)
+    assert_same(tptd.mesh(scan.astype(np.float16), 120.3), native)
+
+
 def test_spacing_as_the_cli(tmp_path, scan):
     cli, report = cli_mesh(tmp_path, "scan.npy", "--alpha", 120.3, "--spacing", "0.5,1,2")
     py = tptd.mesh(scan, 120.3, spacing=(0.5, 1, 2), check=True)

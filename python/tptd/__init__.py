@@ -115,7 +115,9 @@ def mesh(
     given instead of ``spacing`` and ``origin``), as ``tptd-mesh`` reads a ``.npy`` file. Any
     integer or floating-point dtype; the samples are copied once into the library's grid
     (x fastest, in their own type: a plain copy for a Fortran-ordered array, a transposing
-    one otherwise), so the array is not held after the call.
+    one otherwise; ``int8`` is widened to ``int16``, 32- and 64-bit integers to ``float64``,
+    ``float16`` to ``float32``, as the file readers do), so the array is not held after the
+    call.
 
     ``alpha`` and/or ``beta`` bound one interval (a missing one is -inf / +inf); ``levels``
     (2 to 16 increasing values) mesh the regions between them in one conforming mesh instead,
@@ -143,8 +145,11 @@ def mesh(
     empty interval or a mesh failing ``check``, with ``tptd-mesh``'s one-line message
     (parameters named the Python way).
     """
-    if not isinstance(volume, np.ndarray):
-        volume = np.asarray(volume)
+    volume = np.asarray(volume)
+    if not volume.dtype.isnative:  # big-endian data: the same values in native byte order
+        volume = volume.astype(volume.dtype.newbyteorder("="))
+    if volume.dtype == np.float16:  # read as float32, like the other narrow types
+        volume = volume.astype(np.float32)
     if affine is not None and tuple(origin) != (0.0, 0.0, 0.0):
         raise ValueError("affine and origin exclude each other: give one")
     opts = _options(
