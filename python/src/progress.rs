@@ -1,7 +1,7 @@
 //! The `progress` callable of a run as the library's [`Progress`]: `progress(stage,
 //! fraction)` at the start of each stage (0.0), as meshing goes (every 1 % at most) and at its
 //! end (1.0). It is called with the GIL taken for the call only, from whichever thread
-//! reports. An exception it raises stops further calls and is raised when the run ends (the
+//! reports, one call at a time and with the fractions of a stage in increasing order. An exception it raises stops further calls and is raised when the run ends (the
 //! run itself is not interrupted).
 
 use std::sync::{Mutex, PoisonError};
@@ -41,21 +41,22 @@ impl PyProgress {
 
     /// Calls the callable with `(stage, fraction)` of the current stage when `due` says so
     /// (given the fraction last reported); the first exception is kept and ends the calls.
+    /// The state stays locked through the call, so that calls from several threads reach
+    /// the callable one at a time and in the order of their fractions (no thread that
+    /// reports holds the GIL while it waits for the lock: the run releases it).
     fn report(&self, fraction: f64, due: impl Fn(f64) -> bool) {
         let Some(callback) = &self.callback else {
             return;
         };
-        let stage = {
-            let mut s = self.state();
-            if s.error.is_some() || !due(s.last) {
-                return;
-            }
-            s.last = fraction;
-            s.stage.clone()
-        };
+        let mut s = self.state();
+        if s.error.is_some() || !due(s.last) {
+            return;
+        }
+        s.last = fraction;
+        let stage = s.stage.clone();
         let result = Python::attach(|py| callback.call1(py, (stage, fraction)).map(|_| ()));
         if let Err(e) = result {
-            self.state().error.get_or_insert(e);
+            s.error.get_or_insert(e);
         }
     }
 

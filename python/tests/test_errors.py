@@ -81,3 +81,9 @@ def test_missing_and_malformed_files(tmp_path):
     cli = cli_error(tmp_path, "bad.npy", "--alpha", "1", "-o", "x.vtu")
     py = raises(ValueError, tptd.mesh_file, tmp_path / "bad.npy", 1)
     assert py.replace(str(tmp_path) + "/", "") == cli
+
+
+def test_affine_excludes_spacing_and_origin(scan):
+    for kwargs in [dict(spacing=(2, 1, 1)), dict(origin=(0, 0, 5))]:
+        msg = raises(ValueError, tptd.mesh, scan, 100, affine=np.eye(4), **kwargs)
+        assert msg == "affine excludes spacing and origin: give the affine or those two"

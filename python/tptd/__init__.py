@@ -150,8 +150,10 @@ def mesh(
         volume = volume.astype(volume.dtype.newbyteorder("="))
     if volume.dtype == np.float16:  # read as float32, like the other narrow types
         volume = volume.astype(np.float32)
-    if affine is not None and tuple(origin) != (0.0, 0.0, 0.0):
-        raise ValueError("affine and origin exclude each other: give one")
+    if affine is not None and (
+        tuple(origin) != (0.0, 0.0, 0.0) or tuple(spacing) != (1.0, 1.0, 1.0)
+    ):
+        raise ValueError("affine excludes spacing and origin: give the affine or those two")
     opts = _options(
         alpha, beta, levels, region_names,
         None if affine is not None else spacing, origin, affine, method, quality, min_angle,
