@@ -52,8 +52,8 @@ pub mod weld;
 pub use curvilinear::{mesh_curvilinear, CurvilinearError};
 pub use decompose::CellCase;
 pub use extract::{
-    mesh_interval, mesh_interval_streamed, mesh_interval_with_progress, MeshError, MeshOptions,
-    MeshOutput, MeshStats, Method,
+    mesh_interval, mesh_interval_seen_by, mesh_interval_streamed, mesh_interval_with_progress,
+    MeshError, MeshOptions, MeshOutput, MeshStats, Method,
 };
 pub use grid::{CurvilinearGrid, ScalarGrid};
 pub use levels::Levels;

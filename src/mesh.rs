@@ -349,6 +349,28 @@ pub trait MeshSink {
     fn chunk(&mut self, chunk: &MeshChunk) -> io::Result<()>;
 }
 
+/// A sink that takes every chunk and keeps nothing.
+pub struct NoSink;
+
+impl MeshSink for NoSink {
+    fn chunk(&mut self, _: &MeshChunk) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Hands each chunk to two sinks in turn.
+pub struct Tee<'a>(
+    pub &'a mut (dyn MeshSink + Send),
+    pub &'a mut (dyn MeshSink + Send),
+);
+
+impl MeshSink for Tee<'_> {
+    fn chunk(&mut self, c: &MeshChunk) -> io::Result<()> {
+        self.0.chunk(c)?;
+        self.1.chunk(c)
+    }
+}
+
 /// The name of region `k` among `names`: the given one, else `region1`, `region2`, …
 /// (counting from 1).
 pub fn region_name(names: &[String], k: usize) -> String {

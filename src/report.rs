@@ -100,6 +100,9 @@ pub struct Timings {
     /// The mesh went to disk slab by slab while it was made: `mesh` then includes the
     /// analysis of the mesh (and `analysis` is only the demo's comparison).
     pub streamed: bool,
+    /// The mesh was analysed slab by slab while it was made (streamed, or held in memory
+    /// with nothing changing it afterwards): `mesh` then includes the analysis.
+    pub analysed_while_meshing: bool,
 }
 
 impl Timings {

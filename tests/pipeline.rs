@@ -327,3 +327,50 @@ fn a_missing_input_is_an_error_of_the_system() {
     assert!(e.is_io() && !e.is_usage(), "{e}");
     assert!(e.message().contains("missing.npy"), "{e}");
 }
+
+/// A run in memory that nothing changes after meshing analyses the mesh while it is made:
+/// its report's facts are those of the mesh analysed after the run, with one interval and
+/// with several regions, and it says so in its timings.
+#[test]
+fn a_mesh_in_memory_is_analysed_while_it_is_made() {
+    use tptd::facts::MeshFacts;
+    let f = |i: usize, j: usize, k: usize| {
+        let (x, y, z) = (i as f64 - 6.3, j as f64 - 5.8, k as f64 - 6.1);
+        (x * x + y * y + z * z).sqrt() + 0.7 * ((i * 5 + j * 3 + k) % 4) as f64
+    };
+    let dims = [13, 12, 14];
+    let values: Vec<f64> = (0..dims[2])
+        .flat_map(|k| (0..dims[1]).flat_map(move |j| (0..dims[0]).map(move |i| f(i, j, k))))
+        .collect();
+    let cases = [
+        (None, Some(3.3), Some(6.6)),
+        (Some(vec![f64::NEG_INFINITY, 2.3, 4.6, 6.9]), None, None),
+    ];
+    for (levels, alpha, beta) in cases {
+        let req = MeshRequest {
+            levels: levels.clone(),
+            alpha,
+            beta,
+            ..MeshRequest::default()
+        };
+        let grid = ScalarGrid::new(dims, values.clone()).unwrap();
+        let run = mesh_grid(grid, "volume", &req, &NoProgress).unwrap();
+        assert!(run.report.timings_seconds.analysed_while_meshing);
+        let mesh = run.mesh.unwrap().mesh;
+        let after = MeshFacts::of(&mesh, true, levels.as_deref().unwrap_or(&[]));
+        let r = &run.report;
+        assert_eq!((r.nodes, r.tets), (after.nodes, after.tets));
+        assert!(
+            (r.volume - after.volume).abs() <= 1e-9 * after.volume,
+            "{levels:?}"
+        );
+        assert_eq!(r.betti, after.betti, "{levels:?}");
+        let d = r.dihedral_degrees.as_ref().unwrap();
+        assert_eq!(Some((d.min, d.max)), after.dihedral, "{levels:?}");
+        assert_eq!(r.regions.len(), after.regions.len());
+        for (a, b) in r.regions.iter().zip(&after.regions) {
+            assert_eq!((a.tets, a.betti), (b.tets, b.betti), "{}", a.name);
+            assert!((a.volume - b.volume).abs() <= 1e-9 * b.volume, "{}", a.name);
+        }
+    }
+}

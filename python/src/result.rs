@@ -8,6 +8,7 @@ use numpy::{Element, PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use rayon::prelude::*;
 use tptd::io::msh::{label_tag, DOMAIN_PHYSICAL_TAG};
 use tptd::pipeline::MeshRun;
 use tptd::{BoundaryLabel, TetMesh};
@@ -70,15 +71,19 @@ impl Arrays {
             true => names.push(("domain".into(), DOMAIN_PHYSICAL_TAG as i32, 3)),
             false => names.extend((0..regions.count()).map(|k| (regions.name(k), k as i32 + 1, 3))),
         }
-        let triangles = mesh
+        let all = mesh.boundary.len() + regions.interfaces.len();
+        let mut triangles = vec![0i64; 3 * all];
+        let rows = mesh
             .boundary
-            .iter()
-            .chain(&regions.interfaces)
-            .flat_map(|t| t.map(i64::from))
-            .collect();
+            .par_iter()
+            .chain(regions.interfaces.par_iter());
+        triangles
+            .par_chunks_mut(3)
+            .zip(rows)
+            .for_each(|(o, t)| o.copy_from_slice(&t.map(i64::from)));
         // Each array of the mesh is freed once converted, so that the two copies of the
         // largest one only are held at once.
-        let points = flat(mesh.points, |p| p);
+        let points = flat_points(mesh.points);
         let tets = flat(mesh.tets, |t| t.map(i64::from));
         Arrays {
             points,
@@ -95,16 +100,22 @@ impl Arrays {
     }
 }
 
-/// The rows of `v` converted by `f` into one flat vector; `v` is freed.
-fn flat<T, U: Copy, const N: usize>(v: Vec<[T; N]>, f: impl Fn([T; N]) -> [U; N]) -> Vec<U>
+/// The rows of `v` converted by `f` into one flat vector, in parallel; `v` is freed.
+fn flat<T, U, const N: usize>(v: Vec<[T; N]>, f: impl Fn([T; N]) -> [U; N] + Sync) -> Vec<U>
 where
-    T: Copy,
+    T: Copy + Sync,
+    U: Copy + Default + Send,
 {
-    let mut out = Vec::with_capacity(v.len() * N);
-    for &row in &v {
-        out.extend_from_slice(&f(row));
-    }
+    let mut out = vec![U::default(); v.len() * N];
+    out.par_chunks_mut(N)
+        .zip(v.par_iter())
+        .for_each(|(o, &row)| o.copy_from_slice(&f(row)));
     out
+}
+
+/// The points as one flat vector: the same memory, not copied.
+fn flat_points(points: Vec<[f64; 3]>) -> Vec<f64> {
+    bytemuck::allocation::try_cast_vec(points).unwrap_or_else(|(_, p)| flat(p, |x| x))
 }
 
 /// `v` as a numpy array (no copy) of `columns` columns.

@@ -16,7 +16,7 @@ use crate::decompose::plan::Planner;
 use crate::grid::ScalarGrid;
 use crate::levels::Levels;
 use crate::mesh::TetMesh;
-use crate::mesh::{Gather, MeshSink};
+use crate::mesh::{Gather, MeshSink, NoSink, Tee};
 use crate::warp::{snap_vertices, Snapped};
 use crate::weld::{Slab, TooLarge, Welder};
 use cell::{process_slab, Ctx};
@@ -251,8 +251,22 @@ pub fn mesh_interval_with_progress(
     opts: &MeshOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<MeshOutput, MeshError> {
+    mesh_interval_seen_by(grid, opts, progress, &mut NoSink)
+}
+
+/// [`mesh_interval_with_progress`] handing each slab to `also` as well, as it is gathered:
+/// to analyse the mesh while it is made (as the streamed run does) rather than after.
+///
+/// # Errors
+/// As [`mesh_interval`], and [`MeshError::Output`] with the first error of `also`.
+pub fn mesh_interval_seen_by(
+    grid: &ScalarGrid,
+    opts: &MeshOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    also: &mut (dyn MeshSink + Send),
+) -> Result<MeshOutput, MeshError> {
     let mut gather = Gather::new(opts.levels.len());
-    let (stats, snapped) = mesh_in_pool(grid, opts, progress, &mut gather)?;
+    let (stats, snapped) = mesh_in_pool(grid, opts, progress, &mut Tee(&mut gather, also))?;
     Ok(MeshOutput {
         mesh: gather.mesh,
         stats,

@@ -13,6 +13,7 @@ mod regions;
 
 pub use regions::RegionFacts;
 
+pub use crate::mesh::Tee;
 use crate::mesh::{BoundaryLabel, MeshChunk, MeshSink, INTERVAL_LEVELS};
 use crate::mesh::{TetMesh, NUM_LABELS, VOLUME_BLOCK};
 use crate::quality::{cosine_extremes, cosines_to_degrees, dihedral_range, widest, NO_COSINES};
@@ -316,18 +317,5 @@ impl MeshSink for FactsSink {
             },
         );
         Ok(())
-    }
-}
-
-/// Hands each chunk to two sinks in turn.
-pub struct Tee<'a>(
-    pub &'a mut (dyn MeshSink + Send),
-    pub &'a mut (dyn MeshSink + Send),
-);
-
-impl MeshSink for Tee<'_> {
-    fn chunk(&mut self, c: &MeshChunk) -> io::Result<()> {
-        self.0.chunk(c)?;
-        self.1.chunk(c)
     }
 }

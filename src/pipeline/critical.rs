@@ -221,7 +221,7 @@ fn check_memory(
         (true, true) => "finding the critical points with persistence and the contour spectrum",
     };
     crate::memory::check(need, what).map_err(|e| {
-        PipelineError::file(
+        PipelineError::memory(
             input,
             format_args!(
                 "{e}; crop the volume, leave out {} and {} or raise {}",

@@ -1,6 +1,7 @@
 //! The error of a run: one line `{file}: {problem}`, whether it is a usage error (an
-//! output that would replace an input or another output, found before any work), and
-//! whether the system refused a file (missing, unreadable, not writable).
+//! output that would replace an input or another output, found before any work), whether
+//! the system refused a file (missing, unreadable, not writable), and whether the run would
+//! not fit in memory.
 
 use std::fmt;
 
@@ -13,6 +14,7 @@ pub struct PipelineError {
     message: String,
     usage: bool,
     io: bool,
+    memory: bool,
 }
 
 impl PipelineError {
@@ -22,6 +24,7 @@ impl PipelineError {
             message: format!("{file}: {problem}"),
             usage: false,
             io: false,
+            memory: false,
         }
     }
 
@@ -40,6 +43,16 @@ impl PipelineError {
             message: error.to_string(),
             usage: false,
             io: false,
+            memory: false,
+        }
+    }
+
+    /// An error about `file` where the run's memory estimate exceeds the limit (or the memory
+    /// available): displays as `{file}: {problem}`.
+    pub(crate) fn memory(file: impl fmt::Display, problem: impl fmt::Display) -> Self {
+        PipelineError {
+            memory: true,
+            ..Self::file(file, problem)
         }
     }
 
@@ -64,6 +77,12 @@ impl PipelineError {
         self.io
     }
 
+    /// Whether the run was refused because it would not fit in memory (its estimate exceeds
+    /// the memory limit or the memory available; a binding raises `MemoryError` then).
+    pub fn is_memory(&self) -> bool {
+        self.memory
+    }
+
     /// The message (as displayed).
     pub fn message(&self) -> &str {
         &self.message
@@ -85,6 +104,7 @@ impl From<FileClash> for PipelineError {
             message: e.to_string(),
             usage: true,
             io: false,
+            memory: false,
         }
     }
 }

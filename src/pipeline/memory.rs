@@ -59,7 +59,7 @@ pub(crate) fn check_memory(
         tets as f64 / 1e6
     );
     crate::memory::check(need, what).map_err(|e| {
-        PipelineError::file(
+        PipelineError::memory(
             &job.input_name,
             format_args!(
                 "{e}; narrow the interval, crop the volume or raise {}",

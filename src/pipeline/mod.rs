@@ -170,6 +170,7 @@ fn run_job(
     let t_quality = w.t_quality.take();
     let mut timings = Timings {
         streamed: stream_to.is_some(),
+        analysed_while_meshing: w.analysed_while_meshing,
         read: t_read,
         checks: t_checks,
         mesh: w.t_mesh,

@@ -139,7 +139,7 @@ fn sdf_error(job: &Job, e: SdfError) -> PipelineError {
     match e {
         SdfError::Surface(m) => PipelineError::file(name, m),
         SdfError::Options(m) => PipelineError::file(name, format_args!("{m}; use {grid}")),
-        SdfError::Memory(m) => PipelineError::file(
+        SdfError::Memory(m) => PipelineError::memory(
             name,
             format_args!("{m}; use {grid} or raise {}", n.of(Param::MemoryLimit)),
         ),

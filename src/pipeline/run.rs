@@ -16,9 +16,9 @@ use crate::quality::summarize;
 use crate::report::{QualitySection, QualityTimings};
 use crate::surface::analysis::{analyse_surface, SurfaceAnalysis};
 use crate::{
-    level_surface, mesh_interval, mesh_interval_streamed, mesh_interval_with_progress,
-    CurvilinearGrid, MeshError, MeshOptions, MeshOutput, MeshStats, Method, ScalarGrid,
-    SurfaceOptions,
+    level_surface, mesh_interval, mesh_interval_seen_by, mesh_interval_streamed,
+    mesh_interval_with_progress, CurvilinearGrid, MeshError, MeshOptions, MeshOutput, MeshStats,
+    Method, ScalarGrid, SurfaceOptions,
 };
 
 use super::progress::{Reporter, StageKind};
@@ -47,6 +47,8 @@ pub(crate) struct Written {
     pub(crate) t_map: Option<f64>,
     pub(crate) t_check: Option<f64>,
     pub(crate) t_write: f64,
+    /// The facts were gathered while meshing (`t_mesh` includes them).
+    pub(crate) analysed_while_meshing: bool,
 }
 
 /// Seconds since `t`.
@@ -65,8 +67,7 @@ pub(crate) fn stream_to_disk(
     let t = Instant::now();
     let levels = job.opts.levels.len().max(crate::mesh::INTERVAL_LEVELS);
     let mut spill = spill_for_levels(output, levels, job.req.region_names.clone())?;
-    let mut facts = FactsSink::new(job.req.analysis)
-        .with_regions(&job.opts.levels, job.req.region_names.clone());
+    let mut facts = facts_sink(job);
     let stage = reporter.stage("meshing", meshing(grid));
     let stats = mesh_interval_streamed(
         grid,
@@ -106,6 +107,7 @@ pub(crate) fn stream_to_disk(
         t_map: None,
         t_check: None,
         t_write,
+        analysed_while_meshing: true,
     })
 }
 
@@ -125,7 +127,11 @@ pub(crate) fn mesh_in_memory(
     reporter: &Reporter,
 ) -> Result<Written, PipelineError> {
     let t = Instant::now();
-    let mut out = mesh(grid, job, reporter)?;
+    // A mesh that neither the quality pass nor a curvilinear map will change is analysed
+    // while it is made, as a streamed one is.
+    let analyse_now = job.req.quality.is_none() && curvilinear.is_none();
+    let mut sink = analyse_now.then(|| facts_sink(job));
+    let mut out = mesh(grid, job, reporter, sink.as_mut())?;
     let t_mesh = secs(t);
 
     let improved = improve_mesh((grid, job), &mut out, curvilinear, reporter);
@@ -143,10 +149,16 @@ pub(crate) fn mesh_in_memory(
     };
 
     let t = Instant::now();
-    let stage = reporter.stage("analysing the mesh", StageKind::Step);
-    let facts = MeshFacts::of(&out.mesh, job.req.analysis, &job.opts.levels);
+    let facts = match sink {
+        Some(sink) => sink.finish(),
+        None => {
+            let stage = reporter.stage("analysing the mesh", StageKind::Step);
+            let facts = MeshFacts::of(&out.mesh, job.req.analysis, &job.opts.levels);
+            stage.finish();
+            facts
+        }
+    };
     let after = (quality.is_some() && job.req.analysis).then(|| summarize(&out.mesh));
-    stage.finish();
     let quality = quality.map(|q| QualitySection { after, ..q });
     let comparison = compare_demo(grid, job)?;
     let t_analysis = secs(t);
@@ -172,6 +184,7 @@ pub(crate) fn mesh_in_memory(
         t_map,
         t_check,
         t_write,
+        analysed_while_meshing: analyse_now,
     })
 }
 
@@ -248,10 +261,24 @@ fn write_output(
     Ok(written)
 }
 
-/// Meshes the interval; an empty mesh is an error.
-fn mesh(grid: &ScalarGrid, job: &Job, reporter: &Reporter) -> Result<MeshOutput, PipelineError> {
+/// What gathers the facts of the job's mesh slab by slab.
+fn facts_sink(job: &Job) -> FactsSink {
+    FactsSink::new(job.req.analysis).with_regions(&job.opts.levels, job.req.region_names.clone())
+}
+
+/// Meshes the interval, handing the slabs to `facts` too when given; an empty mesh is an
+/// error.
+fn mesh(
+    grid: &ScalarGrid,
+    job: &Job,
+    reporter: &Reporter,
+    facts: Option<&mut FactsSink>,
+) -> Result<MeshOutput, PipelineError> {
     let stage = reporter.stage("meshing", meshing(grid));
-    let out = mesh_interval_with_progress(grid, &job.opts, &stage.counter());
+    let out = match facts {
+        Some(f) => mesh_interval_seen_by(grid, &job.opts, &stage.counter(), f),
+        None => mesh_interval_with_progress(grid, &job.opts, &stage.counter()),
+    };
     stage.finish();
     let mut out = out.map_err(|e| PipelineError::file(&job.input_name, e))?;
     check_not_empty(grid, job, out.mesh.tets.len())?;

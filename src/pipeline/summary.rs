@@ -274,35 +274,38 @@ fn cells_line(s: &mut String, r: &Report) {
     );
 }
 
+/// The seconds of meshing and of what followed it, in order.
+fn stage_times(t: &crate::report::Timings) -> Vec<String> {
+    let mut parts = Vec::new();
+    parts.push(match (t.streamed, t.analysed_while_meshing) {
+        (true, _) => format!("mesh and analysis (streamed to disk) {:.3} s", t.mesh),
+        (false, true) => format!("mesh and analysis {:.3} s", t.mesh),
+        (false, false) => format!("mesh {:.3} s", t.mesh),
+    });
+    if let (Some(q), Some(p)) = (t.quality, &t.quality_stages) {
+        parts.push(format!(
+            "quality {q:.3} s (before {:.3} s, pass {:.3} s, outcome {:.3} s)",
+            p.before, p.pass, p.outcome
+        ));
+    }
+    if let Some(m) = t.map {
+        parts.push(format!("map {m:.3} s"));
+    }
+    match (t.analysed_while_meshing, t.analysis > 0.0) {
+        (true, true) => parts.push(format!("demo comparison {:.3} s", t.analysis)),
+        (true, false) => {}
+        (false, _) => parts.push(format!("analysis {:.3} s", t.analysis)),
+    }
+    if let Some(c) = t.check {
+        parts.push(format!("check {c:.3} s"));
+    }
+    parts
+}
+
 /// Timings and the files written.
 fn output_lines(s: &mut String, r: &Report, report_path: Option<&Path>) {
     let t = &r.timings_seconds;
-    let middle = if t.streamed {
-        let demo = if t.analysis > 0.0 {
-            format!(", demo comparison {:.3} s", t.analysis)
-        } else {
-            String::new()
-        };
-        format!("mesh and analysis (streamed to disk) {:.3} s{demo}", t.mesh)
-    } else {
-        let quality = match (t.quality, &t.quality_stages) {
-            (Some(q), Some(p)) => format!(
-                "quality {q:.3} s (before {:.3} s, pass {:.3} s, outcome {:.3} s), ",
-                p.before, p.pass, p.outcome
-            ),
-            _ => String::new(),
-        };
-        let map = t
-            .map
-            .map_or_else(String::new, |m| format!("map {m:.3} s, "));
-        let check = t
-            .check
-            .map_or_else(String::new, |c| format!(", check {c:.3} s"));
-        format!(
-            "mesh {:.3} s, {quality}{map}analysis {:.3} s{check}",
-            t.mesh, t.analysis
-        )
-    };
+    let middle = stage_times(t).join(", ");
     let _ = writeln!(
         s,
         "  time      read {:.3} s, checks {:.3} s, {middle}, write {:.3} s, other {:.3} s, total \
