@@ -26,6 +26,39 @@ fn py_name(p: Param) -> &'static str {
 /// The library's messages name the parameters as the Python functions do.
 pub(crate) const PY_NAMES: ParamNames = ParamNames(py_name);
 
+/// The bound `v` (if given) through the library's parser, named by `names` in messages.
+pub(crate) fn bound(v: Option<f64>, p: Param, names: ParamNames) -> PyResult<Option<f64>> {
+    let parse = |v: f64| {
+        let text = v.to_string();
+        values::bound(&text).map_err(|e| invalid_named(names, &text, p, e))
+    };
+    v.map(parse).transpose()
+}
+
+/// The spacing (if given) through the library's parser.
+pub(crate) fn spacing(s: Option<[f64; 3]>) -> PyResult<Option<[f64; 3]>> {
+    let Some([x, y, z]) = s else {
+        return Ok(None);
+    };
+    let text = format!("{x},{y},{z}");
+    values::spacing(&text)
+        .map(Some)
+        .map_err(|e| invalid(&text, Param::Spacing, e))
+}
+
+/// The thread count (if given): 1 or more.
+pub(crate) fn threads(n: Option<i64>) -> PyResult<Option<usize>> {
+    match n {
+        None => Ok(None),
+        Some(n) if n >= 1 => Ok(Some(n as usize)),
+        Some(n) => Err(invalid(
+            n,
+            Param::Threads,
+            "expected 1 or more worker threads",
+        )),
+    }
+}
+
 /// The methods, by name.
 const METHODS: [Method; 5] = [
     Method::Ctd,
@@ -61,16 +94,41 @@ pub(crate) struct Options {
     pub(crate) voxel_size: Option<f64>,
 }
 
+/// The names of `tptd.isosurface`: its level is the lower bound of the interval meshed.
+fn iso_name(p: Param) -> &'static str {
+    match p {
+        Param::Alpha => "level",
+        p => py_name(p),
+    }
+}
+
+/// The library's messages name the parameters as `tptd.isosurface` does.
+pub(crate) const ISO_NAMES: ParamNames = ParamNames(iso_name);
+
 /// `invalid value '{value}' for {param}: {problem}`, as the command line says it.
-fn invalid(value: impl std::fmt::Display, p: Param, problem: impl std::fmt::Display) -> PyErr {
+pub(crate) fn invalid(
+    value: impl std::fmt::Display,
+    p: Param,
+    problem: impl std::fmt::Display,
+) -> PyErr {
+    invalid_named(PY_NAMES, value, p, problem)
+}
+
+/// [`invalid`] with the parameter named by `names`.
+fn invalid_named(
+    names: ParamNames,
+    value: impl std::fmt::Display,
+    p: Param,
+    problem: impl std::fmt::Display,
+) -> PyErr {
     PyValueError::new_err(format!(
         "invalid value '{value}' for {}: {problem}",
-        py_name(p)
+        names.of(p)
     ))
 }
 
 /// `v` through the library's parser of the parameter `p` (given its text).
-fn parsed<T>(v: f64, p: Param, parse: fn(&str) -> Result<T, String>) -> PyResult<T> {
+pub(crate) fn parsed<T>(v: f64, p: Param, parse: fn(&str) -> Result<T, String>) -> PyResult<T> {
     let text = v.to_string();
     parse(&text).map_err(|e| invalid(&text, p, e))
 }
@@ -110,6 +168,15 @@ impl Options {
     /// # Errors
     /// `ValueError` with the library's message.
     pub(crate) fn request(&self, input: Option<PathBuf>) -> PyResult<MeshRequest> {
+        self.request_named(input, PY_NAMES)
+    }
+
+    /// [`Options::request`] with the parameters named by `names` in messages.
+    pub(crate) fn request_named(
+        &self,
+        input: Option<PathBuf>,
+        names: ParamNames,
+    ) -> PyResult<MeshRequest> {
         let threads = self.threads()?;
         let method = self.method()?;
         if self.affine.is_some() && self.spacing.is_some() {
@@ -126,15 +193,15 @@ impl Options {
             transfer: None,
             threads,
         })
-        .map_err(|e| PyValueError::new_err(e.render(PY_NAMES)))?;
+        .map_err(|e| PyValueError::new_err(e.render(names)))?;
         Ok(MeshRequest {
             input,
             function: self.function.clone(),
             field: self.field.clone(),
             spacing: self.spacing()?,
             surface_grid: self.surface_grid()?,
-            alpha: self.bound(self.alpha, Param::Alpha)?,
-            beta: self.bound(self.beta, Param::Beta)?,
+            alpha: bound(self.alpha, Param::Alpha, names)?,
+            beta: bound(self.beta, Param::Beta, names)?,
             levels: self.levels()?,
             region_names: self.region_names.clone().unwrap_or_default(),
             method,
@@ -142,13 +209,9 @@ impl Options {
             quality: self.quality()?,
             check: self.check,
             analysis: self.analysis,
-            names: PY_NAMES,
+            names,
             ..MeshRequest::default()
         })
-    }
-
-    fn bound(&self, v: Option<f64>, p: Param) -> PyResult<Option<f64>> {
-        v.map(|v| parsed(v, p, values::bound)).transpose()
     }
 
     fn levels(&self) -> PyResult<Option<Vec<f64>>> {
@@ -163,13 +226,7 @@ impl Options {
     }
 
     fn spacing(&self) -> PyResult<Option<[f64; 3]>> {
-        let Some([x, y, z]) = self.spacing else {
-            return Ok(None);
-        };
-        let text = format!("{x},{y},{z}");
-        values::spacing(&text)
-            .map(Some)
-            .map_err(|e| invalid(&text, Param::Spacing, e))
+        spacing(self.spacing)
     }
 
     fn method(&self) -> PyResult<Method> {
@@ -187,15 +244,7 @@ impl Options {
     }
 
     fn threads(&self) -> PyResult<Option<usize>> {
-        match self.threads {
-            None => Ok(None),
-            Some(n) if n >= 1 => Ok(Some(n as usize)),
-            Some(n) => Err(invalid(
-                n,
-                Param::Threads,
-                "expected 1 or more worker threads",
-            )),
-        }
+        threads(self.threads)
     }
 
     fn quality(&self) -> PyResult<Option<QualityRequest>> {

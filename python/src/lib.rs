@@ -1,14 +1,20 @@
 //! `tptd._tptd`, the native module of the Python package `tptd`: arguments in, the library's
-//! runs out. Each function converts its arguments ([`args`], [`volume`]), calls the library's
-//! entry point with the GIL released ([`tptd::pipeline::mesh_grid`] for an array,
-//! [`tptd::pipeline::mesh_file`] for a file, [`tptd::pipeline::read_grid`]) and converts the
-//! result to numpy arrays ([`result`]); the package's `__init__.py` builds the
-//! `meshio.Mesh`. The checks, messages and meshing are the library's, as for `tptd-mesh`.
+//! runs out. Each function converts its arguments ([`args`], [`volume`], [`mesh_in`]), calls
+//! the library's entry point with the GIL released ([`tptd::pipeline::mesh_grid`] for an
+//! array, [`tptd::pipeline::mesh_file`] for a file, [`tptd::pipeline::read_grid`], and with
+//! [`tptd::level_surface`] for an isosurface; [`critical`], [`inspect`] and [`write`] for
+//! the other runs) and converts the result to numpy arrays ([`result`]) or the JSON of
+//! `tptd-mesh`; the package's `__init__.py` builds the `meshio.Mesh` and the dicts. The
+//! checks, messages and work are the library's, as for `tptd-mesh`.
 
 mod args;
+mod critical;
+mod inspect;
+mod mesh_in;
 mod progress;
 mod result;
 mod volume;
+mod write;
 
 use std::path::PathBuf;
 
@@ -16,17 +22,18 @@ use numpy::PyUntypedArray;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use tptd::pipeline::{mesh_file, mesh_grid, read_grid, MeshRun, PipelineError};
+use tptd::pipeline::{mesh_file, mesh_grid, read_grid, MeshRun, NoProgress, PipelineError};
+use tptd::{level_surface, SurfaceOptions};
 
-use args::{Options, PY_NAMES};
+use args::{Options, ISO_NAMES, PY_NAMES};
 use progress::PyProgress;
 
 /// The name of an array volume in messages (the parameter's).
-const VOLUME: &str = "volume";
+pub(crate) const VOLUME: &str = "volume";
 
 /// A library error as a Python exception: `OSError` when the system refused a file,
 /// `ValueError` otherwise, with the library's one-line message.
-fn py_error(e: PipelineError) -> PyErr {
+pub(crate) fn py_error(e: PipelineError) -> PyErr {
     let message = e.message().replace(['\n', '\r'], " ");
     if e.is_io() {
         PyOSError::new_err(message)
@@ -79,6 +86,34 @@ fn finish<'py>(
     result::mesh_dict(py, run)
 }
 
+/// The level set `{f = level}` of an array volume (see `tptd.isosurface`): the interval
+/// `[level, inf)` meshed in memory as `options` say (`alpha` is the level), then its level
+/// surface, as `tptd-mesh VOLUME --alpha LEVEL -o OUT.obj` writes it; returns its arrays as a
+/// dict.
+#[pyfunction]
+#[pyo3(signature = (volume, options, caps=false))]
+fn isosurface_volume<'py>(
+    py: Python<'py>,
+    volume: &Bound<'py, PyUntypedArray>,
+    options: Options,
+    caps: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let req = options.request_named(None, ISO_NAMES)?;
+    let grid = volume::grid_of(volume, options.origin, options.affine)?;
+    let surface = py.detach(|| {
+        let run = mesh_grid(grid, VOLUME, &req, &NoProgress)?;
+        let opts = SurfaceOptions {
+            caps,
+            beta: f64::INFINITY,
+        };
+        let s = run.mesh.as_ref().map(|out| level_surface(&out.mesh, &opts));
+        Ok((s, run.report.warnings))
+    });
+    let (s, warnings) = surface.map_err(py_error)?;
+    let s = s.ok_or_else(|| PyValueError::new_err("the run held no mesh"))?;
+    result::surface_dict(py, s, warnings)
+}
+
 /// Reads a volume file: `(array, affine)`, the array indexed `[i, j, k]` in the file's sample
 /// type (Fortran order, no copy of the samples) and the 4×4 affine from index to physical
 /// coordinates.
@@ -96,6 +131,11 @@ fn _tptd(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mesh_volume, m)?)?;
     m.add_function(wrap_pyfunction!(mesh_path, m)?)?;
     m.add_function(wrap_pyfunction!(read_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(isosurface_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(critical::critical_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(critical::critical_path, m)?)?;
+    m.add_function(wrap_pyfunction!(inspect::inspect_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(write::write_mesh, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 use rayon::prelude::*;
 use tptd::io::msh::{label_tag, DOMAIN_PHYSICAL_TAG};
 use tptd::pipeline::MeshRun;
-use tptd::{BoundaryLabel, TetMesh};
+use tptd::{BoundaryLabel, TetMesh, TriSurface};
 
 /// Elementary tag of the one volume of a mesh of one interval (as the `.msh` writer's).
 const VOLUME_ENTITY: i32 = 1;
@@ -156,6 +156,24 @@ pub(crate) fn mesh_dict(py: Python<'_>, run: MeshRun) -> PyResult<Bound<'_, PyDi
     d.set_item("triangle_tag", array(py, a.triangle_tag, 1)?)?;
     d.set_item("names", a.names)?;
     d.set_item("report", report)?;
+    d.set_item("warnings", warnings)?;
+    Ok(d)
+}
+
+/// The dict of a level surface: `points`, `f` and `triangle`, and the run's `warnings`.
+pub(crate) fn surface_dict(
+    py: Python<'_>,
+    s: TriSurface,
+    warnings: Vec<String>,
+) -> PyResult<Bound<'_, PyDict>> {
+    let (points, triangles) = py.detach(move || {
+        let points = flat(s.points, |p| p);
+        (points, flat(s.triangles, |t| t.map(i64::from)))
+    });
+    let d = PyDict::new(py);
+    d.set_item("points", array(py, points, 3)?)?;
+    d.set_item("f", array(py, s.values, 1)?)?;
+    d.set_item("triangle", array(py, triangles, 3)?)?;
     d.set_item("warnings", warnings)?;
     Ok(d)
 }

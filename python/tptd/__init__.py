@@ -6,13 +6,17 @@ as :func:`mesh`). The meshing, the checks and the messages are the Rust library'
 ``tptd-mesh``'s; options that would do nothing are refused with ``ValueError``.
 
 Functions: :func:`mesh` (an array), :func:`mesh_file` (any input ``tptd-mesh`` reads),
-:func:`read_volume` (a volume file as an array and its affine).
+:func:`read_volume` (a volume file as an array and its affine), :func:`isosurface` (a level
+set as triangles), :func:`critical_points` and :func:`critical_points_file` (``tptd-mesh
+--critical``), :func:`inspect` (``tptd-mesh --inspect``), :func:`write` (a mesh through the
+library's writers).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 import warnings
 from typing import Callable, Optional, Sequence, Tuple
 
@@ -20,7 +24,10 @@ import numpy as np
 
 from . import _tptd
 
-__all__ = ["mesh", "mesh_file", "read_volume", "MeshWarning", "__version__"]
+__all__ = [
+    "mesh", "mesh_file", "read_volume", "isosurface", "critical_points", "critical_points_file",
+    "inspect", "write", "MeshWarning", "__version__",
+]
 __version__ = _tptd.__version__
 
 Progress = Callable[[str, float], object]
@@ -87,6 +94,26 @@ def _to_meshio(d: dict, boundary: bool):
     return m
 
 
+def _array(volume) -> np.ndarray:
+    """``volume`` as an array the native module takes: native byte order, float16 as
+    float32 (as the file readers read them)."""
+    volume = np.asarray(volume)
+    if not volume.dtype.isnative:  # big-endian data: the same values in native byte order
+        volume = volume.astype(volume.dtype.newbyteorder("="))
+    if volume.dtype == np.float16:  # read as float32, like the other narrow types
+        volume = volume.astype(np.float32)
+    return volume
+
+
+def _placement(spacing, origin, affine):
+    """The spacing to pass (``None`` with an affine), refusing an affine with either."""
+    if affine is not None and (
+        tuple(origin) != (0.0, 0.0, 0.0) or tuple(spacing) != (1.0, 1.0, 1.0)
+    ):
+        raise ValueError("affine excludes spacing and origin: give the affine or those two")
+    return None if affine is not None else spacing
+
+
 def mesh(
     volume,
     alpha: Optional[float] = None,
@@ -145,19 +172,10 @@ def mesh(
     empty interval or a mesh failing ``check``, with ``tptd-mesh``'s one-line message
     (parameters named the Python way).
     """
-    volume = np.asarray(volume)
-    if not volume.dtype.isnative:  # big-endian data: the same values in native byte order
-        volume = volume.astype(volume.dtype.newbyteorder("="))
-    if volume.dtype == np.float16:  # read as float32, like the other narrow types
-        volume = volume.astype(np.float32)
-    if affine is not None and (
-        tuple(origin) != (0.0, 0.0, 0.0) or tuple(spacing) != (1.0, 1.0, 1.0)
-    ):
-        raise ValueError("affine excludes spacing and origin: give the affine or those two")
+    volume = _array(volume)
     opts = _options(
-        alpha, beta, levels, region_names,
-        None if affine is not None else spacing, origin, affine, method, quality, min_angle,
-        max_angle, quality_time, check, analysis, threads,
+        alpha, beta, levels, region_names, _placement(spacing, origin, affine), origin,
+        affine, method, quality, min_angle, max_angle, quality_time, check, analysis, threads,
     )
     return _to_meshio(_tptd.mesh_volume(volume, opts, progress), boundary)
 
@@ -212,3 +230,280 @@ def read_volume(path) -> Tuple[np.ndarray, np.ndarray]:
     """
     array, affine = _tptd.read_volume(os.fspath(path))
     return array, affine
+
+
+def isosurface(
+    volume,
+    level: float,
+    *,
+    spacing: Sequence[float] = (1.0, 1.0, 1.0),
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
+    affine=None,
+    method: str = "ctd",
+    caps: bool = False,
+    threads: Optional[int] = None,
+):
+    """The level set ``{f = level}`` of an array as triangles: the surface ``tptd-mesh`` writes
+    for ``VOLUME --alpha LEVEL -o OUT.obj`` (``.ply``, ``.stl``), i.e. the ``alpha`` boundary
+    of the mesh of ``{level <= f}``, with the topology of the trilinear interpolant (``method``
+    as in :func:`mesh`), normals towards increasing f. ``caps=True`` adds the triangles on
+    the grid box that close it (``--caps``). ``volume``, ``spacing``, ``origin``, ``affine``
+    and ``threads`` as in :func:`mesh`; the GIL is released while it works.
+
+    Returns a ``meshio.Mesh``: ``points`` (float64, n x 3, numbered by first use), one cell
+    block ``triangle`` (int64) and ``point_data["f"]``. Warnings (a level equal to grid values
+    or near a critical value) are issued as :class:`MeshWarning`. Raises ``ValueError`` as
+    :func:`mesh` does (e.g. a level above the data: the interval contains no part of the
+    volume).
+    """
+    import meshio
+
+    volume = _array(volume)
+    opts = _options(
+        level, None, None, None, _placement(spacing, origin, affine), origin, affine, method,
+        False, 15.0, 155.0, None, False, False, threads,
+    )
+    d = _tptd.isosurface_volume(volume, opts, bool(caps))
+    for w in d["warnings"]:
+        warnings.warn(w, MeshWarning, stacklevel=2)
+    return meshio.Mesh(d["points"], [("triangle", d["triangle"])], point_data={"f": d["f"]})
+
+
+def _critical_options(spacing, origin, affine, min_value, max_value, kind, persistence,
+                      min_persistence, threads) -> dict:
+    if kind is not None and not isinstance(kind, str):
+        kind = ",".join(str(k) for k in kind)
+    return {
+        "spacing": None if spacing is None else [float(x) for x in spacing],
+        "origin": [float(x) for x in origin],
+        "affine": None if affine is None else np.asarray(affine, dtype=float).tolist(),
+        "min_value": None if min_value is None else float(min_value),
+        "max_value": None if max_value is None else float(max_value),
+        "kind": kind,
+        "persistence": bool(persistence),
+        "min_persistence": None if min_persistence is None else float(min_persistence),
+        "threads": None if threads is None else int(threads),
+    }
+
+
+def critical_points(
+    volume,
+    *,
+    spacing: Optional[Sequence[float]] = None,
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
+    affine=None,
+    min_value: Optional[float] = None,
+    max_value: Optional[float] = None,
+    kind=None,
+    persistence: bool = False,
+    min_persistence: Optional[float] = None,
+    threads: Optional[int] = None,
+) -> list:
+    """The critical points and regions of the trilinear field of an array (where the topology
+    of ``{f >= w}`` or ``{f <= w}`` changes): the records ``tptd-mesh VOLUME --critical
+    --json`` writes, one dict per point (``value``, ``kind``, ``position`` in physical
+    coordinates, ``persistence``, ``superlevel``, ``sublevel``, ``region``, ...).
+
+    ``volume``, ``origin``, ``affine`` and ``threads`` as in :func:`mesh` (``spacing``
+    defaults to 1). Filters, as the command line's: ``min_value`` / ``max_value`` hide points
+    below / above; ``kind`` keeps only these kinds (a list or a comma-separated string of
+    ``minimum``, ``maximum``, ``saddle``, ``face_saddle``, ``body_saddle``,
+    ``region_minimum``, ``region_maximum``, ``region_saddle``); ``persistence=True`` computes
+    each point's persistence; ``min_persistence`` hides points below it (and implies
+    ``persistence``). Raises ``ValueError`` with ``tptd-mesh``'s one-line message.
+    """
+    volume = _array(volume)
+    if affine is not None and (spacing is not None or tuple(origin) != (0.0, 0.0, 0.0)):
+        raise ValueError("affine excludes spacing and origin: give the affine or those two")
+    opts = _critical_options(
+        spacing, origin, affine, min_value, max_value, kind, persistence, min_persistence,
+        threads,
+    )
+    return json.loads(_tptd.critical_volume(volume, opts))
+
+
+def critical_points_file(
+    path,
+    *,
+    spacing: Optional[Sequence[float]] = None,
+    min_value: Optional[float] = None,
+    max_value: Optional[float] = None,
+    kind=None,
+    persistence: bool = False,
+    min_persistence: Optional[float] = None,
+    threads: Optional[int] = None,
+) -> list:
+    """:func:`critical_points` of a volume file ``tptd-mesh`` reads (``spacing`` replaces the
+    file's): the records of ``tptd-mesh PATH --critical --json``. Raises ``OSError`` when the
+    file cannot be read, ``ValueError`` otherwise."""
+    opts = _critical_options(
+        spacing, (0.0, 0.0, 0.0), None, min_value, max_value, kind, persistence,
+        min_persistence, threads,
+    )
+    return json.loads(_tptd.critical_path(os.fspath(path), opts))
+
+
+def _blocks(m, kind: str, width: int, key: Optional[str] = None):
+    """The cells of type ``kind`` of every block, and their ``cell_data[key]`` (``None`` when
+    a block has none)."""
+    idx = [i for i, c in enumerate(m.cells) if c.type == kind]
+    cells = [np.asarray(m.cells[i].data, dtype=np.int64).reshape(-1, width) for i in idx]
+    cells = np.concatenate(cells) if cells else np.zeros((0, width), dtype=np.int64)
+    data = m.cell_data.get(key) if key else None
+    if data is None or not idx:
+        return cells, None
+    return cells, np.concatenate([np.ravel(np.asarray(data[i], dtype=np.int64)) for i in idx])
+
+
+def _mesh_arrays(m, labels, levels=0, region_names=()) -> dict:
+    """The arrays of a ``meshio.Mesh`` the native module takes: points, ``point_data["f"]``
+    (if any), the ``tetra`` cells with their ``region``, the ``triangle`` cells with their
+    label codes ``labels(tags)`` (from ``gmsh:physical``; -1: not labelled)."""
+    if not any(c.type == "tetra" for c in m.cells):
+        raise ValueError("mesh: no tetra cells")
+    tetra, tetra_region = _blocks(m, "tetra", 4, "region")
+    triangle, tags = _blocks(m, "triangle", 3, "gmsh:physical")
+    _, triangle_region = _blocks(m, "triangle", 3, "region")
+    f = m.point_data.get("f")
+    return {
+        "points": np.ascontiguousarray(m.points, dtype=np.float64),
+        "f": None if f is None else np.ascontiguousarray(np.ravel(f), dtype=np.float64),
+        "tetra": tetra,
+        "tetra_region": tetra_region,
+        "triangle": triangle,
+        "triangle_label": labels(tags, len(triangle)),
+        "triangle_region": triangle_region,
+        "levels": int(levels),
+        "region_names": [str(n) for n in region_names],
+    }
+
+
+def _groups(m, dim: int) -> dict:
+    """The names of ``m.field_data``'s groups of dimension ``dim``, by tag."""
+    out = {}
+    for name, v in m.field_data.items():
+        v = np.ravel(v)
+        if len(v) >= 2 and int(v[1]) == dim:
+            out[int(v[0])] = name
+    return out
+
+
+def _levels(m, tetra_region) -> Tuple[int, list]:
+    """The levels of the run a mesh of :func:`mesh` comes from (0 for one interval) and its
+    regions' names: from ``m.info`` (the report), else from the group names."""
+    info = getattr(m, "info", None)
+    if isinstance(info, dict) and info.get("levels"):
+        return len(info["levels"]), [r["name"] for r in info.get("regions", [])]
+    surfaces = _groups(m, 2)
+    level_tags = [t for t, n in surfaces.items() if re.fullmatch(r"level[0-9]+", n)]
+    several = tetra_region is not None and len(tetra_region) and tetra_region.max() > 0
+    if not level_tags and not several:
+        return 0, []
+    box = [t - 1 for t, n in surfaces.items() if n == "box"]
+    regions = [] if tetra_region is None or not len(tetra_region) else [tetra_region.max() + 2]
+    count = max(level_tags + box + regions)
+    volumes = _groups(m, 3)
+    return count, [volumes.get(k + 1, f"region{k + 1}") for k in range(count - 1)]
+
+
+def write(
+    mesh,
+    path,
+    *,
+    msh_version: Optional[str] = None,
+    vtu_encoding: Optional[str] = None,
+    ascii: bool = False,
+) -> None:
+    """Write a mesh of :func:`mesh` with the library's writers, as ``tptd-mesh`` writes its
+    output: the format by the extension of ``path``, ``.msh`` (``msh_version``: ``4.1``,
+    the default, ``2.2`` or ``4.1-binary``), ``.inp``, ``.vtu`` (``vtu_encoding``:
+    ``base64``, the default, ``zlib`` or ``raw``), or the level sets as ``.obj``, ``.ply``,
+    ``.stl`` (``ascii=True``: text ``.ply`` / ``.stl``). The same mesh gives the same bytes
+    as ``tptd-mesh ... -o path``. The file is written under a temporary name in the same
+    folder and renamed when complete: a failure leaves no file (and an existing one as it
+    was). The GIL is released while writing.
+
+    ``mesh``: a ``meshio.Mesh`` with a ``tetra`` block and ``points``; its ``triangle`` block
+    with ``cell_data["gmsh:physical"]`` (the labelled boundary, then the interfaces),
+    ``cell_data["region"]``, ``point_data["f"]`` (zeros if absent) and ``field_data`` as
+    :func:`mesh` gives them; the levels of a mesh of several regions are read from
+    ``mesh.info`` (else from the group names). Raises ``ValueError`` for an unknown
+    extension, an option of another format or an inconsistent mesh, ``OSError`` when the
+    file cannot be written, each with ``tptd-mesh``'s one-line message.
+    """
+    tetra_region = _blocks(mesh, "tetra", 4, "region")[1]
+    levels, names = _levels(mesh, tetra_region)
+    count = max(levels, 2)
+
+    def codes(tags, n):
+        if tags is None:
+            return np.full(n, -1, dtype=np.int64)
+        return np.where((tags >= 1) & (tags <= count + 1), tags - 1, -1).astype(np.int64)
+
+    arrays = _mesh_arrays(mesh, codes, levels, names)
+    options = {"msh_version": msh_version, "vtu_encoding": vtu_encoding, "ascii": bool(ascii)}
+    _tptd.write_mesh(os.fspath(path), arrays, options)
+
+
+def _is_path(x) -> bool:
+    return isinstance(x, (str, bytes, os.PathLike))
+
+
+def inspect(
+    mesh,
+    volume=None,
+    *,
+    alpha: Optional[float] = None,
+    beta: Optional[float] = None,
+    spacing: Optional[Sequence[float]] = None,
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
+    affine=None,
+    threads: Optional[int] = None,
+) -> dict:
+    """Inspect a tetrahedral mesh as ``tptd-mesh --inspect MESH [--volume VOLUME --alpha A
+    --beta B] --json`` does: counts, volume, dihedral angles and their percentiles, quality,
+    the library checker's verdict (``valid``, ``problems``: conformity, orientation, closed
+    manifold boundary, embedding), Betti numbers; with the volume it models and the interval
+    ``[alpha, beta]``, the trilinear interval's Betti numbers and volume and the boundary's
+    distance to the level sets. Returns the command line's JSON object of the mesh as a dict.
+
+    ``mesh``: a file the command line reads (``.msh``, ``.inp``, ``.vtu``, ``.vtk``, Medit
+    ``.mesh``, TetGen ``.node``/``.ele``) or a ``meshio.Mesh`` (its ``tetra`` cells and
+    points; ``point_data["f"]``; its triangles in groups named ``alpha``, ``beta``, ``box``
+    by ``field_data`` and ``cell_data["gmsh:physical"]`` are its labelled boundary, as a
+    ``.msh`` file's groups), named ``mesh`` in the result. ``volume``: a volume file (whose
+    spacing ``spacing`` replaces) or an array (placed by ``spacing``, ``origin`` or
+    ``affine`` as in :func:`mesh`). Raises ``ValueError`` for arguments the command line
+    refuses (e.g. an interval without a volume) or malformed files, ``OSError`` for a file
+    that cannot be read.
+    """
+    if _is_path(mesh):
+        m = os.fspath(mesh)
+    else:
+        surfaces = _groups(mesh, 2)
+        by_tag = {t: ["alpha", "beta", "box"].index(n.lower())
+                  for t, n in surfaces.items() if n.lower() in ("alpha", "beta", "box")}
+
+        def codes(tags, n):
+            if tags is None:
+                return np.full(n, -1, dtype=np.int64)
+            return np.array([by_tag.get(int(t), -1) for t in tags], dtype=np.int64)
+
+        m = _mesh_arrays(mesh, codes)
+    if volume is not None and _is_path(volume):
+        if affine is not None or tuple(origin) != (0.0, 0.0, 0.0):
+            raise ValueError("origin and affine apply only to an array volume")
+        volume = os.fspath(volume)
+    elif volume is not None:
+        volume = _array(volume)
+        if affine is not None and (spacing is not None or tuple(origin) != (0.0, 0.0, 0.0)):
+            raise ValueError("affine excludes spacing and origin: give the affine or those two")
+    options = {
+        "alpha": None if alpha is None else float(alpha),
+        "beta": None if beta is None else float(beta),
+        "spacing": None if spacing is None else [float(x) for x in spacing],
+        "origin": [float(x) for x in origin],
+        "affine": None if affine is None else np.asarray(affine, dtype=float).tolist(),
+        "threads": None if threads is None else int(threads),
+    }
+    return json.loads(_tptd.inspect_mesh(m, volume, options))

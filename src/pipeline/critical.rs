@@ -4,7 +4,8 @@
 //! printing its table ([`critical_table`]): it checks that the outputs can be written and
 //! that none is an input file or another output, reads the input, checks the memory
 //! estimate, finds the points, builds the transfer function and writes the JSON, the contour
-//! spectrum and the transfer function atomically. Nothing here prints.
+//! spectrum and the transfer function atomically. Nothing here prints. [`critical_grid`] is
+//! the same run on a volume given in memory (a binding's array).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -21,6 +22,7 @@ use crate::io::{
 use crate::ScalarGrid;
 
 use super::progress::{Progress, Reporter, StageKind};
+use super::read::with_spacing;
 use super::{check_threads, read_grid, Param, ParamNames, PipelineError};
 
 /// One run of the critical points: the input, the filters of the points, the outputs and the
@@ -133,6 +135,40 @@ pub fn critical_file(
     crate::memory::set_limit(req.memory_limit);
     let reporter = Reporter::new(progress);
     let input = req.input_name();
+    let transfer_format = check_outputs(req)?;
+    let stage = reporter.stage(&format!("reading {input}"), StageKind::Step);
+    let grid = read_grid(req.input.as_deref(), req.spacing, req.names)?;
+    stage.finish();
+    find_and_write(&grid, &input, req, transfer_format, (&reporter, t))
+}
+
+/// Runs `req` on `grid`, a volume given in memory and named `name` in messages, as
+/// [`critical_file`] runs it on its input file (whose path is not read): the same checks,
+/// points and outputs; the request's spacing, if given, replaces the grid's.
+///
+/// # Errors
+/// As [`critical_file`], naming `name`.
+pub fn critical_grid(
+    grid: ScalarGrid,
+    name: &str,
+    req: &CriticalRequest,
+    progress: &dyn Progress,
+) -> Result<CriticalRun, PipelineError> {
+    let t = Instant::now();
+    crate::memory::set_limit(req.memory_limit);
+    let reporter = Reporter::new(progress);
+    let req = CriticalRequest {
+        input: None,
+        ..req.clone()
+    };
+    let transfer_format = check_outputs(&req)?;
+    let grid = with_spacing(grid, req.spacing, name, req.names)?;
+    find_and_write(&grid, name, &req, transfer_format, (&reporter, t))
+}
+
+/// Checks the thread count and the outputs: writable, the transfer function's format (which
+/// it returns), no output an input file or another output.
+fn check_outputs(req: &CriticalRequest) -> Result<Option<TransferFormat>, PipelineError> {
     check_threads(req.threads, req.names)?;
     for out in [&req.json, &req.spectrum, &req.transfer]
         .into_iter()
@@ -142,24 +178,33 @@ pub fn critical_file(
     }
     let transfer_format = req.transfer.as_deref().map(transfer_format).transpose()?;
     check_files(req)?;
-    let stage = reporter.stage(&format!("reading {input}"), StageKind::Step);
-    let grid = read_grid(req.input.as_deref(), req.spacing, req.names)?;
-    stage.finish();
+    Ok(transfer_format)
+}
+
+/// The work of a run on `grid` (named `input`) once the outputs are checked: the memory
+/// estimate, the points, the transfer function and the outputs; the seconds count from `t`.
+fn find_and_write(
+    grid: &ScalarGrid,
+    input: &str,
+    req: &CriticalRequest,
+    transfer_format: Option<TransferFormat>,
+    (reporter, t): (&Reporter, Instant),
+) -> Result<CriticalRun, PipelineError> {
     let opts = req.options();
     check_memory(
-        &grid,
-        (&input, req.names),
+        grid,
+        (input, req.names),
         opts.persistence,
         req.spectrum.is_some(),
     )?;
     let stage = reporter.stage("finding the critical points", StageKind::Step);
     let points =
-        find_critical_with_options(&grid, &opts).map_err(|e| PipelineError::file(&input, e))?;
+        find_critical_with_options(grid, &opts).map_err(|e| PipelineError::file(input, e))?;
     stage.finish();
     let secs = t.elapsed().as_secs_f64();
     // built before any file is written, so that bad parameters leave no output
     let transfer = match &req.transfer {
-        Some(path) => Some(build_transfer(req, &grid, &points, path)?),
+        Some(path) => Some(build_transfer(req, grid, &points, path)?),
         None => None,
     };
     let _stage = reporter.stage("writing the outputs", StageKind::Step);
@@ -170,10 +215,10 @@ pub fn critical_file(
         })?;
     }
     if let Some(path) = &req.spectrum {
-        write_spectrum(&grid, path, &opts)?;
+        write_spectrum(grid, path, &opts)?;
     }
     if let (Some(path), Some(format), Some(tf)) = (&req.transfer, transfer_format, &transfer) {
-        write_transfer_function(tf, &input, path, format)?;
+        write_transfer_function(tf, input, path, format)?;
     }
     Ok(CriticalRun {
         points,
@@ -392,5 +437,23 @@ mod tests {
         };
         let e = critical_file(&req, &NoProgress).unwrap_err();
         assert!(e.is_usage(), "{e}");
+    }
+
+    #[test]
+    fn a_grid_in_memory_gives_the_points_of_its_file() {
+        let req = CriticalRequest {
+            persistence: true,
+            ..CriticalRequest::default()
+        };
+        let file = critical_file(&req, &NoProgress).unwrap();
+        let grid = crate::demo::demo_volume();
+        let given = critical_grid(grid, "volume", &req, &NoProgress).unwrap();
+        assert_eq!(given.points, file.points);
+        let spaced = CriticalRequest {
+            spacing: Some([1.0, 0.0, 1.0]),
+            ..req
+        };
+        let e = critical_grid(crate::demo::demo_volume(), "volume", &spaced, &NoProgress);
+        assert!(e.unwrap_err().message().starts_with("volume: spacing: "));
     }
 }

@@ -4,8 +4,9 @@
 //! not fit in memory.
 
 use std::fmt;
+use std::io::ErrorKind;
 
-use crate::io::{FileClash, ReadError, WriteError};
+use crate::io::{FileClash, MeshReadError, ReadError, WriteError};
 
 /// Why a run failed: displays as one line naming the file (or the demo input, or the
 /// option) and the problem.
@@ -130,6 +131,10 @@ impl From<WriteError> for PipelineError {
                 path.display(),
                 dir.display()
             )),
+            // a writer refusing an inconsistent mesh: the content, not the system
+            WriteError::Io { path, source } if source.kind() == ErrorKind::InvalidInput => {
+                Self::file(path.display(), format_args!("cannot write: {source}"))
+            }
             WriteError::Io { path, source } => {
                 Self::io(format_args!("{}: cannot write: {source}", path.display()))
             }
@@ -142,6 +147,17 @@ impl From<ReadError> for PipelineError {
     fn from(e: ReadError) -> Self {
         match e {
             ReadError::Io { .. } => Self::io(e),
+            e => Self::other(e),
+        }
+    }
+}
+
+impl From<MeshReadError> for PipelineError {
+    /// The mesh reader's message; a file the system refused is marked
+    /// ([`PipelineError::is_io`]).
+    fn from(e: MeshReadError) -> Self {
+        match e {
+            MeshReadError::Io { .. } | MeshReadError::Vtk(ReadError::Io { .. }) => Self::io(e),
             e => Self::other(e),
         }
     }

@@ -5,7 +5,8 @@
 //! file read, reads the reference volume and computes the trilinear interval's reference,
 //! reads and inspects each mesh ([`crate::inspect::inspect`]) and writes the JSON. An
 //! unreadable mesh ends the run before anything is written; an invalid mesh is a result,
-//! not an error.
+//! not an error. [`inspect_given`] is the same run with meshes and the volume in memory
+//! (a binding's).
 
 use std::path::{Path, PathBuf};
 
@@ -13,7 +14,7 @@ use crate::inspect::ReferenceOptions;
 use crate::inspect::{inspect, reference, table, InspectOptions, Inspection, Reference};
 use crate::io::{check_clashes, check_writable, input_run_files, mesh_files, output_run_files};
 use crate::io::{read_mesh, read_volume, write_atomically, RunFile};
-use crate::ScalarGrid;
+use crate::{ScalarGrid, TetMesh};
 
 use super::progress::{Progress, Reporter, StageKind};
 use super::text::fmt_interval;
@@ -61,6 +62,16 @@ impl InspectRun {
     }
 }
 
+/// Meshes and a reference volume given in memory instead of files (a binding's), for
+/// [`inspect_given`].
+#[derive(Clone, Debug, Default)]
+pub struct InspectInputs {
+    /// The meshes, each with its name in the results, inspected after the request's files.
+    pub meshes: Vec<(String, TetMesh)>,
+    /// The volume the meshes model, with its name in messages, instead of the request's.
+    pub volume: Option<(String, ScalarGrid)>,
+}
+
 /// Runs `req`: checks the JSON output, reads the volume and its reference, reads and
 /// inspects each mesh, writes the JSON. Stages go to `progress`.
 ///
@@ -69,6 +80,21 @@ impl InspectRun {
 /// usage error ([`PipelineError::is_usage`]).
 pub fn inspect_files(
     req: &InspectRequest,
+    progress: &dyn Progress,
+) -> Result<InspectRun, PipelineError> {
+    inspect_given(req, InspectInputs::default(), progress)
+}
+
+/// [`inspect_files`] with meshes and a volume in memory too (`given`): the request's mesh
+/// files are inspected first, then the given meshes, as if read from files (a mesh's
+/// `boundary` holds the triangles it labels, possibly none); a given volume replaces the
+/// request's (the request's spacing applies to it as to a file).
+///
+/// # Errors
+/// As [`inspect_files`].
+pub fn inspect_given(
+    req: &InspectRequest,
+    given: InspectInputs,
     progress: &dyn Progress,
 ) -> Result<InspectRun, PipelineError> {
     crate::memory::set_limit(req.memory_limit);
@@ -83,20 +109,26 @@ pub fn inspect_files(
     }
     check_files(req)?;
     let reporter = Reporter::new(progress);
-    let volume = match &req.volume {
-        Some(path) => Some(read_reference(req, path, &reporter)?),
-        None => None,
+    let volume = match (given.volume, &req.volume) {
+        (Some((name, grid)), _) => Some(reference_of(req, grid, &name, &reporter)?),
+        (None, Some(path)) => Some(read_reference(req, path, &reporter)?),
+        (None, None) => None,
     };
     let opts = InspectOptions {
-        volume: volume.as_ref().map(|(g, r)| (g, r)),
+        volume: volume.as_ref().map(|(g, r, _)| (g, r)),
         ..InspectOptions::default()
     };
-    let mut meshes = Vec::with_capacity(req.meshes.len());
+    let mut meshes = Vec::with_capacity(req.meshes.len() + given.meshes.len());
     for path in &req.meshes {
         let name = path.display().to_string();
         let stage = reporter.stage(&format!("inspecting {name}"), StageKind::Step);
-        let file = read_mesh(path).map_err(PipelineError::other)?;
+        let file = read_mesh(path).map_err(PipelineError::from)?;
         meshes.push(inspect(&name, file.mesh, &opts));
+        stage.finish();
+    }
+    for (name, mesh) in given.meshes {
+        let stage = reporter.stage(&format!("inspecting {name}"), StageKind::Step);
+        meshes.push(inspect(&name, mesh, &opts));
         stage.finish();
     }
     if let Some(path) = &req.json {
@@ -105,7 +137,7 @@ pub fn inspect_files(
             writeln!(w)
         })?;
     }
-    let reference = volume.zip(req.volume.clone()).map(|((_, r), p)| (r, p));
+    let reference = volume.map(|(_, r, p)| (r, p));
     Ok(InspectRun { meshes, reference })
 }
 
@@ -126,28 +158,39 @@ fn check_files(req: &InspectRequest) -> Result<(), PipelineError> {
     Ok(())
 }
 
-/// Reads the volume (with the spacing) and computes the reference of the interval.
+/// Reads the volume and computes the reference of the interval (see [`reference_of`]).
 fn read_reference(
     req: &InspectRequest,
     path: &Path,
     reporter: &Reporter,
-) -> Result<(ScalarGrid, Reference), PipelineError> {
+) -> Result<(ScalarGrid, Reference, PathBuf), PipelineError> {
     let name = path.display().to_string();
-    let n = req.names;
     let stage = reporter.stage(&format!("reading {name}"), StageKind::Step);
-    let mut grid = read_volume(path).map_err(PipelineError::from)?;
+    let grid = read_volume(path).map_err(PipelineError::from)?;
+    stage.finish();
+    reference_of(req, grid, &name, reporter)
+}
+
+/// The volume `grid` named `name` with the request's spacing, the reference of the
+/// request's interval, and the name as a path (for the table).
+fn reference_of(
+    req: &InspectRequest,
+    mut grid: ScalarGrid,
+    name: &str,
+    reporter: &Reporter,
+) -> Result<(ScalarGrid, Reference, PathBuf), PipelineError> {
+    let n = req.names;
     if let Some(s) = req.spacing {
         grid = ScalarGrid::with_geometry(grid.dims, s, grid.origin, grid.direction, grid.values)
             .map_err(|e| {
-                PipelineError::file(&name, format_args!("{}: {e}", n.of(Param::Spacing)))
+                PipelineError::file(name, format_args!("{}: {e}", n.of(Param::Spacing)))
             })?;
     }
-    stage.finish();
     let alpha = req.alpha.unwrap_or(f64::NEG_INFINITY);
     let beta = req.beta.unwrap_or(f64::INFINITY);
     if alpha >= beta {
         return Err(PipelineError::file(
-            &name,
+            name,
             format_args!(
                 "empty interval: {} ({alpha}) must be less than {} ({beta})",
                 n.of(Param::Alpha),
@@ -158,7 +201,7 @@ fn read_reference(
     let what = format!("the trilinear interval {}", fmt_interval(alpha, beta));
     let stage = reporter.stage(&what, StageKind::Step);
     let r = reference(&grid, alpha, beta, &ReferenceOptions::default())
-        .map_err(|e| PipelineError::file(&name, e))?;
+        .map_err(|e| PipelineError::file(name, e))?;
     stage.finish();
-    Ok((grid, r))
+    Ok((grid, r, PathBuf::from(name)))
 }

@@ -27,7 +27,8 @@
 //!
 //! The critical points of a volume (`tptd-mesh --critical`) are a run of their own
 //! (`critical.rs`): [`critical_file`] takes a [`CriticalRequest`] and gives a
-//! [`CriticalRun`], whose table is [`critical_table`].
+//! [`CriticalRun`], whose table is [`critical_table`]; [`critical_grid`] is the same run on a
+//! volume in memory. [`write_mesh_file`] writes a mesh as a run writes its output.
 
 mod applies;
 mod bounds;
@@ -52,14 +53,17 @@ use crate::report::{QualityTimings, Report, Timings};
 use crate::{MeshOutput, Method, ScalarGrid};
 
 pub use applies::{check_applies, Given, Inapplicable, Mode};
-pub use critical::{critical_file, critical_table, transfer_line, CriticalRequest, CriticalRun};
+pub use critical::{
+    critical_file, critical_grid, critical_table, transfer_line, CriticalRequest, CriticalRun,
+};
 pub use error::PipelineError;
-pub use inspect::{inspect_files, InspectRequest, InspectRun};
+pub use inspect::{inspect_files, inspect_given, InspectInputs, InspectRequest, InspectRun};
 pub use memory::out_of_memory_line;
 pub use param::{Param, ParamNames};
 pub use progress::{NoProgress, Progress, StageKind};
 pub use read::read_grid;
 pub use request::{check_threads, MeshRequest, QualityRequest, DEMO_OUTPUT};
+pub use run::write_mesh_file;
 pub use summary::summary;
 
 use progress::Reporter;

@@ -9,8 +9,8 @@ use crate::check::{check_mesh, CheckOptions, CheckReport};
 use crate::curvilinear::map_mesh;
 use crate::facts::{FactsSink, MeshFacts, Tee};
 use crate::io::{
-    spill_for_levels, write_mesh_pending, write_spilled_pending, write_surface_pending,
-    PendingFile, SurfaceFormat,
+    check_writable, spill_for_levels, write_mesh_pending, write_spilled_pending,
+    write_surface_pending, PendingFile, SurfaceFormat, WriteOptions,
 };
 use crate::quality::summarize;
 use crate::report::{QualitySection, QualityTimings};
@@ -18,7 +18,7 @@ use crate::surface::analysis::{analyse_surface, SurfaceAnalysis};
 use crate::{
     level_surface, mesh_interval, mesh_interval_seen_by, mesh_interval_streamed,
     mesh_interval_with_progress, CurvilinearGrid, MeshError, MeshOptions, MeshOutput, MeshStats,
-    Method, ScalarGrid, SurfaceOptions,
+    Method, ScalarGrid, SurfaceOptions, TetMesh,
 };
 
 use super::progress::{Reporter, StageKind};
@@ -196,7 +196,7 @@ fn check_output(
     job: &Job,
     grid: &ScalarGrid,
     parameter_points: Option<&[[f64; 3]]>,
-    mesh: &crate::TetMesh,
+    mesh: &TetMesh,
     reporter: &Reporter,
 ) -> Result<(Option<CheckReport>, Option<f64>), PipelineError> {
     if !job.req.check {
@@ -244,21 +244,53 @@ fn write_output(
         return Ok((None, None));
     };
     let stage = reporter.stage(&format!("writing {}", output.display()), StageKind::Step);
-    let write = &job.req.write;
-    let written = match SurfaceFormat::from_path(output) {
-        Some(_) => {
-            let opts = SurfaceOptions {
-                caps: job.req.caps,
-                beta: job.opts.beta,
-            };
-            let s = level_surface(&out.mesh, &opts);
-            let file = write_surface_pending(output, &s, write)?;
-            (Some(analyse_surface(&s)), Some(file))
-        }
-        None => (None, Some(write_mesh_pending(output, &out.mesh, write)?)),
+    let surface = SurfaceOptions {
+        caps: job.req.caps,
+        beta: job.opts.beta,
     };
+    let (analysis, file) = write_pending(output, &out.mesh, &job.req.write, &surface)?;
     stage.finish();
-    Ok(written)
+    Ok((analysis, Some(file)))
+}
+
+/// Writes `mesh` to a temporary of `output`: the mesh in the format of its extension, or for
+/// a surface extension (`.obj`, `.ply`, `.stl`) its level sets ([`level_surface`] with
+/// `surface`), with their analysis.
+fn write_pending(
+    output: &Path,
+    mesh: &TetMesh,
+    write: &WriteOptions,
+    surface: &SurfaceOptions,
+) -> Result<(Option<SurfaceAnalysis>, PendingFile), PipelineError> {
+    Ok(match SurfaceFormat::from_path(output) {
+        Some(_) => {
+            let s = level_surface(mesh, surface);
+            let file = write_surface_pending(output, &s, write)?;
+            (Some(analyse_surface(&s)), file)
+        }
+        None => (None, write_mesh_pending(output, mesh, write)?),
+    })
+}
+
+/// Writes `mesh` to `path` as a run writes its output: the format by the extension (`.msh`,
+/// `.inp`, `.vtu` with `write`'s options), or for `.obj`, `.ply` and `.stl` the level sets
+/// (with `surface`'s caps). The file is written under a temporary name and renamed onto
+/// `path` when complete: a failure leaves no file, and an existing `path` as it was.
+///
+/// # Errors
+/// One line naming `path`: a directory or a missing one, an unknown extension, an
+/// inconsistent mesh (an index out of range, lengths that differ, a labelled triangle that
+/// is no face of a tet), or the system's refusal ([`PipelineError::is_io`]).
+pub fn write_mesh_file(
+    path: &Path,
+    mesh: &TetMesh,
+    write: &WriteOptions,
+    surface: &SurfaceOptions,
+) -> Result<(), PipelineError> {
+    check_writable(path)?;
+    let (_, file) = write_pending(path, mesh, write, surface)?;
+    file.commit()?;
+    Ok(())
 }
 
 /// What gathers the facts of the job's mesh slab by slab.
