@@ -16,6 +16,7 @@
 
 pub mod algebra;
 pub mod allocator;
+pub mod cancel;
 pub mod check;
 pub(crate) mod clip;
 pub mod critical;

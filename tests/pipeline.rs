@@ -374,3 +374,67 @@ fn a_mesh_in_memory_is_analysed_while_it_is_made() {
         }
     }
 }
+
+/// A [`Progress`] that sets the run's stop flag when the stage `at` starts.
+struct CancelAt(&'static str, tptd::cancel::Cancel);
+
+impl Progress for CancelAt {
+    fn stage(&self, name: &str, _kind: StageKind) {
+        if name == self.0 {
+            self.1.cancel();
+        }
+    }
+    fn fraction(&self, _done: u64, _total: u64) {}
+    fn message(&self, _message: &str) {}
+    fn finish(&self) {}
+    fn warn(&self, _message: &str) {}
+}
+
+/// A run whose caller sets its stop flag while it meshes (streamed to disk or held in
+/// memory) or while the quality pass works stops with an interrupted error and leaves no
+/// file; the same request with a fresh flag runs to its end.
+#[test]
+fn a_cancelled_run_stops_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("waves.npy");
+    let f = |i: usize, j: usize, k: usize| {
+        let (x, y, z) = (i as f64 * 0.35, j as f64 * 0.35, k as f64 * 0.35);
+        x.sin() * y.cos() + y.sin() * z.cos() + z.sin() * x.cos()
+    };
+    write_npy(&input, [24, 24, 24], f);
+    let quality = Some(QualityRequest {
+        options: Default::default(),
+        seconds: None,
+    });
+    let cases = [
+        ("meshing", None, Some("w.vtu")),
+        ("meshing", None, None),
+        ("improving elements", quality.clone(), Some("w.msh")),
+    ];
+    for (at, quality, output) in cases {
+        let req = MeshRequest {
+            input: Some(input.clone()),
+            alpha: Some(-0.3013),
+            beta: Some(0.2987),
+            quality: quality.clone(),
+            output: output.map(|o| dir.path().join(o)),
+            ..MeshRequest::default()
+        };
+        let e = mesh_file(&req, &CancelAt(at, req.cancel.clone()))
+            .err()
+            .unwrap();
+        assert!(e.is_interrupted() && !e.is_usage(), "{at}: {e}");
+        assert!(e.message().contains("interrupted"), "{e}");
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(left.len(), 1, "{at}: the run left files");
+        let fresh = MeshRequest {
+            cancel: Default::default(),
+            ..req
+        };
+        let run = mesh_file(&fresh, &NoProgress).unwrap();
+        assert!(run.report.tets > 0);
+        if let Some(o) = output {
+            std::fs::remove_file(dir.path().join(o)).unwrap();
+        }
+    }
+}

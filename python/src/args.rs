@@ -92,6 +92,7 @@ pub(crate) struct Options {
     pub(crate) function: Option<PathBuf>,
     pub(crate) resolution: Option<i64>,
     pub(crate) voxel_size: Option<f64>,
+    pub(crate) memory_limit: Option<i64>,
 }
 
 /// The names of `tptd.isosurface`: its level is the lower bound of the interval meshed.
@@ -155,6 +156,7 @@ impl Options {
             (Param::Function, self.function.is_some()),
             (Param::Resolution, self.resolution.is_some()),
             (Param::VoxelSize, self.voxel_size.is_some()),
+            (Param::MemoryLimit, self.memory_limit.is_some()),
         ];
         set.into_iter()
             .filter(|&(_, s)| s)
@@ -209,6 +211,7 @@ impl Options {
             quality: self.quality()?,
             check: self.check,
             analysis: self.analysis,
+            memory_limit: self.memory_limit()?,
             names,
             ..MeshRequest::default()
         })
@@ -245,6 +248,18 @@ impl Options {
 
     fn threads(&self) -> PyResult<Option<usize>> {
         threads(self.threads)
+    }
+
+    fn memory_limit(&self) -> PyResult<Option<u64>> {
+        match self.memory_limit {
+            None => Ok(None),
+            Some(n) if n >= 1 => Ok(Some(n as u64)),
+            Some(n) => Err(invalid(
+                n,
+                Param::MemoryLimit,
+                "expected a positive number of bytes",
+            )),
+        }
     }
 
     fn quality(&self) -> PyResult<Option<QualityRequest>> {

@@ -10,6 +10,7 @@
 mod args;
 mod critical;
 mod inspect;
+mod interrupt;
 mod mesh_in;
 mod progress;
 mod result;
@@ -19,24 +20,28 @@ mod write;
 use std::path::PathBuf;
 
 use numpy::PyUntypedArray;
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tptd::pipeline::{mesh_file, mesh_grid, read_grid, MeshRun, NoProgress, PipelineError};
 use tptd::{level_surface, SurfaceOptions};
 
 use args::{Options, ISO_NAMES, PY_NAMES};
+use interrupt::interruptible;
 use progress::PyProgress;
 
 /// The name of an array volume in messages (the parameter's).
 pub(crate) const VOLUME: &str = "volume";
 
 /// A library error as a Python exception: `OSError` when the system refused a file,
-/// `ValueError` otherwise, with the library's one-line message.
+/// `MemoryError` when the run would not fit in memory, `ValueError` otherwise, with the
+/// library's one-line message.
 pub(crate) fn py_error(e: PipelineError) -> PyErr {
     let message = e.message().replace(['\n', '\r'], " ");
     if e.is_io() {
         PyOSError::new_err(message)
+    } else if e.is_memory() {
+        PyMemoryError::new_err(message)
     } else {
         PyValueError::new_err(message)
     }
@@ -54,7 +59,7 @@ fn mesh_volume<'py>(
     let req = options.request(None)?;
     let grid = volume::grid_of(volume, options.origin, options.affine)?;
     let progress = PyProgress::new(progress);
-    let run = py.detach(|| mesh_grid(grid, VOLUME, &req, &progress));
+    let run = interruptible(py, &req.cancel, || mesh_grid(grid, VOLUME, &req, &progress))?;
     finish(py, run, progress)
 }
 
@@ -70,7 +75,7 @@ fn mesh_path<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let req = options.request(Some(path))?;
     let progress = PyProgress::new(progress);
-    let run = py.detach(|| mesh_file(&req, &progress));
+    let run = interruptible(py, &req.cancel, || mesh_file(&req, &progress))?;
     finish(py, run, progress)
 }
 
@@ -100,7 +105,7 @@ fn isosurface_volume<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let req = options.request_named(None, ISO_NAMES)?;
     let grid = volume::grid_of(volume, options.origin, options.affine)?;
-    let surface = py.detach(|| {
+    let surface = interruptible(py, &req.cancel, || {
         let run = mesh_grid(grid, VOLUME, &req, &NoProgress)?;
         let opts = SurfaceOptions {
             caps,
@@ -108,7 +113,7 @@ fn isosurface_volume<'py>(
         };
         let s = run.mesh.as_ref().map(|out| level_surface(&out.mesh, &opts));
         Ok((s, run.report.warnings))
-    });
+    })?;
     let (s, warnings) = surface.map_err(py_error)?;
     let s = s.ok_or_else(|| PyValueError::new_err("the run held no mesh"))?;
     result::surface_dict(py, s, warnings)

@@ -87,3 +87,13 @@ def test_affine_excludes_spacing_and_origin(scan):
     for kwargs in [dict(spacing=(2, 1, 1)), dict(origin=(0, 0, 5))]:
         msg = raises(ValueError, tptd.mesh, scan, 100, affine=np.eye(4), **kwargs)
         assert msg == "affine excludes spacing and origin: give the affine or those two"
+
+
+def test_a_run_that_would_not_fit_raises_memory_error(tmp_path, scan):
+    for f, volume in ((tptd.mesh, scan), (tptd.mesh_file, tmp_path / "scan.npy")):
+        message = raises(MemoryError, f, volume, 120.3, memory_limit=1000)
+        assert "memory limit is 1000 B" in message and "\n" not in message
+    assert "memory_limit" in raises(ValueError, tptd.mesh, scan, 120.3, memory_limit=0)
+    # a limit the run fits in changes nothing
+    fits = tptd.mesh(scan, 120.3, memory_limit=1 << 30)
+    assert np.array_equal(fits.cells_dict["tetra"], tptd.mesh(scan, 120.3).cells_dict["tetra"])

@@ -47,9 +47,12 @@ def test_a_file_against_a_volume_file_and_array(tmp_path, scan, ring_msh):
     assert without_file(py) == without_file(cli)
     on_array = tptd.inspect(ring_msh, scan, alpha=120.3, beta=180.7)
     assert without_file(on_array) == without_file(cli)
-    spaced = cli_inspect(tmp_path, "ring.msh", "--volume", "scan.npy", *INTERVAL,
+    # a mesh of the volume with its spacing
+    tptd.write(tptd.mesh(scan, 120.3, 180.7, spacing=(1, 1, 2)), tmp_path / "spaced.msh")
+    spaced = cli_inspect(tmp_path, "spaced.msh", "--volume", "scan.npy", *INTERVAL,
                          "--spacing", "1,1,2")
-    py = tptd.inspect(ring_msh, scan, alpha=120.3, beta=180.7, spacing=(1, 1, 2))
+    assert spaced["valid"] is True
+    py = tptd.inspect(tmp_path / "spaced.msh", scan, alpha=120.3, beta=180.7, spacing=(1, 1, 2))
     assert without_file(py) == without_file(spaced)
 
 

@@ -70,3 +70,34 @@ def test_warnings_are_issued_and_reported(scan):
     lines = [str(x.message) for x in w if issubclass(x.category, tptd.MeshWarning)]
     assert lines and lines == m.info["warnings"]
     assert lines[0].startswith("volume: alpha 120 equals the value of")
+
+
+def gyroid(n=36):
+    x, y, z = np.mgrid[:n, :n, :n] * 0.35
+    g = np.sin(x) * np.cos(y) + np.sin(y) * np.cos(z) + np.sin(z) * np.cos(x)
+    return g.astype(np.float32)
+
+
+def test_ctrl_c_stops_a_run_and_raises_keyboard_interrupt():
+    import _thread
+
+    img = gyroid()
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", tptd.MeshWarning)
+        whole = tptd.mesh(img, -0.3013, 0.2987, quality=True)
+    took = time.perf_counter() - t0
+    assert took > 1.5, "too fast to interrupt"
+    timer = threading.Timer(0.3, _thread.interrupt_main)
+    t0 = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        tptd.mesh(img, -0.3013, 0.2987, quality=True)
+    stopped = time.perf_counter() - t0
+    timer.join()
+    assert stopped < 0.3 + 0.5 * took, (stopped, took)
+    # the next run is not affected
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", tptd.MeshWarning)
+        again = tptd.mesh(img, -0.3013, 0.2987, quality=True)
+    assert np.array_equal(again.cells_dict["tetra"], whole.cells_dict["tetra"])

@@ -41,7 +41,7 @@ class MeshWarning(UserWarning):
 def _options(
     alpha, beta, levels, region_names, spacing, origin, affine, method, quality, min_angle,
     max_angle, quality_time, check, analysis, threads, field=None, function=None,
-    resolution=None, voxel_size=None,
+    resolution=None, voxel_size=None, memory_limit=None,
 ) -> dict:
     def floats(v, n=None):
         return None if v is None else [float(x) for x in v]
@@ -66,6 +66,7 @@ def _options(
         "function": None if function is None else os.fspath(function),
         "resolution": None if resolution is None else int(resolution),
         "voxel_size": None if voxel_size is None else float(voxel_size),
+        "memory_limit": None if memory_limit is None else int(memory_limit),
     }
 
 
@@ -132,6 +133,7 @@ def mesh(
     check: bool = False,
     analysis: bool = True,
     threads: Optional[int] = None,
+    memory_limit: Optional[int] = None,
     boundary: bool = True,
     progress: Optional[Progress] = None,
 ):
@@ -168,6 +170,10 @@ def mesh(
     ``tptd-mesh --report``: counts, volume, Betti numbers, angles, warnings, timings).
     Warnings are also issued as :class:`MeshWarning`.
 
+    Before any work the run's memory is estimated (the grid, the mesh, the quality pass and
+    the check) and compared with ``memory_limit`` (bytes; default: the memory available):
+    a run that would not fit raises ``MemoryError``.
+
     Raises ``ValueError`` for an argument that is invalid or would do nothing, and for an
     empty interval or a mesh failing ``check``, with ``tptd-mesh``'s one-line message
     (parameters named the Python way).
@@ -176,6 +182,7 @@ def mesh(
     opts = _options(
         alpha, beta, levels, region_names, _placement(spacing, origin, affine), origin,
         affine, method, quality, min_angle, max_angle, quality_time, check, analysis, threads,
+        memory_limit=memory_limit,
     )
     return _to_meshio(_tptd.mesh_volume(volume, opts, progress), boundary)
 
@@ -200,6 +207,7 @@ def mesh_file(
     function=None,
     resolution: Optional[int] = None,
     voxel_size: Optional[float] = None,
+    memory_limit: Optional[int] = None,
     boundary: bool = True,
     progress: Optional[Progress] = None,
 ):
@@ -214,7 +222,7 @@ def mesh_file(
     opts = _options(
         alpha, beta, levels, region_names, spacing, (0.0, 0.0, 0.0), None, method, quality,
         min_angle, max_angle, quality_time, check, analysis, threads, field, function,
-        resolution, voxel_size,
+        resolution, voxel_size, memory_limit,
     )
     return _to_meshio(_tptd.mesh_path(os.fspath(path), opts, progress), boundary)
 

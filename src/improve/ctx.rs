@@ -26,6 +26,8 @@ pub struct Ctx<'a> {
     pub boundary_collapse_ratio: f64,
     /// When the time budget runs out.
     pub deadline: Option<Instant>,
+    /// The caller's stop flag ([`QualityOptions::cancel`](super::QualityOptions::cancel)).
+    pub cancel: crate::cancel::Cancel,
     /// The state of the round the operation runs in.
     pub round: RoundFlags<'a>,
 }
@@ -59,9 +61,9 @@ pub struct RoundFlags<'a> {
 }
 
 impl Ctx<'_> {
-    /// Whether the time budget has run out.
+    /// Whether the time budget has run out, or the caller asked the pass to stop.
     pub fn out_of_time(&self) -> bool {
-        self.deadline.is_some_and(|d| Instant::now() >= d)
+        self.cancel.is_cancelled() || self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 
     /// The quality the pass maximises (biased minimum sine).
@@ -107,6 +109,7 @@ pub(super) fn context<'a>(
         target: lo_s.min(obtuse_weight * hi_s),
         boundary_collapse_ratio: opts.boundary_collapse_ratio,
         deadline: opts.time_budget.map(|b| start + b),
+        cancel: opts.cancel.clone(),
         round: RoundFlags::default(),
     }
 }

@@ -50,6 +50,9 @@ pub struct QualityOptions {
     /// At most this many of the listed tets are given one by one (worst first); the counts
     /// per reason cover all.
     pub forced_list_cap: usize,
+    /// Set by the caller to stop the pass early: it then stops as when its time budget runs
+    /// out (the mesh is valid whenever it stops).
+    pub cancel: crate::cancel::Cancel,
 }
 
 impl Default for QualityOptions {
@@ -66,6 +69,7 @@ impl Default for QualityOptions {
             forced_floor: 5.0,
             forced_critical_tol: 1e-5,
             forced_list_cap: 1000,
+            cancel: crate::cancel::Cancel::new(),
         }
     }
 }

@@ -61,6 +61,7 @@ pub(super) fn run_rounds(
             polish: true,
             ..ctx.round
         },
+        cancel: ctx.cancel.clone(),
         ..*ctx
     };
     let mut sub = None;
@@ -171,6 +172,7 @@ fn run_round_on(
                 rim_marks: Some(&s.rim_marks),
                 ..ctx.round
             },
+            cancel: ctx.cancel.clone(),
             ..*ctx
         };
         let progress = Progress {

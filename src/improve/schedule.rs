@@ -54,6 +54,7 @@ fn retry(lm: &mut LocalMesh, ctx: &Ctx, report: &mut ImproveReport) {
                 centroid,
                 ..ctx.round
             },
+            cancel: ctx.cancel.clone(),
             ..*ctx
         };
         improve_once(&mut other, &variant, &mut r);

@@ -59,6 +59,14 @@ pub enum ReadError {
         #[source]
         source: GridError,
     },
+    /// Holding the samples would exceed the memory limit (or the memory available).
+    #[error("{file}: {message}")]
+    Memory {
+        /// The file being read.
+        file: String,
+        /// What would not fit, and what helps.
+        message: String,
+    },
     /// The file extension is not one of the supported volume formats.
     #[error(
         "{file}: unknown volume format; supported extensions are {}",
@@ -103,6 +111,14 @@ fn file_name(path: &Path) -> String {
 }
 
 impl ReadError {
+    /// An error of `path` whose samples would not fit in memory.
+    pub(crate) fn memory(path: &Path, message: impl AsRef<str>) -> Self {
+        ReadError::Memory {
+            file: file_name(path),
+            message: one_line(message.as_ref()),
+        }
+    }
+
     /// A malformed-content error for `path`.
     pub(crate) fn invalid(path: &Path, message: impl AsRef<str>) -> Self {
         ReadError::Invalid {
@@ -140,6 +156,7 @@ impl ReadError {
         match self {
             ReadError::Io { file, .. }
             | ReadError::Invalid { file, .. }
+            | ReadError::Memory { file, .. }
             | ReadError::Unsupported { file, .. }
             | ReadError::Grid { file, .. }
             | ReadError::UnknownFormat { file } => file,
@@ -250,8 +267,8 @@ impl SampleBuf {
         let storage = storage_of(ty);
         let need = crate::memory::read_bytes(count as u64, storage.bytes() as u64, held as u64);
         crate::memory::check(need, format!("reading {count} samples"))
-            .map_err(|e| ReadError::invalid(path, format!("{e}; crop or downsample the volume")))?;
-        let cannot = |e| ReadError::invalid(path, format!("cannot hold {count} samples: {e}"));
+            .map_err(|e| ReadError::memory(path, format!("{e}; crop or downsample the volume")))?;
+        let cannot = |e| ReadError::memory(path, format!("cannot hold {count} samples: {e}"));
         let samples = match storage {
             SampleStorage::U8 => Samples::U8(zeroed(count).map_err(cannot)?),
             SampleStorage::I16 => Samples::I16(zeroed(count).map_err(cannot)?),
@@ -543,7 +560,7 @@ pub(crate) fn decompress_exact(
 ) -> Result<Vec<u8>, ReadError> {
     let mut out = Vec::new();
     crate::memory::try_reserve(&mut out, want)
-        .map_err(|e| ReadError::invalid(path, format!("cannot hold {want} bytes of data: {e}")))?;
+        .map_err(|e| ReadError::memory(path, format!("cannot hold {want} bytes of data: {e}")))?;
     out.resize(want, 0);
     decompress_into(path, reader, 0, &mut out, exact, what)?;
     Ok(out)

@@ -16,6 +16,7 @@ pub struct PipelineError {
     usage: bool,
     io: bool,
     memory: bool,
+    interrupted: bool,
 }
 
 impl PipelineError {
@@ -26,6 +27,7 @@ impl PipelineError {
             usage: false,
             io: false,
             memory: false,
+            interrupted: false,
         }
     }
 
@@ -45,6 +47,7 @@ impl PipelineError {
             usage: false,
             io: false,
             memory: false,
+            interrupted: false,
         }
     }
 
@@ -54,6 +57,14 @@ impl PipelineError {
         PipelineError {
             memory: true,
             ..Self::file(file, problem)
+        }
+    }
+
+    /// The run about `file` stopped because its caller asked ([`crate::cancel::Cancel`]).
+    pub(crate) fn interrupted(file: impl fmt::Display) -> Self {
+        PipelineError {
+            interrupted: true,
+            ..Self::file(file, "interrupted; nothing written")
         }
     }
 
@@ -84,6 +95,12 @@ impl PipelineError {
         self.memory
     }
 
+    /// Whether the run stopped because its caller asked (a binding raises
+    /// `KeyboardInterrupt` then).
+    pub fn is_interrupted(&self) -> bool {
+        self.interrupted
+    }
+
     /// The message (as displayed).
     pub fn message(&self) -> &str {
         &self.message
@@ -106,6 +123,7 @@ impl From<FileClash> for PipelineError {
             usage: true,
             io: false,
             memory: false,
+            interrupted: false,
         }
     }
 }
@@ -147,6 +165,10 @@ impl From<ReadError> for PipelineError {
     fn from(e: ReadError) -> Self {
         match e {
             ReadError::Io { .. } => Self::io(e),
+            ReadError::Memory { .. } => PipelineError {
+                memory: true,
+                ..Self::other(e)
+            },
             e => Self::other(e),
         }
     }

@@ -33,7 +33,10 @@ pub(crate) fn improve_mesh(
     let t = Instant::now();
     let before = analysis.then(|| summarize_mapped(&out.mesh, curvilinear));
     let before_seconds = t.elapsed().as_secs_f64();
-    let opts = request.pass_options();
+    let opts = QualityOptions {
+        cancel: job.req.cancel.clone(),
+        ..request.pass_options()
+    };
     let done = improve_in_pool(out, (grid, job), &opts, map, reporter);
     let section = QualitySection {
         target_degrees: [opts.min_angle, opts.max_angle],

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use crate::cancel::Cancel;
 use crate::demo::{DEMO_ALPHA, DEMO_BETA};
 use crate::improve::QualityOptions;
 use crate::io::{
@@ -80,6 +81,9 @@ pub struct MeshRequest {
     pub memory_limit: Option<u64>,
     /// How messages name the parameters.
     pub names: ParamNames,
+    /// Set by the caller to stop the run: it then fails ([`PipelineError::is_interrupted`])
+    /// and leaves no output.
+    pub cancel: Cancel,
 }
 
 impl Default for MeshRequest {
@@ -107,6 +111,7 @@ impl Default for MeshRequest {
             critical_tol: None,
             memory_limit: None,
             names: ParamNames::NEUTRAL,
+            cancel: Cancel::new(),
         }
     }
 }

@@ -5,6 +5,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use crate::cancel::Cancel;
 use crate::check::{check_mesh, CheckOptions, CheckReport};
 use crate::curvilinear::map_mesh;
 use crate::facts::{FactsSink, MeshFacts, Tee};
@@ -12,13 +13,14 @@ use crate::io::{
     check_writable, spill_for_levels, write_mesh_pending, write_spilled_pending,
     write_surface_pending, PendingFile, SurfaceFormat, WriteOptions,
 };
+use crate::mesh::NoSink;
 use crate::quality::summarize;
 use crate::report::{QualitySection, QualityTimings};
 use crate::surface::analysis::{analyse_surface, SurfaceAnalysis};
 use crate::{
-    level_surface, mesh_interval, mesh_interval_seen_by, mesh_interval_streamed,
-    mesh_interval_with_progress, CurvilinearGrid, MeshError, MeshOptions, MeshOutput, MeshStats,
-    Method, ScalarGrid, SurfaceOptions, TetMesh,
+    level_surface, mesh_interval, mesh_interval_seen_by, mesh_interval_streamed, CurvilinearGrid,
+    MeshChunk, MeshError, MeshOptions, MeshOutput, MeshSink, MeshStats, Method, ScalarGrid,
+    SurfaceOptions, TetMesh,
 };
 
 use super::progress::{Reporter, StageKind};
@@ -73,10 +75,11 @@ pub(crate) fn stream_to_disk(
         grid,
         &job.opts,
         &stage.counter(),
-        &mut Tee(&mut spill, &mut facts),
+        &mut Stop::new(job, &mut Tee(&mut spill, &mut facts)),
     );
     stage.finish();
     let stats = stats.map_err(|e| match e {
+        _ if job.req.cancel.is_cancelled() => PipelineError::interrupted(&job.input_name),
         MeshError::Output(e) => PipelineError::file(output.display(), e),
         e => PipelineError::file(&job.input_name, e),
     })?;
@@ -135,6 +138,9 @@ pub(crate) fn mesh_in_memory(
     let t_mesh = secs(t);
 
     let improved = improve_mesh((grid, job), &mut out, curvilinear, reporter);
+    if job.req.cancel.is_cancelled() {
+        return Err(PipelineError::interrupted(&job.input_name));
+    }
     let (quality, t_quality) = improved.unzip();
     // The level-set distance of a curvilinear mesh is checked in parameter space.
     let parameter_points =
@@ -293,6 +299,31 @@ pub fn write_mesh_file(
     Ok(())
 }
 
+/// A sink that hands each chunk on until the job's caller asks the run to stop
+/// ([`crate::cancel::Cancel`]), then fails, which stops meshing.
+struct Stop<'a> {
+    cancel: &'a Cancel,
+    inner: &'a mut (dyn MeshSink + Send),
+}
+
+impl<'a> Stop<'a> {
+    fn new(job: &'a Job, inner: &'a mut (dyn MeshSink + Send)) -> Self {
+        Stop {
+            cancel: &job.req.cancel,
+            inner,
+        }
+    }
+}
+
+impl MeshSink for Stop<'_> {
+    fn chunk(&mut self, c: &MeshChunk) -> std::io::Result<()> {
+        if self.cancel.is_cancelled() {
+            return Err(std::io::ErrorKind::Interrupted.into());
+        }
+        self.inner.chunk(c)
+    }
+}
+
 /// What gathers the facts of the job's mesh slab by slab.
 fn facts_sink(job: &Job) -> FactsSink {
     FactsSink::new(job.req.analysis).with_regions(&job.opts.levels, job.req.region_names.clone())
@@ -307,12 +338,17 @@ fn mesh(
     facts: Option<&mut FactsSink>,
 ) -> Result<MeshOutput, PipelineError> {
     let stage = reporter.stage("meshing", meshing(grid));
-    let out = match facts {
-        Some(f) => mesh_interval_seen_by(grid, &job.opts, &stage.counter(), f),
-        None => mesh_interval_with_progress(grid, &job.opts, &stage.counter()),
+    let mut none = NoSink;
+    let also: &mut (dyn MeshSink + Send) = match facts {
+        Some(f) => f,
+        None => &mut none,
     };
+    let out = mesh_interval_seen_by(grid, &job.opts, &stage.counter(), &mut Stop::new(job, also));
     stage.finish();
-    let mut out = out.map_err(|e| PipelineError::file(&job.input_name, e))?;
+    let mut out = out.map_err(|e| match job.req.cancel.is_cancelled() {
+        true => PipelineError::interrupted(&job.input_name),
+        false => PipelineError::file(&job.input_name, e),
+    })?;
     check_not_empty(grid, job, out.mesh.tets.len())?;
     out.mesh.regions.names = job.req.region_names.clone();
     Ok(out)

@@ -79,6 +79,7 @@ fn mesh_request(cli: &Cli) -> MeshRequest {
         critical_tol: cli.critical_tol,
         memory_limit: cli.memory_limit,
         names: FLAGS,
+        cancel: tptd::cancel::Cancel::new(),
     }
 }
 
