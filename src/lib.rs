@@ -16,6 +16,7 @@
 
 pub mod algebra;
 pub mod allocator;
+pub mod buffer;
 pub mod check;
 pub(crate) mod clip;
 pub mod critical;
@@ -49,6 +50,7 @@ pub mod union_find;
 pub(crate) mod warp;
 pub mod weld;
 
+pub use buffer::Buffer;
 pub use curvilinear::{mesh_curvilinear, CurvilinearError};
 pub use decompose::CellCase;
 pub use extract::{
