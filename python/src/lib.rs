@@ -45,10 +45,14 @@ fn mesh_volume<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let req = options.request(None)?;
-    let grid = volume::grid_of(volume, options.origin, options.affine)?;
+    // `grid` may read the array in place: `lent` (numpy's read-only borrow of it) outlives
+    // the grid, which the run drops (or `finish` does, attached) before this returns.
+    let (grid, lent) = volume::grid_of(volume, options.origin, options.affine)?;
     let progress = PyProgress::new(progress);
     let run = py.detach(|| mesh_grid(grid, VOLUME, &req, &progress));
-    finish(py, run, progress)
+    let out = finish(py, run, progress);
+    drop(lent);
+    out
 }
 
 /// Meshes the volume file `path` (see `tptd.mesh_file`); returns the arrays of the mesh as a
