@@ -97,29 +97,46 @@ pub(crate) struct Lent<'py>(Vec<Box<dyn Held + 'py>>);
 trait Held {}
 impl<T> Held for T {}
 
-/// The samples of `volume` if its type is `T`: read in place when `share` and the array
-/// allows it (its borrow pushed to `lent`), else copied and converted by `into`.
-fn typed<'py, T: Element + Copy + Sync + 'static>(
+/// `volume` borrowed read-only as an array of `T`, if that is its type.
+fn of_type<'py, T: Element>(
     volume: &Bound<'py, PyUntypedArray>,
-    share: Option<fn(Buffer<T>) -> Samples>,
-    into: impl Fn(Vec<T>) -> Samples,
-    lent: &mut Lent<'py>,
-) -> PyResult<Option<Samples>> {
-    let py = volume.py();
-    if !volume.dtype().is_equiv_to(&numpy::dtype::<T>(py)) {
+) -> PyResult<Option<PyReadonlyArray3<'py, T>>> {
+    if !volume.dtype().is_equiv_to(&numpy::dtype::<T>(volume.py())) {
         return Ok(None);
     }
-    let array = volume.cast::<PyArray3<T>>()?.try_readonly()?;
-    if let Some(share) = share {
-        if let Some(buffer) = in_place(&array) {
-            lent.0.push(Box::new(array));
-            return Ok(Some(share(buffer)));
-        }
-    }
-    Ok(Some(into(x_fastest(array.as_array()))))
+    Ok(Some(volume.cast::<PyArray3<T>>()?.try_readonly()?))
 }
 
-/// The samples of a 3-D array of one of the readers' types, x fastest.
+/// The samples of `volume` if its type is `T`, a type the grid stores: read in place when the
+/// array allows it (its borrow pushed to `lent`), else copied x fastest.
+fn stored<'py, T>(
+    volume: &Bound<'py, PyUntypedArray>,
+    lent: &mut Lent<'py>,
+) -> PyResult<Option<Samples>>
+where
+    T: Element + Copy + Sync + 'static,
+    Samples: From<Vec<T>> + From<Buffer<T>>,
+{
+    let Some(array) = of_type::<T>(volume)? else {
+        return Ok(None);
+    };
+    if let Some(buffer) = in_place(&array) {
+        lent.0.push(Box::new(array));
+        return Ok(Some(Samples::from(buffer)));
+    }
+    Ok(Some(Samples::from(x_fastest(array.as_array()))))
+}
+
+/// The samples of `volume` if its type is `T`, copied x fastest and converted by `into`.
+fn converted<T: Element + Copy>(
+    volume: &Bound<'_, PyUntypedArray>,
+    into: impl Fn(Vec<T>) -> Samples,
+) -> PyResult<Option<Samples>> {
+    Ok(of_type::<T>(volume)?.map(|a| into(x_fastest(a.as_array()))))
+}
+
+/// The samples of a 3-D array of one of the readers' types, x fastest (borrows of arrays
+/// read in place pushed to `lent`).
 fn samples<'py>(volume: &Bound<'py, PyUntypedArray>, lent: &mut Lent<'py>) -> PyResult<Samples> {
     fn wide<T: Into<f64>>(v: Vec<T>) -> Samples {
         Samples::from(v.into_iter().map(Into::into).collect::<Vec<f64>>())
@@ -127,46 +144,16 @@ fn samples<'py>(volume: &Bound<'py, PyUntypedArray>, lent: &mut Lent<'py>) -> Py
     fn wide64<T: Copy>(v: Vec<T>, f: fn(T) -> f64) -> Samples {
         Samples::from(v.into_iter().map(f).collect::<Vec<f64>>())
     }
-    let found = typed::<u8>(volume, Some(Samples::from), Samples::from, lent)?
-        .or(typed::<i16>(
-            volume,
-            Some(Samples::from),
-            Samples::from,
-            lent,
-        )?)
-        .or(typed::<u16>(
-            volume,
-            Some(Samples::from),
-            Samples::from,
-            lent,
-        )?)
-        .or(typed::<f32>(
-            volume,
-            Some(Samples::from),
-            Samples::from,
-            lent,
-        )?)
-        .or(typed::<f64>(
-            volume,
-            Some(Samples::from),
-            Samples::from,
-            lent,
-        )?)
-        .or(typed::<i8>(volume, None, Samples::from, lent)?)
-        .or(typed::<u32>(volume, None, wide, lent)?)
-        .or(typed::<i32>(volume, None, wide, lent)?)
-        .or(typed::<u64>(
-            volume,
-            None,
-            |v| wide64(v, |x| x as f64),
-            lent,
-        )?)
-        .or(typed::<i64>(
-            volume,
-            None,
-            |v| wide64(v, |x| x as f64),
-            lent,
-        )?);
+    let found = stored::<u8>(volume, lent)?
+        .or(stored::<i16>(volume, lent)?)
+        .or(stored::<u16>(volume, lent)?)
+        .or(stored::<f32>(volume, lent)?)
+        .or(stored::<f64>(volume, lent)?)
+        .or(converted::<i8>(volume, Samples::from)?)
+        .or(converted::<u32>(volume, wide)?)
+        .or(converted::<i32>(volume, wide)?)
+        .or(converted::<u64>(volume, |v| wide64(v, |x| x as f64))?)
+        .or(converted::<i64>(volume, |v| wide64(v, |x| x as f64))?);
     found.ok_or_else(|| {
         PyValueError::new_err(format!(
             "volume: unsupported dtype {}; use an integer or floating-point type (uint8, \
