@@ -359,7 +359,7 @@ impl Levels {
         let written = self.iter().filter(|l| l.is_finite());
         let mut values = match written.clone().all(|l| grid.values.holds(l)) {
             true => grid.values.clone(),
-            false => Samples::F64(grid.values.to_f64_vec()),
+            false => Samples::from(grid.values.to_f64_vec()),
         };
         values.par_map_in_place(|v| near_any(v).unwrap_or(v));
         let g = ScalarGrid {

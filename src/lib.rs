@@ -16,6 +16,7 @@
 
 pub mod algebra;
 pub mod allocator;
+pub mod buffer;
 pub mod cancel;
 pub mod check;
 pub(crate) mod clip;
@@ -50,6 +51,7 @@ pub mod union_find;
 pub(crate) mod warp;
 pub mod weld;
 
+pub use buffer::Buffer;
 pub use curvilinear::{mesh_curvilinear, CurvilinearError};
 pub use decompose::CellCase;
 pub use extract::{

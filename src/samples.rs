@@ -9,25 +9,33 @@
 //! for one value, [`Samples::gather`] for a cell's corners, [`Samples::for_each_in`] for a row,
 //! [`Samples::par_fold`] for whole-volume reductions. Inside each arm the loop is compiled for
 //! that element type.
+//!
+//! Each arm's [`Buffer`] is a vector of the grid's own or a read-only slice shared with its
+//! owner (an array of the caller's, used without a copy); the accessors match its kind once
+//! per call too and then read a plain slice. The few writers ([`Samples::as_bytes_mut`],
+//! [`Samples::par_map_in_place`]) copy a shared slice first.
 
 use rayon::prelude::*;
+
+use crate::buffer::Buffer;
 
 /// Samples handed to one rayon task by [`Samples::par_fold`].
 const PAR_CHUNK: usize = 1 << 16;
 
-/// The samples of a grid, x fastest, in their storage type.
+/// The samples of a grid, x fastest, in their storage type. Equal when the values are
+/// (owned or shared alike); a clone of shared samples shares them too.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Samples {
     /// Unsigned 8-bit integers.
-    U8(Vec<u8>),
+    U8(Buffer<u8>),
     /// Signed 16-bit integers (also `i8` data).
-    I16(Vec<i16>),
+    I16(Buffer<i16>),
     /// Unsigned 16-bit integers.
-    U16(Vec<u16>),
+    U16(Buffer<u16>),
     /// 32-bit floats.
-    F32(Vec<f32>),
+    F32(Buffer<f32>),
     /// 64-bit floats (also 32- and 64-bit integer data).
-    F64(Vec<f64>),
+    F64(Buffer<f64>),
 }
 
 /// The storage types, for messages and reports.
@@ -78,11 +86,11 @@ impl SampleStorage {
     /// `count` zero samples of this type.
     pub fn zeros(self, count: usize) -> Samples {
         match self {
-            SampleStorage::U8 => Samples::U8(vec![0; count]),
-            SampleStorage::I16 => Samples::I16(vec![0; count]),
-            SampleStorage::U16 => Samples::U16(vec![0; count]),
-            SampleStorage::F32 => Samples::F32(vec![0.0; count]),
-            SampleStorage::F64 => Samples::F64(vec![0.0; count]),
+            SampleStorage::U8 => Samples::from(vec![0u8; count]),
+            SampleStorage::I16 => Samples::from(vec![0i16; count]),
+            SampleStorage::U16 => Samples::from(vec![0u16; count]),
+            SampleStorage::F32 => Samples::from(vec![0f32; count]),
+            SampleStorage::F64 => Samples::from(vec![0f64; count]),
         }
     }
 }
@@ -93,16 +101,60 @@ impl std::fmt::Display for SampleStorage {
     }
 }
 
-/// Runs `$body` with `$v` bound to the typed vector (`&Vec<T>` or `&mut Vec<T>`), one arm per
-/// storage type; `f64::from` converts every element type.
+/// Runs `$body` with `$v` bound to the typed slice `&[T]`, one arm per storage type (the
+/// buffer's kind is matched there, once); `f64::from` converts every element type.
 macro_rules! typed {
     ($s:expr, $v:ident => $body:expr) => {
         match $s {
-            Samples::U8($v) => $body,
-            Samples::I16($v) => $body,
-            Samples::U16($v) => $body,
-            Samples::F32($v) => $body,
-            Samples::F64($v) => $body,
+            Samples::U8(b) => {
+                let $v: &[u8] = b;
+                $body
+            }
+            Samples::I16(b) => {
+                let $v: &[i16] = b;
+                $body
+            }
+            Samples::U16(b) => {
+                let $v: &[u16] = b;
+                $body
+            }
+            Samples::F32(b) => {
+                let $v: &[f32] = b;
+                $body
+            }
+            Samples::F64(b) => {
+                let $v: &[f64] = b;
+                $body
+            }
+        }
+    };
+}
+
+/// [`typed!`] for writing: `$v` is the typed vector `&mut Vec<T>`, a shared slice copied
+/// first.
+macro_rules! typed_mut {
+    ($s:expr, $v:ident => $body:expr) => {
+        match $s {
+            Samples::U8(b) => {
+                let $v = b.to_mut();
+                $body
+            }
+            Samples::I16(b) => {
+                let $v = b.to_mut();
+                $body
+            }
+            Samples::U16(b) => {
+                let $v = b.to_mut();
+                $body
+            }
+            Samples::F32(b) => {
+                let $v = b.to_mut();
+                $body
+            }
+            Samples::F64(b) => {
+                let $v = b.to_mut();
+                $body
+            }
         }
     };
 }
@@ -143,13 +195,24 @@ impl Samples {
     /// The samples' memory as bytes (native byte order); its length is
     /// `len() * bytes_per_sample()`.
     pub fn as_bytes(&self) -> &[u8] {
-        typed!(self, v => bytemuck::cast_slice(v.as_slice()))
+        typed!(self, v => bytemuck::cast_slice(v))
     }
 
     /// The samples' memory as writable bytes (native byte order), for readers filling them
-    /// straight from a file.
+    /// straight from a file. Shared samples are copied first.
     pub fn as_bytes_mut(&mut self) -> &mut [u8] {
-        typed!(self, v => bytemuck::cast_slice_mut(v.as_mut_slice()))
+        typed_mut!(self, v => bytemuck::cast_slice_mut(v.as_mut_slice()))
+    }
+
+    /// Whether the samples are shared with another owner rather than held by the grid.
+    pub fn is_shared(&self) -> bool {
+        match self {
+            Samples::U8(b) => b.is_shared(),
+            Samples::I16(b) => b.is_shared(),
+            Samples::U16(b) => b.is_shared(),
+            Samples::F32(b) => b.is_shared(),
+            Samples::F64(b) => b.is_shared(),
+        }
     }
 
     /// Sample `i` as an `f64` (exact for every storage type). Panics when out of range.
@@ -273,13 +336,26 @@ impl Samples {
 
     /// Replaces every sample `x` by `f(x)` in place (in parallel). `f` must return a value of
     /// the storage type: the result is converted with `as` (integers saturate and truncate).
+    /// Shared samples are copied first.
     pub fn par_map_in_place(&mut self, f: impl Fn(f64) -> f64 + Sync + Send) {
         match self {
-            Samples::U8(v) => v.par_iter_mut().for_each(|x| *x = f(f64::from(*x)) as u8),
-            Samples::I16(v) => v.par_iter_mut().for_each(|x| *x = f(f64::from(*x)) as i16),
-            Samples::U16(v) => v.par_iter_mut().for_each(|x| *x = f(f64::from(*x)) as u16),
-            Samples::F32(v) => v.par_iter_mut().for_each(|x| *x = f(f64::from(*x)) as f32),
-            Samples::F64(v) => v.par_iter_mut().for_each(|x| *x = f(*x)),
+            Samples::U8(v) => v
+                .to_mut()
+                .par_iter_mut()
+                .for_each(|x| *x = f(f64::from(*x)) as u8),
+            Samples::I16(v) => v
+                .to_mut()
+                .par_iter_mut()
+                .for_each(|x| *x = f(f64::from(*x)) as i16),
+            Samples::U16(v) => v
+                .to_mut()
+                .par_iter_mut()
+                .for_each(|x| *x = f(f64::from(*x)) as u16),
+            Samples::F32(v) => v
+                .to_mut()
+                .par_iter_mut()
+                .for_each(|x| *x = f(f64::from(*x)) as f32),
+            Samples::F64(v) => v.to_mut().par_iter_mut().for_each(|x| *x = f(*x)),
         }
     }
 
@@ -299,7 +375,13 @@ macro_rules! from_vec {
     ($($t:ty => $var:ident),*) => {$(
         impl From<Vec<$t>> for Samples {
             fn from(v: Vec<$t>) -> Self {
-                Samples::$var(v)
+                Samples::$var(v.into())
+            }
+        }
+
+        impl From<Buffer<$t>> for Samples {
+            fn from(b: Buffer<$t>) -> Self {
+                Samples::$var(b)
             }
         }
     )*};
@@ -309,7 +391,7 @@ from_vec!(u8 => U8, i16 => I16, u16 => U16, f32 => F32, f64 => F64);
 impl From<Vec<i8>> for Samples {
     /// `i8` data are held as `i16`.
     fn from(v: Vec<i8>) -> Self {
-        Samples::I16(v.into_iter().map(i16::from).collect())
+        Samples::from(v.into_iter().map(i16::from).collect::<Vec<i16>>())
     }
 }
 
@@ -347,6 +429,40 @@ mod tests {
             assert!(s.par_any(|x| x == 7.0) && !s.par_any(|x| x == 8.0));
             assert_eq!(s.as_bytes().len(), 4 * s.bytes_per_sample());
             assert_eq!(s.storage().bytes(), s.bytes_per_sample());
+        }
+    }
+
+    /// `s` with its samples in a shared buffer (a copy, held as another owner's slice).
+    fn shared(s: &Samples) -> Samples {
+        match s {
+            Samples::U8(b) => Samples::U8(Buffer::shared(b.to_vec())),
+            Samples::I16(b) => Samples::I16(Buffer::shared(b.to_vec())),
+            Samples::U16(b) => Samples::U16(Buffer::shared(b.to_vec())),
+            Samples::F32(b) => Samples::F32(Buffer::shared(b.to_vec())),
+            Samples::F64(b) => Samples::F64(Buffer::shared(b.to_vec())),
+        }
+    }
+
+    #[test]
+    fn shared_samples_read_as_owned_ones_and_are_copied_to_be_written() {
+        for owned in all_types() {
+            let s = shared(&owned);
+            assert!(s.is_shared() && !owned.is_shared());
+            assert_eq!(s, owned);
+            assert_eq!(s.storage(), owned.storage());
+            assert_eq!(s.to_f64_vec(), owned.to_f64_vec());
+            assert_eq!(s.gather([3, 1]), owned.gather([3, 1]));
+            assert_eq!(s.min_max_in(1..3), owned.min_max_in(1..3));
+            assert_eq!(s.as_bytes(), owned.as_bytes());
+            let (mut a, mut b) = (s.clone(), owned.clone());
+            assert!(a.is_shared(), "a clone shares the samples");
+            a.par_map_in_place(|x| x * 0.5);
+            b.par_map_in_place(|x| x * 0.5);
+            assert!(!a.is_shared() && a == b);
+            assert_eq!(s, owned, "the shared samples are not written");
+            let mut c = s.clone();
+            c.as_bytes_mut()[0] ^= 1;
+            assert!(!c.is_shared() && c != s && s == owned);
         }
     }
 

@@ -95,8 +95,11 @@ pub(crate) fn critical_volume(
     options: CriticalArgs,
 ) -> PyResult<String> {
     let req = options.request(None)?;
-    let grid = volume::grid_of(volume, options.origin, options.affine)?;
-    points_json(py.detach(|| critical_grid(grid, VOLUME, &req, &NoProgress)))
+    // `lent` (numpy's borrow of an array read in place) outlives the run
+    let (grid, lent) = volume::grid_of(volume, options.origin, options.affine)?;
+    let out = points_json(py.detach(|| critical_grid(grid, VOLUME, &req, &NoProgress)));
+    drop(lent);
+    out
 }
 
 /// The critical points of the volume file `path` (see `tptd.critical_points_file`), as JSON.

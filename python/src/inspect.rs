@@ -96,11 +96,14 @@ pub(crate) fn inspect_mesh(
         MeshArg::Path(p) => req.meshes.push(p),
         MeshArg::Arrays(a) => given.meshes.push((MESH.to_string(), a.into_mesh()?)),
     }
-    match volume {
-        Some(VolumeArg::Path(p)) => req.volume = Some(p),
+    // `lent` (numpy's borrow of an array read in place) outlives the run
+    let mut lent = None;
+    match &volume {
+        Some(VolumeArg::Path(p)) => req.volume = Some(p.clone()),
         Some(VolumeArg::Array(a)) => {
-            let grid = volume::grid_of(&a, options.origin, options.affine)?;
+            let (grid, borrow) = volume::grid_of(a, options.origin, options.affine)?;
             given.volume = Some((VOLUME.to_string(), grid));
+            lent = Some(borrow);
         }
         None => {}
     }
@@ -114,6 +117,7 @@ pub(crate) fn inspect_mesh(
             None => work(),
         }
     });
-    let run = run.map_err(py_error)?;
-    serde_json::to_string(&run.meshes[0]).map_err(|e| PyValueError::new_err(e.to_string()))
+    let run = run.map_err(py_error);
+    drop(lent);
+    serde_json::to_string(&run?.meshes[0]).map_err(|e| PyValueError::new_err(e.to_string()))
 }

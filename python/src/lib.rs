@@ -57,10 +57,14 @@ fn mesh_volume<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let req = options.request(None)?;
-    let grid = volume::grid_of(volume, options.origin, options.affine)?;
+    // `grid` may read the array in place: `lent` (numpy's read-only borrow of it) outlives
+    // the grid, which the run drops (or `finish` does, attached) before this returns.
+    let (grid, lent) = volume::grid_of(volume, options.origin, options.affine)?;
     let progress = PyProgress::new(progress);
     let run = interruptible(py, &req.cancel, || mesh_grid(grid, VOLUME, &req, &progress))?;
-    finish(py, run, progress)
+    let out = finish(py, run, progress);
+    drop(lent);
+    out
 }
 
 /// Meshes the volume file `path` (see `tptd.mesh_file`); returns the arrays of the mesh as a
@@ -104,7 +108,8 @@ fn isosurface_volume<'py>(
     caps: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let req = options.request_named(None, ISO_NAMES)?;
-    let grid = volume::grid_of(volume, options.origin, options.affine)?;
+    // `lent` (numpy's borrow of an array read in place) outlives the run
+    let (grid, lent) = volume::grid_of(volume, options.origin, options.affine)?;
     let surface = interruptible(py, &req.cancel, || {
         let run = mesh_grid(grid, VOLUME, &req, &NoProgress)?;
         let opts = SurfaceOptions {
@@ -113,8 +118,9 @@ fn isosurface_volume<'py>(
         };
         let s = run.mesh.as_ref().map(|out| level_surface(&out.mesh, &opts));
         Ok((s, run.report.warnings))
-    })?;
-    let (s, warnings) = surface.map_err(py_error)?;
+    });
+    drop(lent);
+    let (s, warnings) = surface?.map_err(py_error)?;
     let s = s.ok_or_else(|| PyValueError::new_err("the run held no mesh"))?;
     result::surface_dict(py, s, warnings)
 }

@@ -135,10 +135,17 @@ fn array<'py, T: Element>(
 /// The dict of a run's mesh: `points`, `f`, `tetra`, `tetra_region`, `tetra_tag`,
 /// `tetra_entity`, `triangle`, `triangle_region`, `triangle_tag`, `names`, `report` (JSON
 /// text) and `warnings`.
+///
+/// The run's input grid, which may read the caller's array in place, is dropped first (with
+/// the thread attached, before the mesh's arrays are made).
 pub(crate) fn mesh_dict(py: Python<'_>, run: MeshRun) -> PyResult<Bound<'_, PyDict>> {
-    let report = run.report.to_json_pretty();
-    let warnings = run.report.warnings.clone();
-    let Some(out) = run.mesh else {
+    let MeshRun {
+        report, grid, mesh, ..
+    } = run;
+    drop(grid);
+    let warnings = report.warnings.clone();
+    let report = report.to_json_pretty();
+    let Some(out) = mesh else {
         return Err(PyValueError::new_err(
             "the run wrote its mesh instead of holding it",
         ));

@@ -142,11 +142,14 @@ def mesh(
     ``volume`` is a 3-D array indexed ``volume[i, j, k]`` = grid point ``(x, y, z)`` at
     ``origin + (i, j, k) * spacing`` (or ``affine @ (i, j, k, 1)`` when the 4x4 ``affine`` is
     given instead of ``spacing`` and ``origin``), as ``tptd-mesh`` reads a ``.npy`` file. Any
-    integer or floating-point dtype; the samples are copied once into the library's grid
-    (x fastest, in their own type: a plain copy for a Fortran-ordered array, a transposing
-    one otherwise; ``int8`` is widened to ``int16``, 32- and 64-bit integers to ``float64``,
-    ``float16`` to ``float32``, as the file readers do), so the array is not held after the
-    call.
+    integer or floating-point dtype. The library's grid holds the samples x fastest in their
+    own type: a Fortran-ordered array (as ``tptd.read_volume``, nibabel's ``get_fdata()``
+    and ``np.asarray(img.dataobj)`` give) of ``uint8``, ``int16``, ``uint16``, ``float32``
+    or ``float64`` is used in place, without a copy; any other array is copied once (a
+    transposing copy for a C-ordered one; ``int8`` is widened to ``int16``, 32- and 64-bit
+    integers to ``float64``, ``float16`` to ``float32``, as the file readers do). The array
+    must not be modified while the call runs (the GIL is released); it is not held after
+    the call.
 
     ``alpha`` and/or ``beta`` bound one interval (a missing one is -inf / +inf); ``levels``
     (2 to 16 increasing values) mesh the regions between them in one conforming mesh instead,

@@ -119,7 +119,7 @@ fn scaled(raw: Samples, slope: f64, inter: f64) -> Samples {
         let mut out = raw.to_f64_vec();
         drop(raw);
         out.par_iter_mut().for_each(|v| *v = f(*v));
-        return Samples::F64(out);
+        return Samples::from(out);
     }
     let mut out = vec![0f32; raw.len()];
     out.par_chunks_mut(BLOCK).enumerate().for_each(|(c, o)| {
@@ -130,7 +130,7 @@ fn scaled(raw: Samples, slope: f64, inter: f64) -> Samples {
             *y = f(x) as f32;
         }
     });
-    Samples::F32(out)
+    Samples::from(out)
 }
 
 #[derive(Debug)]

@@ -79,11 +79,11 @@ fn read_c_order(
 /// [`scatter_block`] in the samples' storage type (`out` and `block` share it).
 fn scatter(block: &Samples, out: &mut Samples, i0: usize, shape: [usize; 3]) {
     match (block, out) {
-        (Samples::U8(b), Samples::U8(o)) => scatter_block(b, o, i0, shape),
-        (Samples::I16(b), Samples::I16(o)) => scatter_block(b, o, i0, shape),
-        (Samples::U16(b), Samples::U16(o)) => scatter_block(b, o, i0, shape),
-        (Samples::F32(b), Samples::F32(o)) => scatter_block(b, o, i0, shape),
-        (Samples::F64(b), Samples::F64(o)) => scatter_block(b, o, i0, shape),
+        (Samples::U8(b), Samples::U8(o)) => scatter_block(b, o.to_mut(), i0, shape),
+        (Samples::I16(b), Samples::I16(o)) => scatter_block(b, o.to_mut(), i0, shape),
+        (Samples::U16(b), Samples::U16(o)) => scatter_block(b, o.to_mut(), i0, shape),
+        (Samples::F32(b), Samples::F32(o)) => scatter_block(b, o.to_mut(), i0, shape),
+        (Samples::F64(b), Samples::F64(o)) => scatter_block(b, o.to_mut(), i0, shape),
         _ => unreachable!("a block is read into the storage type of the grid"),
     }
 }

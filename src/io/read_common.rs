@@ -270,11 +270,11 @@ impl SampleBuf {
             .map_err(|e| ReadError::memory(path, format!("{e}; crop or downsample the volume")))?;
         let cannot = |e| ReadError::memory(path, format!("cannot hold {count} samples: {e}"));
         let samples = match storage {
-            SampleStorage::U8 => Samples::U8(zeroed(count).map_err(cannot)?),
-            SampleStorage::I16 => Samples::I16(zeroed(count).map_err(cannot)?),
-            SampleStorage::U16 => Samples::U16(zeroed(count).map_err(cannot)?),
-            SampleStorage::F32 => Samples::F32(zeroed(count).map_err(cannot)?),
-            SampleStorage::F64 => Samples::F64(zeroed(count).map_err(cannot)?),
+            SampleStorage::U8 => Samples::U8(zeroed(count).map_err(cannot)?.into()),
+            SampleStorage::I16 => Samples::I16(zeroed(count).map_err(cannot)?.into()),
+            SampleStorage::U16 => Samples::U16(zeroed(count).map_err(cannot)?.into()),
+            SampleStorage::F32 => Samples::F32(zeroed(count).map_err(cannot)?.into()),
+            SampleStorage::F64 => Samples::F64(zeroed(count).map_err(cannot)?.into()),
         };
         Ok(SampleBuf { samples, ty, count })
     }
