@@ -28,6 +28,7 @@ pub(crate) mod extract;
 pub mod facts;
 pub mod field;
 pub(crate) mod geom;
+pub mod grade;
 pub mod grid;
 pub mod improve;
 pub mod inspect;

@@ -91,6 +91,9 @@ pub struct Timings {
     /// The validity check (`--check` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<f64>,
+    /// Grading the interior (`--max-edge` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grade: Option<f64>,
     /// Writing the output mesh.
     pub write: f64,
     /// The rest: `total` less the stages above.
@@ -115,6 +118,7 @@ impl Timings {
             + self.quality.unwrap_or(0.0)
             + self.map.unwrap_or(0.0)
             + self.check.unwrap_or(0.0)
+            + self.grade.unwrap_or(0.0)
             + self.write;
         self.other = (self.total - stages).max(0.0);
     }
@@ -203,6 +207,9 @@ pub struct Report {
     /// [`build_report`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub check: Option<crate::check::CheckReport>,
+    /// The graded interior (`--max-edge` only; set by the caller after [`build_report`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grade: Option<crate::grade::GradeReport>,
     /// Worker threads used.
     pub threads: usize,
     /// Stage timings.
@@ -345,6 +352,7 @@ pub fn build_report(
         quality,
         surface: None,
         check: None,
+        grade: None,
         threads: run.threads,
         timings_seconds: timings,
         warnings: Vec::new(),

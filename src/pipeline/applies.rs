@@ -259,7 +259,9 @@ const CRITICAL_ONLY: [Param; 9] = [
 ];
 
 /// Parameters that only meshing uses.
-const MESH_ONLY: [Param; 17] = [
+const MESH_ONLY: [Param; 19] = [
+    Param::MaxEdge,
+    Param::Grading,
     Param::Alpha,
     Param::Beta,
     Param::Levels,
@@ -345,6 +347,9 @@ pub fn check_applies(g: &Given) -> Result<(), Inapplicable> {
     }
     if let (false, Some(param)) = (g.has(Param::Quality), g.first(&QUALITY_ONLY)) {
         return only_with(param, &[Param::Quality]);
+    }
+    if let (false, true) = (g.has(Param::MaxEdge), g.has(Param::Grading)) {
+        return only_with(Param::Grading, &[Param::MaxEdge]);
     }
     check_output(g, g.output.unwrap_or(Path::new(DEMO_OUTPUT)))?;
     check_input(g)?;
@@ -446,6 +451,9 @@ fn check_output(g: &Given, output: &Path) -> Result<(), Inapplicable> {
     if g.has(Param::VtuEncoding) && mesh != Some(MeshFormat::Vtu) {
         return refuse(Param::VtuEncoding, ".vtu output");
     }
+    if g.has(Param::MaxEdge) && surface.is_some() {
+        return refuse(Param::MaxEdge, "volume mesh output (.msh, .inp, .vtu)");
+    }
     if g.has(Param::Caps) && surface.is_none() {
         return refuse(Param::Caps, "isosurface output (.obj, .ply, .stl)");
     }
@@ -467,6 +475,9 @@ fn check_input(g: &Given) -> Result<(), Inapplicable> {
             input: g.input.map(Path::to_path_buf),
         })
     };
+    if g.has(Param::MaxEdge) && curvilinear {
+        return refuse(Param::MaxEdge, "a volume on a regular grid");
+    }
     if g.has(Param::Field) && !curvilinear {
         return refuse(Param::Field, "a curvilinear grid input (.vts, .xyz)");
     }

@@ -18,6 +18,7 @@ use crate::allocator::OutOfMemory;
 pub(crate) fn streams<'a>(job: &'a Job, curvilinear: bool) -> Option<&'a Path> {
     let output = job.output.as_deref()?;
     let stream = job.req.quality.is_none()
+        && job.req.grade.is_none()
         && !job.req.check
         && !curvilinear
         && SurfaceFormat::from_path(output).is_none();

@@ -152,6 +152,39 @@ pub fn mesh_grid(
     run_job(&job, input, &reporter, (t_total, t_args, 0.0))
 }
 
+/// A graded interior needs cubes of two cells at least: `max_edge` of two of the grid's
+/// widest spacing, and a grading above 1.
+fn check_grade(grid: &ScalarGrid, job: &request::Job) -> Result<(), PipelineError> {
+    let Some(g) = &job.req.grade else {
+        return Ok(());
+    };
+    let names = job.req.names;
+    let widest = grid.spacing.iter().fold(0.0f64, |m, &s| m.max(s.abs()));
+    if !(g.grading > 1.0 && g.grading.is_finite()) {
+        return Err(PipelineError::usage(
+            &job.input_name,
+            format_args!(
+                "{} must be a finite number above 1, got {}",
+                names.of(Param::Grading),
+                g.grading
+            ),
+        ));
+    }
+    if crate::grade::max_side(grid, g.max_edge) < 2 {
+        return Err(PipelineError::usage(
+            &job.input_name,
+            format_args!(
+                "{} {} is less than two cells (the grid's widest spacing is {widest}): no cube \
+                 fits; give at least {}",
+                names.of(Param::MaxEdge),
+                g.max_edge,
+                2.0 * widest
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The run of a checked request on its input, read (`mesh_file`) or given (`mesh_grid`),
 /// after the seconds `(start, checking the arguments, reading)`.
 fn run_job(
@@ -164,6 +197,7 @@ fn run_job(
     let t = Instant::now();
     let stream_to = memory::streams(job, curvilinear.is_some());
     bounds::warn_input(grid, job, curvilinear.is_some(), reporter);
+    check_grade(grid, job)?;
     memory::check_memory(grid, job, stream_to.is_some())?;
     let t_checks = t_args + secs(t);
 
@@ -183,6 +217,7 @@ fn run_job(
         quality_stages: t_quality,
         map: w.t_map,
         check: w.t_check,
+        grade: w.t_grade,
         write: w.t_write,
         other: 0.0,
         total: secs(t_total),

@@ -56,6 +56,8 @@ params! {
     QualityTime => "quality_time",
     BoundaryCollapseRatio => "boundary_collapse_ratio",
     SplitSag => "split_sag",
+    MaxEdge => "max_edge",
+    Grading => "grading",
     Demo => "demo",
     MemoryLimit => "memory_limit",
     Quiet => "quiet",

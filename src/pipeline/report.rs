@@ -47,6 +47,7 @@ pub(crate) fn make_report(
     );
     report.surface = w.surface.take();
     report.check = w.check.take();
+    report.grade = w.grade.take();
     report
 }
 

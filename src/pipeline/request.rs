@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use crate::cancel::Cancel;
 use crate::demo::{DEMO_ALPHA, DEMO_BETA};
+use crate::grade::GradeOptions;
 use crate::improve::QualityOptions;
 use crate::io::{
     check_clashes, check_writable, input_run_files, is_surface, output_run_files, MeshFormat,
@@ -68,6 +69,9 @@ pub struct MeshRequest {
     pub caps: bool,
     /// The quality pass after meshing, if any.
     pub quality: Option<QualityRequest>,
+    /// Graded interior: cubes of up to `max_edge` deep inside the domain instead of the fine
+    /// cells (holds the mesh in memory; not with a curvilinear grid).
+    pub grade: Option<GradeOptions>,
     /// Check the mesh before writing it (a failed check is an error and writes nothing).
     pub check: bool,
     /// Compute the Betti numbers, the dihedral angles and the quality summaries.
@@ -105,6 +109,7 @@ impl Default for MeshRequest {
             write: WriteOptions::default(),
             caps: false,
             quality: None,
+            grade: None,
             check: false,
             analysis: true,
             critical_check: true,

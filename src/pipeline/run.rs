@@ -9,6 +9,7 @@ use crate::cancel::Cancel;
 use crate::check::{check_mesh, CheckOptions, CheckReport};
 use crate::curvilinear::map_mesh;
 use crate::facts::{FactsSink, MeshFacts, Tee};
+use crate::grade::{grade_interior, GradeReport};
 use crate::io::{
     check_writable, spill_for_levels, write_mesh_pending, write_spilled_pending,
     write_surface_pending, PendingFile, SurfaceFormat, WriteOptions,
@@ -37,6 +38,8 @@ pub(crate) struct Written {
     pub(crate) surface: Option<SurfaceAnalysis>,
     pub(crate) comparison: Option<DemoComparison>,
     pub(crate) check: Option<CheckReport>,
+    /// The graded interior (`--max-edge`).
+    pub(crate) grade: Option<GradeReport>,
     /// The output under its temporary name (`None`: nothing written).
     pub(crate) file: Option<PendingFile>,
     /// The mesh (when it was held in memory).
@@ -48,6 +51,7 @@ pub(crate) struct Written {
     pub(crate) t_quality: Option<QualityTimings>,
     pub(crate) t_map: Option<f64>,
     pub(crate) t_check: Option<f64>,
+    pub(crate) t_grade: Option<f64>,
     pub(crate) t_write: f64,
     /// The facts were gathered while meshing (`t_mesh` includes them).
     pub(crate) analysed_while_meshing: bool,
@@ -102,6 +106,7 @@ pub(crate) fn stream_to_disk(
         surface: None,
         comparison,
         check: None,
+        grade: None,
         file: Some(file?),
         mesh: None,
         t_mesh,
@@ -109,6 +114,7 @@ pub(crate) fn stream_to_disk(
         t_quality: None,
         t_map: None,
         t_check: None,
+        t_grade: None,
         t_write,
         analysed_while_meshing: true,
     })
@@ -132,10 +138,13 @@ pub(crate) fn mesh_in_memory(
     let t = Instant::now();
     // A mesh that neither the quality pass nor a curvilinear map will change is analysed
     // while it is made, as a streamed one is.
-    let analyse_now = job.req.quality.is_none() && curvilinear.is_none();
+    let analyse_now = job.req.quality.is_none() && job.req.grade.is_none() && curvilinear.is_none();
     let mut sink = analyse_now.then(|| facts_sink(job));
     let mut out = mesh(grid, job, reporter, sink.as_mut())?;
     let t_mesh = secs(t);
+    let t = Instant::now();
+    let grade = grade_mesh(grid, job, &mut out, reporter);
+    let t_grade = grade.is_some().then(|| secs(t));
 
     let improved = improve_mesh((grid, job), &mut out, curvilinear, reporter);
     if job.req.cancel.is_cancelled() {
@@ -182,6 +191,7 @@ pub(crate) fn mesh_in_memory(
         surface,
         comparison,
         check,
+        grade,
         file,
         mesh: Some(out),
         t_mesh,
@@ -189,9 +199,36 @@ pub(crate) fn mesh_in_memory(
         t_quality,
         t_map,
         t_check,
+        t_grade,
         t_write,
         analysed_while_meshing: analyse_now,
     })
+}
+
+/// With a graded interior in the request: the cubes put in place of the fine cells deep
+/// inside the domain, before the quality pass.
+fn grade_mesh(
+    grid: &ScalarGrid,
+    job: &Job,
+    out: &mut MeshOutput,
+    reporter: &Reporter,
+) -> Option<GradeReport> {
+    let opts = job.req.grade.as_ref()?;
+    let stage = reporter.stage("grading the interior", StageKind::Step);
+    let levels = job
+        .opts
+        .run_levels()
+        .unwrap_or(crate::Levels::interval(job.opts.alpha, job.opts.beta));
+    let pool = job
+        .opts
+        .threads
+        .and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
+    let report = match pool {
+        Some(p) => p.install(|| grade_interior(out, grid, &levels, opts)),
+        None => grade_interior(out, grid, &levels, opts),
+    };
+    stage.finish();
+    Some(report)
 }
 
 /// With the check: the validity check of the mesh, before anything is written; a mesh that

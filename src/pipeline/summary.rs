@@ -43,6 +43,7 @@ pub fn summary(
     mesh_lines(&mut s, r);
     analysis_lines(&mut s, r, names);
     region_lines(&mut s, r);
+    grade_line(&mut s, r);
     quality_lines(&mut s, r, names);
     cells_line(&mut s, r);
     output_lines(&mut s, r, report_path);
@@ -121,6 +122,30 @@ fn mesh_lines(s: &mut String, r: &Report) {
         bt(&last),
         bt("box"),
         inner.join(", ")
+    );
+}
+
+/// The graded interior: the cubes by side and the tets they saved.
+fn grade_line(s: &mut String, r: &Report) {
+    let Some(g) = &r.grade else {
+        return;
+    };
+    let cubes: Vec<String> = (g.cubes.iter().enumerate())
+        .map(|(l, n)| format!("{n} of {} cells", 2usize << l))
+        .collect();
+    let saved = 1.0 - g.tets_after as f64 / g.tets_before.max(1) as f64;
+    let _ = writeln!(
+        s,
+        "  graded    cubes up to {} cells a side: {}; tets {} -> {} ({:.1} % fewer)",
+        g.max_side_cells,
+        if cubes.is_empty() {
+            "none".to_string()
+        } else {
+            cubes.join(", ")
+        },
+        g.tets_before,
+        g.tets_after,
+        100.0 * saved
     );
 }
 
@@ -295,6 +320,9 @@ fn stage_times(t: &crate::report::Timings) -> Vec<String> {
         (true, true) => parts.push(format!("demo comparison {:.3} s", t.analysis)),
         (true, false) => {}
         (false, _) => parts.push(format!("analysis {:.3} s", t.analysis)),
+    }
+    if let Some(g) = t.grade {
+        parts.push(format!("grading {g:.3} s"));
     }
     if let Some(c) = t.check {
         parts.push(format!("check {c:.3} s"));

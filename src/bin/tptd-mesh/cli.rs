@@ -158,6 +158,18 @@ pub(crate) struct Cli {
     #[arg(long, value_name = "S", default_value = "0.03", allow_hyphen_values = true, value_parser = ratio, requires = "quality")]
     pub(crate) split_sag: f64,
 
+    /// Grade the interior: elements deep inside the domain grow to cubes of up to H (file
+    /// units; the largest power of two cells whose side is at most H), while every cell a
+    /// level passes through keeps its fine tets; the boundary, regions, topology and volume do
+    /// not change (holds the mesh in memory; not with a curvilinear grid)
+    #[arg(long, value_name = "H", allow_hyphen_values = true, value_parser = positive)]
+    pub(crate) max_edge: Option<f64>,
+
+    /// How fast --max-edge lets sizes grow away from the surfaces: a cube of side s cells
+    /// lies at least (s - 1)/(G - 1) cells from any cell a level passes through
+    #[arg(long, value_name = "G", default_value = "1.5", allow_hyphen_values = true, value_parser = positive, requires = "max_edge")]
+    pub(crate) grading: f64,
+
     /// Mesh a generated sample (two vessels a third of a voxel apart), interval [0.5, inf),
     /// and show what the decomposition preserves
     #[arg(long, conflicts_with = "input")]

@@ -4,6 +4,7 @@
 
 use std::io::Write;
 
+use tptd::grade::GradeOptions;
 use tptd::improve::QualityOptions;
 use tptd::io::WriteOptions;
 use tptd::pipeline::{critical_file, critical_table, inspect_files, mesh_file, summary};
@@ -73,6 +74,10 @@ fn mesh_request(cli: &Cli) -> MeshRequest {
             .with_vtu_encoding(cli.vtu_encoding.get()),
         caps: cli.caps,
         quality,
+        grade: cli.max_edge.map(|max_edge| GradeOptions {
+            max_edge,
+            grading: cli.grading,
+        }),
         check: cli.check,
         analysis: !cli.no_analysis,
         critical_check: !cli.no_critical_check,
