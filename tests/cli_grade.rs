@@ -70,24 +70,33 @@ fn a_graded_mesh_keeps_the_fine_one_s_topology_volume_and_boundary() {
 fn with_quality_and_levels_on_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     write_npy(&dir.path().join("t.npy"), DIMS, torus);
-    for (extra, name) in [
-        (&["--beta", "7.1", "--quality"][..], "q"),
+    // nested balls: a core of radius 5.2 in a shell ten cells thick
+    write_npy(&dir.path().join("b.npy"), [36, 36, 36], |i, j, k| {
+        let d = [i, j, k].map(|x| x as f64 - 17.4);
+        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+    });
+    let cases: [(&[&str], &str); 2] = [
+        (&["t.npy", "--beta", "7.1", "--quality"], "q"),
         (
-            &["--levels", "-inf,3.3,7.1", "--region-names", "core,rim"][..],
+            &[
+                "b.npy",
+                "--levels",
+                "-inf,5.2,15.3",
+                "--region-names",
+                "core,shell",
+            ],
             "l",
         ),
-    ] {
+    ];
+    for (extra, name) in cases {
         let mut outs = Vec::new();
         for j in ["1", "2"] {
             let out = format!("{name}{j}.msh");
-            let args = [
-                &["t.npy", "--max-edge", "4", "--check", "-j", j, "-o", &out],
-                extra,
-            ]
-            .concat();
+            let args = [extra, &["--max-edge", "4", "--check", "-j", j, "-o", &out]].concat();
             let r = report(dir.path(), &args);
             assert!(r["check"]["valid"].as_bool().unwrap(), "{name}");
-            assert!(r["grade"]["tets_added"].as_u64().unwrap() > 0, "{name}");
+            let g = &r["grade"];
+            assert!(g["tets_added"].as_u64().unwrap() > 0, "{name}: {g}");
             outs.push(fs::read(dir.path().join(&out)).unwrap());
         }
         assert!(outs[0] == outs[1], "{name}: threads differ");
