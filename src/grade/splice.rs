@@ -74,6 +74,39 @@ fn owners(
         .collect()
 }
 
+/// The mesh point at each grid vertex (dense over the grid; `u32::MAX`: none).
+struct GridVertices {
+    dims: [usize; 3],
+    point: Vec<u32>,
+}
+
+impl GridVertices {
+    fn of(mesh: &TetMesh, index: &IndexSpace, dims: [usize; 3]) -> Self {
+        let at: Vec<Option<usize>> = mesh
+            .points
+            .par_iter()
+            .map(|&p| {
+                let g = index.vertex(p)?;
+                (g[0] < dims[0] && g[1] < dims[1] && g[2] < dims[2])
+                    .then(|| g[0] + dims[0] * (g[1] + dims[1] * g[2]))
+            })
+            .collect();
+        let mut point = vec![u32::MAX; dims[0] * dims[1] * dims[2]];
+        for (v, g) in at.into_iter().enumerate() {
+            if let Some(g) = g {
+                point[g] = v as u32;
+            }
+        }
+        GridVertices { dims, point }
+    }
+
+    fn get(&self, g: &[usize; 3]) -> Option<&u32> {
+        let d = self.dims;
+        let p = self.point.get(g[0] + d[0] * (g[1] + d[1] * g[2]))?;
+        (*p != u32::MAX).then_some(p)
+    }
+}
+
 /// What [`splice`] did.
 pub struct Spliced {
     /// Fine tets taken out.
@@ -106,16 +139,7 @@ pub fn splice(
             of_block[o as usize].push(t as u32);
         }
     }
-    let mut vertex: FxHashMap<[usize; 3], u32> = FxHashMap::default();
-    for tets in &of_block {
-        for &t in tets {
-            for &v in &mesh.tets[t as usize] {
-                if let Some(g) = index.vertex(mesh.points[v as usize]) {
-                    vertex.insert(g, v);
-                }
-            }
-        }
-    }
+    let vertex = GridVertices::of(mesh, index, leaves.dims.map(|d| d + 1));
     let cones: Option<Vec<Vec<[u32; 4]>>> = blocks
         .par_iter()
         .zip(&of_block)
@@ -157,7 +181,7 @@ fn block_cones(
     leaves: &Leaves,
     b: Block,
     tets: &[u32],
-    (vertex, index): (&FxHashMap<[usize; 3], u32>, &IndexSpace),
+    (vertex, index): (&GridVertices, &IndexSpace),
 ) -> Option<Vec<[u32; 4]>> {
     let h = b.side() / 2;
     let centre = *vertex.get(&b.origin.map(|x| x + h))?;
