@@ -2,7 +2,7 @@
 //! of: points and field, tetrahedra with their region and Gmsh tags, the labelled triangles
 //! (the boundary, then the interfaces between regions) with theirs, the group names, the
 //! report (JSON) and the warnings. Tags and names are the `.msh` writer's
-//! ([`tptd::io::msh`]), so that `meshio.write("x.msh", mesh)` keeps the groups.
+//! ([`tptd::io::msh`]), so that `tptd.write` and `meshio.read` of its `.msh` keep the groups.
 
 use numpy::{Element, PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;

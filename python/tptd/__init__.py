@@ -168,10 +168,20 @@ def mesh(
     ``cell_data["region"]`` (region of each tet from 0, as ``cell_data["region"]`` of the
     ``.vtu`` output; 0 for one interval), ``cell_data["gmsh:physical"]`` and
     ``"gmsh:geometrical"`` with ``field_data`` the ``.msh`` output's groups (``alpha``,
-    ``beta``, ``box``, ``domain``; or ``level1``, ... and the region names), so that
-    ``meshio.write("x.msh", m)`` keeps them; ``m.info``: the run's report (the dict of
+    ``beta``, ``box``, ``domain``; or ``level1``, ... and the region names: region ``k``'s
+    tets have the physical tag ``k + 1``); ``m.info``: the run's report (the dict of
     ``tptd-mesh --report``: counts, volume, Betti numbers, angles, warnings, timings).
     Warnings are also issued as :class:`MeshWarning`.
+
+    Files: ``meshio.write("x.vtu", m)`` keeps ``region`` and the tags as cell data. For Gmsh
+    write with :func:`write` (``tptd.write(m, "x.msh")``, ``msh_version="2.2"``, ...): a
+    volume group per region and a surface group per label, which ``meshio.read`` gives back
+    as ``gmsh:physical`` and ``field_data``. meshio's own ``.msh`` writers (meshio 5.3) do
+    not keep them: ``meshio.write("x.msh", m)`` writes ANSYS Fluent (meshio's first format
+    for ``.msh``), ``file_format="gmsh"`` (4.1) refuses a mesh of two cell blocks without
+    ``point_data["gmsh:dim_tags"]`` and keeps one tag per block, and ``"gmsh22"`` writes the
+    groups but, with ``region`` or any other cell data beyond the tags, a file meshio cannot
+    read back (its 2.2 reader splits cell data of several blocks wrongly).
 
     Before any work the run's memory is estimated (the grid, the mesh, the quality pass and
     the check) and compared with ``memory_limit`` (bytes; default: the memory available):
