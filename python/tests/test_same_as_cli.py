@@ -103,6 +103,33 @@ def by_vertices(tets):
     return np.lexsort(np.sort(tets, axis=1).T[::-1])
 
 
+@pytest.mark.parametrize(
+    "kwargs",
+    [dict(alpha=120.3, beta=180.7),
+     dict(levels=[60.3, 120.3, 180.7], region_names=["outer", "inner"])],
+)
+def test_converted_while_meshing_as_when_held(scan, kwargs):
+    """Without the check the mesh goes to numpy slab by slab as it is made; with it the run
+    holds the mesh and it is converted after: the same arrays, tags and groups."""
+    streamed = tptd.mesh(scan, **kwargs)
+    held = tptd.mesh(scan, check=True, **kwargs)
+    assert held.info["timings_seconds"]["check"] is not None
+    assert np.array_equal(streamed.points, held.points)
+    assert np.array_equal(streamed.point_data["f"], held.point_data["f"])
+    assert [c.type for c in streamed.cells] == [c.type for c in held.cells] == [
+        "tetra", "triangle"]
+    for a, b in zip(streamed.cells, held.cells):
+        assert a.data.dtype == b.data.dtype == np.int64
+        assert np.array_equal(a.data, b.data)
+    assert streamed.cell_data.keys() == held.cell_data.keys()
+    for key in held.cell_data:
+        for a, b in zip(streamed.cell_data[key], held.cell_data[key]):
+            assert a.dtype == b.dtype and np.array_equal(a, b), key
+    assert streamed.field_data.keys() == held.field_data.keys()
+    for name, v in held.field_data.items():
+        assert np.array_equal(streamed.field_data[name], v), name
+
+
 def test_boundary_triangles_are_the_labelled_faces(scan):
     m = tptd.mesh(scan, 120.3, 180.7)
     tris = m.cells_dict["triangle"]
