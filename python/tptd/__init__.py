@@ -290,8 +290,14 @@ def isosurface(
     return meshio.Mesh(d["points"], [("triangle", d["triangle"])], point_data={"f": d["f"]})
 
 
-def _critical_options(spacing, origin, affine, min_value, max_value, kind, persistence,
-                      min_persistence, threads) -> dict:
+def _critical_options(
+    spacing, origin, affine, *, min_value: Optional[float] = None,
+    max_value: Optional[float] = None, kind=None, persistence: bool = False,
+    min_persistence: Optional[float] = None, threads: Optional[int] = None,
+) -> dict:
+    """The options of a run of the critical points: the placement, and the filters and
+    threads of :func:`critical_points` (the one list of them, which both functions take as
+    keywords)."""
     if kind is not None and not isinstance(kind, str):
         kind = ",".join(str(k) for k in kind)
     return {
@@ -313,54 +319,34 @@ def critical_points(
     spacing: Optional[Sequence[float]] = None,
     origin: Sequence[float] = (0.0, 0.0, 0.0),
     affine=None,
-    min_value: Optional[float] = None,
-    max_value: Optional[float] = None,
-    kind=None,
-    persistence: bool = False,
-    min_persistence: Optional[float] = None,
-    threads: Optional[int] = None,
+    **filters,
 ) -> list:
     """The critical points and regions of the trilinear field of an array (where the topology
     of ``{f >= w}`` or ``{f <= w}`` changes): the records ``tptd-mesh VOLUME --critical
     --json`` writes, one dict per point (``value``, ``kind``, ``position`` in physical
     coordinates, ``persistence``, ``superlevel``, ``sublevel``, ``region``, ...).
 
-    ``volume``, ``origin``, ``affine`` and ``threads`` as in :func:`mesh` (``spacing``
-    defaults to 1). Filters, as the command line's: ``min_value`` / ``max_value`` hide points
-    below / above; ``kind`` keeps only these kinds (a list or a comma-separated string of
-    ``minimum``, ``maximum``, ``saddle``, ``face_saddle``, ``body_saddle``,
-    ``region_minimum``, ``region_maximum``, ``region_saddle``); ``persistence=True`` computes
-    each point's persistence; ``min_persistence`` hides points below it (and implies
-    ``persistence``). Raises ``ValueError`` with ``tptd-mesh``'s one-line message.
+    ``volume``, ``origin`` and ``affine`` as in :func:`mesh` (``spacing`` defaults to 1).
+    Keywords (``filters``), as the command line's: ``min_value`` / ``max_value`` (floats)
+    hide points below / above; ``kind`` keeps only these kinds (a list or a comma-separated
+    string of ``minimum``, ``maximum``, ``saddle``, ``face_saddle``, ``body_saddle``,
+    ``region_minimum``, ``region_maximum``, ``region_saddle``); ``persistence=True``
+    computes each point's persistence; ``min_persistence`` hides points below it (and
+    implies ``persistence``); ``threads`` as in :func:`mesh`. An unknown keyword raises
+    ``TypeError``; otherwise raises ``ValueError`` with ``tptd-mesh``'s one-line message.
     """
     volume = _array(volume)
     if affine is not None and (spacing is not None or tuple(origin) != (0.0, 0.0, 0.0)):
         raise ValueError("affine excludes spacing and origin: give the affine or those two")
-    opts = _critical_options(
-        spacing, origin, affine, min_value, max_value, kind, persistence, min_persistence,
-        threads,
-    )
+    opts = _critical_options(spacing, origin, affine, **filters)
     return json.loads(_tptd.critical_volume(volume, opts))
 
 
-def critical_points_file(
-    path,
-    *,
-    spacing: Optional[Sequence[float]] = None,
-    min_value: Optional[float] = None,
-    max_value: Optional[float] = None,
-    kind=None,
-    persistence: bool = False,
-    min_persistence: Optional[float] = None,
-    threads: Optional[int] = None,
-) -> list:
+def critical_points_file(path, *, spacing: Optional[Sequence[float]] = None, **filters) -> list:
     """:func:`critical_points` of a volume file ``tptd-mesh`` reads (``spacing`` replaces the
-    file's): the records of ``tptd-mesh PATH --critical --json``. Raises ``OSError`` when the
-    file cannot be read, ``ValueError`` otherwise."""
-    opts = _critical_options(
-        spacing, (0.0, 0.0, 0.0), None, min_value, max_value, kind, persistence,
-        min_persistence, threads,
-    )
+    file's; the same keywords ``filters``): the records of ``tptd-mesh PATH --critical
+    --json``. Raises ``OSError`` when the file cannot be read, ``ValueError`` otherwise."""
+    opts = _critical_options(spacing, (0.0, 0.0, 0.0), None, **filters)
     return json.loads(_tptd.critical_path(os.fspath(path), opts))
 
 
