@@ -2,7 +2,8 @@
 //! the stages reach the progress receiver in order and each one ends, the warnings reach it
 //! as they occur and come back in the report, errors are one line with their kind, and a
 //! failed run leaves no output. The same run on a grid in memory ([`mesh_grid`]) gives the
-//! same mesh and writes nothing.
+//! same mesh and writes nothing, or hands it to a caller's sink as it is made
+//! ([`mesh_grid_into`]).
 
 mod common;
 
@@ -11,11 +12,11 @@ use std::sync::Mutex;
 
 use common::files::write_npy;
 use tptd::pipeline::{
-    mesh_file, mesh_grid, MeshRequest, NoProgress, PipelineError, Progress, QualityRequest,
-    StageKind,
+    mesh_file, mesh_grid, mesh_grid_into, MeshRequest, NoProgress, PipelineError, Progress,
+    QualityRequest, StageKind,
 };
 use tptd::sdf::SurfaceGridOptions;
-use tptd::ScalarGrid;
+use tptd::{MeshChunk, MeshSink, ScalarGrid};
 
 /// A [`Progress`] that records every call, one line each.
 #[derive(Default)]
@@ -372,6 +373,78 @@ fn a_mesh_in_memory_is_analysed_while_it_is_made() {
             assert_eq!((a.tets, a.betti), (b.tets, b.betti), "{}", a.name);
             assert!((a.volume - b.volume).abs() <= 1e-9 * b.volume, "{}", a.name);
         }
+    }
+}
+
+/// The chunks a sink is handed, concatenated, and how many there were.
+#[derive(Default)]
+struct Chunks {
+    points: Vec<[f64; 3]>,
+    tets: Vec<[u32; 4]>,
+    regions: Vec<u8>,
+    triangles: usize,
+    count: usize,
+}
+
+impl MeshSink for Chunks {
+    fn chunk(&mut self, c: &MeshChunk) -> std::io::Result<()> {
+        assert_eq!(
+            (c.first_point, c.first_tet),
+            (self.points.len(), self.tets.len())
+        );
+        self.points.extend_from_slice(&c.points);
+        self.tets.extend_from_slice(&c.tets);
+        self.regions.extend_from_slice(&c.regions);
+        self.triangles += c.boundary.len();
+        self.count += 1;
+        Ok(())
+    }
+}
+
+/// A run in memory that nothing needs whole after meshing hands the mesh to the caller's
+/// sink slab by slab (the chunks make the mesh `mesh_grid` holds, with one interval and with
+/// several regions) and holds none; with the check it holds the mesh and the sink gets
+/// nothing.
+#[test]
+fn a_sink_takes_the_mesh_as_it_is_made_when_nothing_needs_it_whole() {
+    let dims = [11, 10, 12];
+    let values: Vec<f64> = (0..dims[0] * dims[1] * dims[2])
+        .map(|n| ((n * 7) % 13) as f64 * 0.5 + (n % 5) as f64 * 0.1)
+        .collect();
+    let cases = [
+        (None, Some(1.3), Some(4.4)),
+        (Some(vec![0.6, 2.3, 4.1, 5.7]), None, None),
+    ];
+    for (levels, alpha, beta) in cases {
+        let req = MeshRequest {
+            levels: levels.clone(),
+            alpha,
+            beta,
+            ..MeshRequest::default()
+        };
+        let grid = || ScalarGrid::new(dims, values.clone()).unwrap();
+        let held = mesh_grid(grid(), "volume", &req, &NoProgress).unwrap();
+        let held_mesh = held.mesh.unwrap().mesh;
+        let mut sink = Chunks::default();
+        let run = mesh_grid_into(grid(), "volume", &req, &NoProgress, &mut sink).unwrap();
+        assert!(run.mesh.is_none(), "{levels:?}");
+        assert!(sink.count > 1, "{levels:?}: {} chunks", sink.count);
+        assert_eq!(sink.points, held_mesh.points);
+        assert_eq!(sink.tets, held_mesh.tets);
+        assert_eq!(sink.regions, held_mesh.regions.tets);
+        let triangles = held_mesh.boundary.len() + held_mesh.regions.interfaces.len();
+        assert_eq!(sink.triangles, triangles);
+        assert_eq!(run.report.tets, held.report.tets);
+        assert_eq!(run.report.betti, held.report.betti);
+
+        let checked = MeshRequest {
+            check: true,
+            ..req.clone()
+        };
+        let mut sink = Chunks::default();
+        let run = mesh_grid_into(grid(), "volume", &checked, &NoProgress, &mut sink).unwrap();
+        assert_eq!(sink.count, 0);
+        assert_eq!(run.mesh.unwrap().mesh, held_mesh);
     }
 }
 

@@ -1,7 +1,8 @@
 //! `tptd._tptd`, the native module of the Python package `tptd`: arguments in, the library's
 //! runs out. Each function converts its arguments ([`args`], [`volume`], [`mesh_in`]), calls
-//! the library's entry point with the GIL released ([`tptd::pipeline::mesh_grid`] for an
-//! array, [`tptd::pipeline::mesh_file`] for a file, [`tptd::pipeline::read_grid`], and with
+//! the library's entry point with the GIL released ([`tptd::pipeline::mesh_grid_into`] for
+//! an array, [`tptd::pipeline::mesh_file_into`] for a file, the mesh converted as it is made
+//! when the run does not hold it; [`tptd::pipeline::read_grid`], and with
 //! [`tptd::level_surface`] for an isosurface; [`critical`], [`inspect`] and [`write`] for
 //! the other runs) and converts the result to numpy arrays ([`result`]) or the JSON of
 //! `tptd-mesh`; the package's `__init__.py` builds the `meshio.Mesh` and the dicts. The
@@ -23,12 +24,15 @@ use numpy::PyUntypedArray;
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use tptd::pipeline::{mesh_file, mesh_grid, read_grid, MeshRun, NoProgress, PipelineError};
+use tptd::pipeline::{
+    mesh_file_into, mesh_grid, mesh_grid_into, read_grid, MeshRun, NoProgress, PipelineError,
+};
 use tptd::{level_surface, SurfaceOptions};
 
 use args::{Options, ISO_NAMES, PY_NAMES};
 use interrupt::interruptible;
 use progress::PyProgress;
+use result::Collect;
 
 /// The name of an array volume in messages (the parameter's).
 pub(crate) const VOLUME: &str = "volume";
@@ -61,8 +65,11 @@ fn mesh_volume<'py>(
     // the grid, which the run drops (or `finish` does, attached) before this returns.
     let (grid, lent) = volume::grid_of(volume, options.origin, options.affine)?;
     let progress = PyProgress::new(progress);
-    let run = interruptible(py, &req.cancel, || mesh_grid(grid, VOLUME, &req, &progress))?;
-    let out = finish(py, run, progress);
+    let mut collect = Collect::new(&req);
+    let run = interruptible(py, &req.cancel, || {
+        mesh_grid_into(grid, VOLUME, &req, &progress, &mut collect)
+    })?;
+    let out = finish(py, run, progress, collect);
     drop(lent);
     out
 }
@@ -79,20 +86,25 @@ fn mesh_path<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let req = options.request(Some(path))?;
     let progress = PyProgress::new(progress);
-    let run = interruptible(py, &req.cancel, || mesh_file(&req, &progress))?;
-    finish(py, run, progress)
+    let mut collect = Collect::new(&req);
+    let run = interruptible(py, &req.cancel, || {
+        mesh_file_into(&req, &progress, &mut collect)
+    })?;
+    finish(py, run, progress, collect)
 }
 
-/// The result of a run as a dict of arrays, or its error; an exception raised by the
-/// progress callback is raised after the run.
+/// The result of a run as a dict of arrays (the mesh the run held, else the one `collect`
+/// gathered while it was made), or its error; an exception raised by the progress callback
+/// is raised after the run.
 fn finish<'py>(
     py: Python<'py>,
     run: Result<MeshRun, PipelineError>,
     progress: PyProgress,
+    collect: Collect,
 ) -> PyResult<Bound<'py, PyDict>> {
     let run = run.map_err(py_error)?;
     progress.raise()?;
-    result::mesh_dict(py, run)
+    result::mesh_dict(py, run, collect)
 }
 
 /// The level set `{f = level}` of an array volume (see `tptd.isosurface`): the interval

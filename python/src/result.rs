@@ -2,16 +2,16 @@
 //! of: points and field, tetrahedra with their region and Gmsh tags, the labelled triangles
 //! (the boundary, then the interfaces between regions) with theirs, the group names, the
 //! report (JSON) and the warnings. Tags and names are the `.msh` writer's
-//! ([`tptd::io::msh`]), so that `meshio.write("x.msh", mesh)` keeps the groups.
+//! ([`tptd::io::msh`]), so that `tptd.write` and `meshio.read` of its `.msh` keep the groups.
 
 use numpy::{Element, PyArray1, PyArrayMethods};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 use tptd::io::msh::{label_tag, DOMAIN_PHYSICAL_TAG};
-use tptd::pipeline::MeshRun;
-use tptd::{BoundaryLabel, TetMesh, TriSurface};
+use tptd::mesh::{region_name, INTERVAL_LEVELS};
+use tptd::pipeline::{MeshRequest, MeshRun};
+use tptd::{BoundaryLabel, MeshChunk, MeshSink, TetMesh, TriSurface};
 
 /// Elementary tag of the one volume of a mesh of one interval (as the `.msh` writer's).
 const VOLUME_ENTITY: i32 = 1;
@@ -31,36 +31,100 @@ struct Arrays {
     names: Vec<(String, i32, i32)>,
 }
 
-impl Arrays {
-    /// The arrays of `mesh` (which they replace, to bound the memory held at once).
-    fn of(mesh: TetMesh) -> Arrays {
+/// A run's mesh gathered as the arrays handed to numpy are made of: slab by slab as it is
+/// meshed (a [`MeshSink`]: each element converted once, as it comes), or from a mesh held by
+/// the run ([`Collect::of_mesh`]).
+pub(crate) struct Collect {
+    /// Levels of the run (2 for one interval).
+    levels: usize,
+    /// Names of the regions (several regions only).
+    region_names: Vec<String>,
+    points: Vec<[f64; 3]>,
+    values: Vec<f64>,
+    /// Tets, flat.
+    tets: Vec<i64>,
+    /// Region of each tet (empty for one interval).
+    tet_region: Vec<i32>,
+    /// Boundary triangles, flat, their labels and (several regions) the region of each.
+    boundary: Vec<i64>,
+    boundary_labels: Vec<BoundaryLabel>,
+    boundary_region: Vec<i32>,
+    /// Interface triangles between regions, flat, and their labels.
+    interfaces: Vec<i64>,
+    interface_labels: Vec<BoundaryLabel>,
+}
+
+impl Collect {
+    /// An empty gatherer for a run of `req`.
+    pub(crate) fn new(req: &MeshRequest) -> Collect {
+        let levels = req.levels.as_ref().map_or(0, Vec::len).max(INTERVAL_LEVELS);
+        Collect {
+            levels,
+            region_names: match levels > INTERVAL_LEVELS {
+                true => (0..levels - 1)
+                    .map(|k| region_name(&req.region_names, k))
+                    .collect(),
+                false => Vec::new(),
+            },
+            points: Vec::new(),
+            values: Vec::new(),
+            tets: Vec::new(),
+            tet_region: Vec::new(),
+            boundary: Vec::new(),
+            boundary_labels: Vec::new(),
+            boundary_region: Vec::new(),
+            interfaces: Vec::new(),
+            interface_labels: Vec::new(),
+        }
+    }
+
+    /// The arrays of a mesh held by the run (which they replace, to bound the memory held
+    /// at once), converted in parallel.
+    fn of_mesh(mesh: TetMesh) -> Collect {
         let levels = mesh.level_count();
-        let regions = &mesh.regions;
-        let one = regions.is_empty();
-        let tet_region: Vec<i32> = match one {
-            true => vec![0; mesh.tets.len()],
-            false => regions.tets.iter().map(|&k| i32::from(k)).collect(),
-        };
-        let (tet_tag, tet_entity) = match one {
+        let r = mesh.regions;
+        Collect {
+            levels,
+            region_names: (0..r.count()).map(|k| r.name(k)).collect(),
+            points: mesh.points,
+            values: mesh.values,
+            tets: flat(mesh.tets, |t| t.map(i64::from)),
+            tet_region: r.tets.iter().map(|&k| i32::from(k)).collect(),
+            boundary: flat(mesh.boundary, |t| t.map(i64::from)),
+            boundary_labels: mesh.boundary_labels,
+            boundary_region: r.boundary.iter().map(|&k| i32::from(k)).collect(),
+            interfaces: flat(r.interfaces, |t| t.map(i64::from)),
+            interface_labels: r.interface_labels,
+        }
+    }
+
+    /// The arrays: tags and names from the labels and regions, the interfaces after the
+    /// boundary.
+    fn arrays(self) -> Arrays {
+        let levels = self.levels;
+        let tets = self.tets.len() / 4;
+        let one = levels <= INTERVAL_LEVELS;
+        let (tet_region, tet_tag, tet_entity) = match one {
             true => (
-                vec![DOMAIN_PHYSICAL_TAG as i32; mesh.tets.len()],
-                vec![VOLUME_ENTITY; mesh.tets.len()],
+                vec![0; tets],
+                vec![DOMAIN_PHYSICAL_TAG as i32; tets],
+                vec![VOLUME_ENTITY; tets],
             ),
             false => {
-                let tags: Vec<i32> = tet_region.iter().map(|k| k + 1).collect();
-                (tags.clone(), tags)
+                let tags: Vec<i32> = self.tet_region.par_iter().map(|k| k + 1).collect();
+                (self.tet_region, tags.clone(), tags)
             }
         };
         let tag = |l: BoundaryLabel| label_tag(l, levels) as i32;
-        let boundary_region = |b: usize| regions.boundary.get(b).map_or(0, |&k| i32::from(k));
+        let labels = || self.boundary_labels.iter().chain(&self.interface_labels);
         // An interface triangle on level i is a face of region i - 1 (below) and i (above).
         let below = |l: BoundaryLabel| l.level().map_or(0, |i| i as i32 - 1);
-        let mut triangle_region: Vec<i32> = (0..mesh.boundary.len()).map(boundary_region).collect();
-        triangle_region.extend(regions.interface_labels.iter().map(|&l| below(l)));
-        let mut triangle_tag: Vec<i32> = mesh.boundary_labels.iter().map(|&l| tag(l)).collect();
-        triangle_tag.extend(regions.interface_labels.iter().map(|&l| tag(l)));
+        let mut triangle_region = self.boundary_region;
+        triangle_region.resize(self.boundary_labels.len(), 0);
+        triangle_region.extend(self.interface_labels.iter().map(|&l| below(l)));
+        let triangle_tag: Vec<i32> = labels().map(|&l| tag(l)).collect();
         let mut present = [false; tptd::mesh::NUM_LABELS];
-        for &l in mesh.boundary_labels.iter().chain(&regions.interface_labels) {
+        for &l in labels() {
             present[l.index()] = true;
         }
         let mut names: Vec<(String, i32, i32)> = BoundaryLabel::of_levels(levels)
@@ -69,26 +133,16 @@ impl Arrays {
             .collect();
         match one {
             true => names.push(("domain".into(), DOMAIN_PHYSICAL_TAG as i32, 3)),
-            false => names.extend((0..regions.count()).map(|k| (regions.name(k), k as i32 + 1, 3))),
+            false => names.extend(
+                (self.region_names.into_iter().enumerate()).map(|(k, n)| (n, k as i32 + 1, 3)),
+            ),
         }
-        let all = mesh.boundary.len() + regions.interfaces.len();
-        let mut triangles = vec![0i64; 3 * all];
-        let rows = mesh
-            .boundary
-            .par_iter()
-            .chain(regions.interfaces.par_iter());
-        triangles
-            .par_chunks_mut(3)
-            .zip(rows)
-            .for_each(|(o, t)| o.copy_from_slice(&t.map(i64::from)));
-        // Each array of the mesh is freed once converted, so that the two copies of the
-        // largest one only are held at once.
-        let points = flat_points(mesh.points);
-        let tets = flat(mesh.tets, |t| t.map(i64::from));
+        let mut triangles = self.boundary;
+        triangles.extend_from_slice(&self.interfaces);
         Arrays {
-            points,
-            values: mesh.values,
-            tets,
+            points: flat_points(self.points),
+            values: self.values,
+            tets: self.tets,
             tet_region,
             tet_tag,
             tet_entity,
@@ -97,6 +151,39 @@ impl Arrays {
             triangle_tag,
             names,
         }
+    }
+}
+
+impl MeshSink for Collect {
+    fn chunk(&mut self, c: &MeshChunk) -> std::io::Result<()> {
+        self.points.extend_from_slice(&c.points);
+        self.values.extend_from_slice(&c.values);
+        self.tets
+            .extend(c.tets.as_flattened().iter().map(|&v| i64::from(v)));
+        self.tet_region
+            .extend(c.regions.iter().map(|&k| i32::from(k)));
+        if c.boundary_regions.is_empty() {
+            let rows = c.boundary.as_flattened().iter();
+            self.boundary.extend(rows.map(|&v| i64::from(v)));
+            self.boundary_labels.extend_from_slice(&c.boundary_labels);
+            return Ok(());
+        }
+        let rows = c.boundary.iter().zip(&c.boundary_labels);
+        for ((t, &l), &region) in rows.zip(&c.boundary_regions) {
+            let t = t.map(i64::from);
+            match l.is_interface(self.levels) {
+                true => {
+                    self.interfaces.extend_from_slice(&t);
+                    self.interface_labels.push(l);
+                }
+                false => {
+                    self.boundary.extend_from_slice(&t);
+                    self.boundary_labels.push(l);
+                    self.boundary_region.push(i32::from(region));
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -134,23 +221,26 @@ fn array<'py, T: Element>(
 
 /// The dict of a run's mesh: `points`, `f`, `tetra`, `tetra_region`, `tetra_tag`,
 /// `tetra_entity`, `triangle`, `triangle_region`, `triangle_tag`, `names`, `report` (JSON
-/// text) and `warnings`.
+/// text) and `warnings`. The mesh is the run's if it held one, else what `collected`
+/// gathered while it was made.
 ///
 /// The run's input grid, which may read the caller's array in place, is dropped first (with
 /// the thread attached, before the mesh's arrays are made).
-pub(crate) fn mesh_dict(py: Python<'_>, run: MeshRun) -> PyResult<Bound<'_, PyDict>> {
+pub(crate) fn mesh_dict(
+    py: Python<'_>,
+    run: MeshRun,
+    collected: Collect,
+) -> PyResult<Bound<'_, PyDict>> {
     let MeshRun {
         report, grid, mesh, ..
     } = run;
     drop(grid);
     let warnings = report.warnings.clone();
     let report = report.to_json_pretty();
-    let Some(out) = mesh else {
-        return Err(PyValueError::new_err(
-            "the run wrote its mesh instead of holding it",
-        ));
-    };
-    let a = py.detach(move || Arrays::of(out.mesh));
+    let a = py.detach(move || match mesh {
+        Some(out) => Collect::of_mesh(out.mesh).arrays(),
+        None => collected.arrays(),
+    });
     let d = PyDict::new(py);
     d.set_item("points", array(py, a.points, 3)?)?;
     d.set_item("f", array(py, a.values, 1)?)?;

@@ -60,31 +60,74 @@ def test_spacing_as_the_cli(tmp_path, scan):
     assert np.allclose(moved.points, py.points + [10, -5, 3], rtol=0, atol=1e-12)
 
 
-def test_regions_as_the_cli_and_kept_by_meshio_msh(tmp_path, scan):
+def test_regions_as_the_cli_and_kept_in_vtu_and_msh(tmp_path, scan):
     levels = ["--levels", "60.3,120.3,180.7", "--region-names", "outer,inner"]
     cli, report = cli_mesh(tmp_path, "scan.npy", *levels)
     py = tptd.mesh(scan, levels=[60.3, 120.3, 180.7], region_names=["outer", "inner"],
                    check=True)
     assert_same(py, cli)
     regions = py.cell_data_dict["region"]["tetra"]
+    py_tets = py.cells_dict["tetra"]
     assert set(regions) == {0, 1}
     assert [r["tets"] for r in py.info["regions"]] == [(regions == k).sum() for k in (0, 1)]
     assert py.info["regions"] == report["regions"]
     assert_valid(py, report)
-    # meshio's Gmsh 2.2 writer keeps the groups: a volume per region, a surface per level
-    # (without the extra `region` data, which meshio cannot read back from a .msh)
-    del py.cell_data["region"]
-    meshio.write(tmp_path / "py.msh", py, file_format="gmsh22")
-    back = meshio.read(tmp_path / "py.msh")
-    assert {"outer", "inner", "level1", "level2", "level3"} <= set(back.field_data)
-    tags = back.cell_data_dict["gmsh:physical"]["tetra"]
-    assert np.array_equal(tags, regions + 1)
-    # the CLI's own .msh names the same groups with the same tags
+    # a .vtu through meshio keeps the regions and the tags as cell data
+    meshio.write(tmp_path / "py.vtu", py)
+    vtu = meshio.read(tmp_path / "py.vtu")
+    for key in ("region", "gmsh:physical", "gmsh:geometrical"):
+        assert np.array_equal(vtu.cell_data_dict[key]["tetra"], py.cell_data_dict[key]["tetra"])
+    # the mesh as returned, written as .msh 4.1 and 2.2 by tptd.write: meshio reads back a
+    # volume group per region (physical tag region + 1) and a surface group per level, with
+    # the tags of the CLI's own .msh
     msh = tmp_path / "cli.msh"
     assert run_cli("scan.npy", *levels, "-o", msh, cwd=tmp_path).returncode == 0
     ours = meshio.read(msh)
-    for name in ("outer", "inner", "level1", "level2", "level3"):
-        assert back.field_data[name][0] == ours.field_data[name][0], name
+    names = {"outer", "inner", "level1", "level2", "level3"}
+    for version in ("4.1", "2.2", "4.1-binary"):
+        tptd.write(py, tmp_path / "py.msh", msh_version=version)
+        back = meshio.read(tmp_path / "py.msh")
+        assert names <= set(back.field_data)
+        for name in names:
+            assert back.field_data[name][0] == ours.field_data[name][0], (version, name)
+        tets = back.cells_dict["tetra"]
+        tags = back.cell_data_dict["gmsh:physical"]["tetra"]
+        assert len(tets) == len(regions)
+        assert np.array_equal(tags[by_vertices(tets)], regions[by_vertices(py_tets)] + 1)
+        assert set(tags) == {back.field_data["outer"][0], back.field_data["inner"][0]}
+
+
+def by_vertices(tets):
+    """The order of `tets` by their sorted vertex numbers (the same tets listed in another
+    order, e.g. grouped by region as a .msh file holds them, then line up)."""
+    return np.lexsort(np.sort(tets, axis=1).T[::-1])
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [dict(alpha=120.3, beta=180.7),
+     dict(levels=[60.3, 120.3, 180.7], region_names=["outer", "inner"])],
+)
+def test_converted_while_meshing_as_when_held(scan, kwargs):
+    """Without the check the mesh goes to numpy slab by slab as it is made; with it the run
+    holds the mesh and it is converted after: the same arrays, tags and groups."""
+    streamed = tptd.mesh(scan, **kwargs)
+    held = tptd.mesh(scan, check=True, **kwargs)
+    assert held.info["timings_seconds"]["check"] is not None
+    assert np.array_equal(streamed.points, held.points)
+    assert np.array_equal(streamed.point_data["f"], held.point_data["f"])
+    assert [c.type for c in streamed.cells] == [c.type for c in held.cells] == [
+        "tetra", "triangle"]
+    for a, b in zip(streamed.cells, held.cells):
+        assert a.data.dtype == b.data.dtype == np.int64
+        assert np.array_equal(a.data, b.data)
+    assert streamed.cell_data.keys() == held.cell_data.keys()
+    for key in held.cell_data:
+        for a, b in zip(streamed.cell_data[key], held.cell_data[key]):
+            assert a.dtype == b.dtype and np.array_equal(a, b), key
+    assert streamed.field_data.keys() == held.field_data.keys()
+    for name, v in held.field_data.items():
+        assert np.array_equal(streamed.field_data[name], v), name
 
 
 def test_boundary_triangles_are_the_labelled_faces(scan):

@@ -168,10 +168,20 @@ def mesh(
     ``cell_data["region"]`` (region of each tet from 0, as ``cell_data["region"]`` of the
     ``.vtu`` output; 0 for one interval), ``cell_data["gmsh:physical"]`` and
     ``"gmsh:geometrical"`` with ``field_data`` the ``.msh`` output's groups (``alpha``,
-    ``beta``, ``box``, ``domain``; or ``level1``, ... and the region names), so that
-    ``meshio.write("x.msh", m)`` keeps them; ``m.info``: the run's report (the dict of
+    ``beta``, ``box``, ``domain``; or ``level1``, ... and the region names: region ``k``'s
+    tets have the physical tag ``k + 1``); ``m.info``: the run's report (the dict of
     ``tptd-mesh --report``: counts, volume, Betti numbers, angles, warnings, timings).
     Warnings are also issued as :class:`MeshWarning`.
+
+    Files: ``meshio.write("x.vtu", m)`` keeps ``region`` and the tags as cell data. For Gmsh
+    write with :func:`write` (``tptd.write(m, "x.msh")``, ``msh_version="2.2"``, ...): a
+    volume group per region and a surface group per label, which ``meshio.read`` gives back
+    as ``gmsh:physical`` and ``field_data``. meshio's own ``.msh`` writers (meshio 5.3) do
+    not keep them: ``meshio.write("x.msh", m)`` writes ANSYS Fluent (meshio's first format
+    for ``.msh``), ``file_format="gmsh"`` (4.1) refuses a mesh of two cell blocks without
+    ``point_data["gmsh:dim_tags"]`` and keeps one tag per block, and ``"gmsh22"`` writes the
+    groups but, with ``region`` or any other cell data beyond the tags, a file meshio cannot
+    read back (its 2.2 reader splits cell data of several blocks wrongly).
 
     Before any work the run's memory is estimated (the grid, the mesh, the quality pass and
     the check) and compared with ``memory_limit`` (bytes; default: the memory available):
@@ -280,8 +290,14 @@ def isosurface(
     return meshio.Mesh(d["points"], [("triangle", d["triangle"])], point_data={"f": d["f"]})
 
 
-def _critical_options(spacing, origin, affine, min_value, max_value, kind, persistence,
-                      min_persistence, threads) -> dict:
+def _critical_options(
+    spacing, origin, affine, *, min_value: Optional[float] = None,
+    max_value: Optional[float] = None, kind=None, persistence: bool = False,
+    min_persistence: Optional[float] = None, threads: Optional[int] = None,
+) -> dict:
+    """The options of a run of the critical points: the placement, and the filters and
+    threads of :func:`critical_points` (the one list of them, which both functions take as
+    keywords)."""
     if kind is not None and not isinstance(kind, str):
         kind = ",".join(str(k) for k in kind)
     return {
@@ -303,54 +319,34 @@ def critical_points(
     spacing: Optional[Sequence[float]] = None,
     origin: Sequence[float] = (0.0, 0.0, 0.0),
     affine=None,
-    min_value: Optional[float] = None,
-    max_value: Optional[float] = None,
-    kind=None,
-    persistence: bool = False,
-    min_persistence: Optional[float] = None,
-    threads: Optional[int] = None,
+    **filters,
 ) -> list:
     """The critical points and regions of the trilinear field of an array (where the topology
     of ``{f >= w}`` or ``{f <= w}`` changes): the records ``tptd-mesh VOLUME --critical
     --json`` writes, one dict per point (``value``, ``kind``, ``position`` in physical
     coordinates, ``persistence``, ``superlevel``, ``sublevel``, ``region``, ...).
 
-    ``volume``, ``origin``, ``affine`` and ``threads`` as in :func:`mesh` (``spacing``
-    defaults to 1). Filters, as the command line's: ``min_value`` / ``max_value`` hide points
-    below / above; ``kind`` keeps only these kinds (a list or a comma-separated string of
-    ``minimum``, ``maximum``, ``saddle``, ``face_saddle``, ``body_saddle``,
-    ``region_minimum``, ``region_maximum``, ``region_saddle``); ``persistence=True`` computes
-    each point's persistence; ``min_persistence`` hides points below it (and implies
-    ``persistence``). Raises ``ValueError`` with ``tptd-mesh``'s one-line message.
+    ``volume``, ``origin`` and ``affine`` as in :func:`mesh` (``spacing`` defaults to 1).
+    Keywords (``filters``), as the command line's: ``min_value`` / ``max_value`` (floats)
+    hide points below / above; ``kind`` keeps only these kinds (a list or a comma-separated
+    string of ``minimum``, ``maximum``, ``saddle``, ``face_saddle``, ``body_saddle``,
+    ``region_minimum``, ``region_maximum``, ``region_saddle``); ``persistence=True``
+    computes each point's persistence; ``min_persistence`` hides points below it (and
+    implies ``persistence``); ``threads`` as in :func:`mesh`. An unknown keyword raises
+    ``TypeError``; otherwise raises ``ValueError`` with ``tptd-mesh``'s one-line message.
     """
     volume = _array(volume)
     if affine is not None and (spacing is not None or tuple(origin) != (0.0, 0.0, 0.0)):
         raise ValueError("affine excludes spacing and origin: give the affine or those two")
-    opts = _critical_options(
-        spacing, origin, affine, min_value, max_value, kind, persistence, min_persistence,
-        threads,
-    )
+    opts = _critical_options(spacing, origin, affine, **filters)
     return json.loads(_tptd.critical_volume(volume, opts))
 
 
-def critical_points_file(
-    path,
-    *,
-    spacing: Optional[Sequence[float]] = None,
-    min_value: Optional[float] = None,
-    max_value: Optional[float] = None,
-    kind=None,
-    persistence: bool = False,
-    min_persistence: Optional[float] = None,
-    threads: Optional[int] = None,
-) -> list:
+def critical_points_file(path, *, spacing: Optional[Sequence[float]] = None, **filters) -> list:
     """:func:`critical_points` of a volume file ``tptd-mesh`` reads (``spacing`` replaces the
-    file's): the records of ``tptd-mesh PATH --critical --json``. Raises ``OSError`` when the
-    file cannot be read, ``ValueError`` otherwise."""
-    opts = _critical_options(
-        spacing, (0.0, 0.0, 0.0), None, min_value, max_value, kind, persistence,
-        min_persistence, threads,
-    )
+    file's; the same keywords ``filters``): the records of ``tptd-mesh PATH --critical
+    --json``. Raises ``OSError`` when the file cannot be read, ``ValueError`` otherwise."""
+    opts = _critical_options(spacing, (0.0, 0.0, 0.0), None, **filters)
     return json.loads(_tptd.critical_path(os.fspath(path), opts))
 
 

@@ -10,7 +10,15 @@ def mesh_volume(
     volume: np.ndarray,
     options: dict[str, Any],
     progress: Optional[Callable[[str, float], object]] = None,
-) -> dict[str, Any]: ...
+) -> dict[str, Any]:
+    """The mesh as numpy arrays: ``points`` (float64, n x 3), ``f``, ``tetra`` (int64,
+    m x 4), ``tetra_region`` (int32, region of each tet from 0: ``cell_data["region"]``),
+    ``tetra_tag`` and ``tetra_entity`` (int32, the ``.msh`` output's physical and elementary
+    tags: region + 1, or the ``domain`` tag), ``triangle``, ``triangle_region``,
+    ``triangle_tag``, ``names`` (``(name, tag, dimension)`` of each group), ``report`` (JSON
+    text) and ``warnings``; ``tptd.mesh`` makes the ``meshio.Mesh`` of them."""
+    ...
+
 def mesh_path(
     path: str,
     options: dict[str, Any],

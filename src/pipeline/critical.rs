@@ -131,15 +131,13 @@ pub fn critical_file(
     req: &CriticalRequest,
     progress: &dyn Progress,
 ) -> Result<CriticalRun, PipelineError> {
-    let t = Instant::now();
-    crate::memory::set_limit(req.memory_limit);
-    let reporter = Reporter::new(progress);
     let input = req.input_name();
-    let transfer_format = check_outputs(req)?;
-    let stage = reporter.stage(&format!("reading {input}"), StageKind::Step);
-    let grid = read_grid(req.input.as_deref(), req.spacing, req.names)?;
-    stage.finish();
-    find_and_write(&grid, &input, req, transfer_format, (&reporter, t))
+    run_on(req, &input, progress, |reporter| {
+        let stage = reporter.stage(&format!("reading {input}"), StageKind::Step);
+        let grid = read_grid(req.input.as_deref(), req.spacing, req.names)?;
+        stage.finish();
+        Ok(grid)
+    })
 }
 
 /// Runs `req` on `grid`, a volume given in memory and named `name` in messages, as
@@ -154,16 +152,31 @@ pub fn critical_grid(
     req: &CriticalRequest,
     progress: &dyn Progress,
 ) -> Result<CriticalRun, PipelineError> {
-    let t = Instant::now();
-    crate::memory::set_limit(req.memory_limit);
-    let reporter = Reporter::new(progress);
     let req = CriticalRequest {
         input: None,
         ..req.clone()
     };
-    let transfer_format = check_outputs(&req)?;
-    let grid = with_spacing(grid, req.spacing, name, req.names)?;
-    find_and_write(&grid, name, &req, transfer_format, (&reporter, t))
+    run_on(&req, name, progress, |_| {
+        with_spacing(grid, req.spacing, name, req.names)
+    })
+}
+
+/// A run of `req` on the volume `grid` gives (read from a file or given in memory, named
+/// `input`), for [`critical_file`] and [`critical_grid`]: the memory limit set, the outputs
+/// checked before `grid` is called, then the points and the outputs; the seconds count from
+/// the start.
+fn run_on(
+    req: &CriticalRequest,
+    input: &str,
+    progress: &dyn Progress,
+    grid: impl FnOnce(&Reporter) -> Result<ScalarGrid, PipelineError>,
+) -> Result<CriticalRun, PipelineError> {
+    let t = Instant::now();
+    crate::memory::set_limit(req.memory_limit);
+    let reporter = Reporter::new(progress);
+    let transfer_format = check_outputs(req)?;
+    let grid = grid(&reporter)?;
+    find_and_write(&grid, input, req, transfer_format, (&reporter, t))
 }
 
 /// Checks the thread count and the outputs: writable, the transfer function's format (which

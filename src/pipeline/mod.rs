@@ -50,7 +50,7 @@ pub mod values;
 use std::time::Instant;
 
 use crate::report::{QualityTimings, Report, Timings};
-use crate::{MeshOutput, Method, ScalarGrid};
+use crate::{MeshOutput, MeshSink, Method, ScalarGrid};
 
 pub use applies::{check_applies, Given, Inapplicable, Mode};
 pub use critical::{
@@ -107,6 +107,31 @@ impl MeshRun {
 /// # Errors
 /// The first failure, as one line naming the file; no output is left behind.
 pub fn mesh_file(req: &MeshRequest, progress: &dyn Progress) -> Result<MeshRun, PipelineError> {
+    file_run(req, progress, None)
+}
+
+/// [`mesh_file`] handing the mesh to `sink` slab by slab as it is made (chunks in slab order,
+/// as [`crate::mesh_interval_streamed`] gives them), in place of holding it, when nothing
+/// after meshing needs the whole mesh: no output, quality pass, curvilinear mapping or check.
+/// [`MeshRun::mesh`] is then `None`. Otherwise the run is [`mesh_file`]'s (the mesh held and
+/// returned) and `sink` gets nothing. For a binding that converts the mesh as it comes.
+///
+/// # Errors
+/// As [`mesh_file`].
+pub fn mesh_file_into(
+    req: &MeshRequest,
+    progress: &dyn Progress,
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<MeshRun, PipelineError> {
+    file_run(req, progress, Some(sink))
+}
+
+/// [`mesh_file`], with the sink of [`mesh_file_into`] if any.
+fn file_run(
+    req: &MeshRequest,
+    progress: &dyn Progress,
+    sink: Option<&mut (dyn MeshSink + Send)>,
+) -> Result<MeshRun, PipelineError> {
     let t_total = Instant::now();
     crate::memory::set_limit(req.memory_limit);
     let reporter = Reporter::new(progress);
@@ -115,7 +140,7 @@ pub fn mesh_file(req: &MeshRequest, progress: &dyn Progress) -> Result<MeshRun, 
     let t = Instant::now();
     let input = read::read_input(&job, &reporter)?;
     let t_read = secs(t);
-    run_job(&job, input, &reporter, (t_total, t_args, t_read))
+    run_job(&job, input, &reporter, (t_total, t_args, t_read), sink)
 }
 
 /// Runs `req` on `grid`, a volume given in memory and named `name` in messages, as
@@ -130,6 +155,32 @@ pub fn mesh_grid(
     name: &str,
     req: &MeshRequest,
     progress: &dyn Progress,
+) -> Result<MeshRun, PipelineError> {
+    grid_run(grid, name, req, progress, None)
+}
+
+/// [`mesh_grid`] handing the mesh to `sink` slab by slab as it is made, in place of holding
+/// it, when nothing after meshing needs the whole mesh, as [`mesh_file_into`] does.
+///
+/// # Errors
+/// As [`mesh_grid`].
+pub fn mesh_grid_into(
+    grid: ScalarGrid,
+    name: &str,
+    req: &MeshRequest,
+    progress: &dyn Progress,
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<MeshRun, PipelineError> {
+    grid_run(grid, name, req, progress, Some(sink))
+}
+
+/// [`mesh_grid`], with the sink of [`mesh_grid_into`] if any.
+fn grid_run(
+    grid: ScalarGrid,
+    name: &str,
+    req: &MeshRequest,
+    progress: &dyn Progress,
+    sink: Option<&mut (dyn MeshSink + Send)>,
 ) -> Result<MeshRun, PipelineError> {
     let t_total = Instant::now();
     crate::memory::set_limit(req.memory_limit);
@@ -149,7 +200,7 @@ pub fn mesh_grid(
         curvilinear: None,
         surface: None,
     };
-    run_job(&job, input, &reporter, (t_total, t_args, 0.0))
+    run_job(&job, input, &reporter, (t_total, t_args, 0.0), sink)
 }
 
 /// A graded interior needs cubes of two cells at least: `max_edge` of two of the grid's
@@ -186,12 +237,14 @@ fn check_grade(grid: &ScalarGrid, job: &request::Job) -> Result<(), PipelineErro
 }
 
 /// The run of a checked request on its input, read (`mesh_file`) or given (`mesh_grid`),
-/// after the seconds `(start, checking the arguments, reading)`.
+/// after the seconds `(start, checking the arguments, reading)`; the mesh goes to `sink` if
+/// given and nothing after meshing needs it whole.
 fn run_job(
     job: &request::Job,
     input: read::Input,
     reporter: &Reporter,
     (t_total, t_args, t_read): (Instant, f64, f64),
+    sink: Option<&mut (dyn MeshSink + Send)>,
 ) -> Result<MeshRun, PipelineError> {
     let (grid, curvilinear) = (&input.grid, input.curvilinear.as_ref());
     let t = Instant::now();
@@ -201,9 +254,11 @@ fn run_job(
     memory::check_memory(grid, job, stream_to.is_some())?;
     let t_checks = t_args + secs(t);
 
-    let mut w = match stream_to {
-        Some(output) => run::stream_to_disk(job, output, grid, reporter)?,
-        None => run::mesh_in_memory(job, grid, curvilinear, reporter)?,
+    let sink = sink.filter(|_| memory::hands_on(job, curvilinear.is_some()));
+    let mut w = match (stream_to, sink) {
+        (Some(output), _) => run::stream_to_disk(job, output, grid, reporter)?,
+        (None, Some(sink)) => run::mesh_to_sink(job, grid, reporter, sink)?,
+        (None, None) => run::mesh_in_memory(job, grid, curvilinear, reporter)?,
     };
     let t_quality = w.t_quality.take();
     let mut timings = Timings {

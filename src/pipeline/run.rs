@@ -70,26 +70,9 @@ pub(crate) fn stream_to_disk(
     grid: &ScalarGrid,
     reporter: &Reporter,
 ) -> Result<Written, PipelineError> {
-    let t = Instant::now();
     let levels = job.opts.levels.len().max(crate::mesh::INTERVAL_LEVELS);
     let mut spill = spill_for_levels(output, levels, job.req.region_names.clone())?;
-    let mut facts = facts_sink(job);
-    let stage = reporter.stage("meshing", meshing(grid));
-    let stats = mesh_interval_streamed(
-        grid,
-        &job.opts,
-        &stage.counter(),
-        &mut Stop::new(job, &mut Tee(&mut spill, &mut facts)),
-    );
-    stage.finish();
-    let stats = stats.map_err(|e| match e {
-        _ if job.req.cancel.is_cancelled() => PipelineError::interrupted(&job.input_name),
-        MeshError::Output(e) => PipelineError::file(output.display(), e),
-        e => PipelineError::file(&job.input_name, e),
-    })?;
-    let facts = facts.finish();
-    check_not_empty(grid, job, facts.tets)?;
-    let t_mesh = secs(t);
+    let (facts, stats, t_mesh) = mesh_streamed(job, grid, reporter, &mut spill, Some(output))?;
     let t = Instant::now();
     let stage = reporter.stage(&format!("writing {}", output.display()), StageKind::Step);
     let file = write_spilled_pending(output, &mut spill, &job.req.write);
@@ -100,24 +83,80 @@ pub(crate) fn stream_to_disk(
     // Only the demo is compared: otherwise nothing is analysed here (the rest is `other`).
     let t_analysis = if comparison.is_some() { secs(t) } else { 0.0 };
     Ok(Written {
-        facts,
-        stats,
-        quality: None,
-        surface: None,
         comparison,
-        check: None,
-        grade: None,
         file: Some(file?),
-        mesh: None,
-        t_mesh,
         t_analysis,
-        t_quality: None,
-        t_map: None,
-        t_check: None,
-        t_grade: None,
         t_write,
-        analysed_while_meshing: true,
+        ..Written::streamed(facts, stats, t_mesh)
     })
+}
+
+/// Meshes slab by slab into the caller's `sink` (which holds the mesh), gathering the facts
+/// on the way; nothing is held here or written ([`super::memory::hands_on`]).
+pub(crate) fn mesh_to_sink(
+    job: &Job,
+    grid: &ScalarGrid,
+    reporter: &Reporter,
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<Written, PipelineError> {
+    let (facts, stats, t_mesh) = mesh_streamed(job, grid, reporter, sink, None)?;
+    Ok(Written::streamed(facts, stats, t_mesh))
+}
+
+/// Meshes slab by slab into `sink` and gathers the facts on the way: the facts, the counters
+/// and the seconds. An error of `sink` names `output` (else the input); an empty mesh is an
+/// error.
+fn mesh_streamed(
+    job: &Job,
+    grid: &ScalarGrid,
+    reporter: &Reporter,
+    sink: &mut (dyn MeshSink + Send),
+    output: Option<&Path>,
+) -> Result<(MeshFacts, MeshStats, f64), PipelineError> {
+    let t = Instant::now();
+    let mut facts = facts_sink(job);
+    let stage = reporter.stage("meshing", meshing(grid));
+    let stats = mesh_interval_streamed(
+        grid,
+        &job.opts,
+        &stage.counter(),
+        &mut Stop::new(job, &mut Tee(sink, &mut facts)),
+    );
+    stage.finish();
+    let stats = stats.map_err(|e| match (e, output) {
+        _ if job.req.cancel.is_cancelled() => PipelineError::interrupted(&job.input_name),
+        (MeshError::Output(e), Some(output)) => PipelineError::file(output.display(), e),
+        (e, _) => PipelineError::file(&job.input_name, e),
+    })?;
+    let facts = facts.finish();
+    check_not_empty(grid, job, facts.tets)?;
+    Ok((facts, stats, secs(t)))
+}
+
+impl Written {
+    /// A mesh streamed (to disk or to a caller's sink) and analysed while it was made, after
+    /// `t_mesh` seconds: nothing else done yet.
+    fn streamed(facts: MeshFacts, stats: MeshStats, t_mesh: f64) -> Written {
+        Written {
+            facts,
+            stats,
+            quality: None,
+            surface: None,
+            comparison: None,
+            check: None,
+            grade: None,
+            file: None,
+            mesh: None,
+            t_mesh,
+            t_analysis: 0.0,
+            t_quality: None,
+            t_map: None,
+            t_check: None,
+            t_grade: None,
+            t_write: 0.0,
+            analysed_while_meshing: true,
+        }
+    }
 }
 
 /// The stage kind of meshing `grid`.
