@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use tptd::grade::{GradeOptions, DEFAULT_GRADING};
 use tptd::improve::QualityOptions;
 use tptd::pipeline::values;
 use tptd::pipeline::{check_applies, Given, MeshRequest, Mode, Param, ParamNames, QualityRequest};
@@ -93,6 +94,8 @@ pub(crate) struct Options {
     pub(crate) resolution: Option<i64>,
     pub(crate) voxel_size: Option<f64>,
     pub(crate) memory_limit: Option<i64>,
+    pub(crate) max_edge: Option<f64>,
+    pub(crate) grading: f64,
 }
 
 /// The names of `tptd.isosurface`: its level is the lower bound of the interval meshed.
@@ -157,6 +160,8 @@ impl Options {
             (Param::Resolution, self.resolution.is_some()),
             (Param::VoxelSize, self.voxel_size.is_some()),
             (Param::MemoryLimit, self.memory_limit.is_some()),
+            (Param::MaxEdge, self.max_edge.is_some()),
+            (Param::Grading, self.grading != DEFAULT_GRADING),
         ];
         set.into_iter()
             .filter(|&(_, s)| s)
@@ -209,6 +214,7 @@ impl Options {
             method,
             threads,
             quality: self.quality()?,
+            grade: self.grade()?,
             check: self.check,
             analysis: self.analysis,
             memory_limit: self.memory_limit()?,
@@ -260,6 +266,16 @@ impl Options {
                 "expected a positive number of bytes",
             )),
         }
+    }
+
+    fn grade(&self) -> PyResult<Option<GradeOptions>> {
+        let Some(max_edge) = self.max_edge else {
+            return Ok(None);
+        };
+        Ok(Some(GradeOptions {
+            max_edge: parsed(max_edge, Param::MaxEdge, values::positive)?,
+            grading: parsed(self.grading, Param::Grading, values::positive)?,
+        }))
     }
 
     fn quality(&self) -> PyResult<Option<QualityRequest>> {

@@ -155,6 +155,23 @@ def test_quality_as_the_cli(tmp_path, scan):
     assert_valid(py, report)
 
 
+def test_graded_interior_as_the_cli(tmp_path, scan):
+    cli, report = cli_mesh(tmp_path, "scan.npy", "--alpha", 60.3, "--max-edge", 4,
+                           "--grading", 2)
+    py = tptd.mesh(scan, 60.3, max_edge=4, grading=2, check=True)
+    assert_same(py, cli)
+    assert py.info["grade"] == {**report["grade"], "seconds": py.info["grade"]["seconds"]}
+    assert py.info["grade"]["tets_after"] < py.info["grade"]["tets_before"]
+    fine = tptd.mesh(scan, 60.3)
+    assert py.info["betti"] == fine.info["betti"]
+    assert len(py.cells_dict["tetra"]) < len(fine.cells_dict["tetra"])
+    assert_valid(py, report)
+    with pytest.raises(ValueError, match="max_edge 1.5 is less than two cells"):
+        tptd.mesh(scan, 60.3, max_edge=1.5)
+    with pytest.raises(ValueError, match="grading"):
+        tptd.mesh(scan, 60.3, grading=2)
+
+
 def test_mesh_file_and_read_volume_as_the_cli(tmp_path, scan):
     cli, report = cli_mesh(tmp_path, "scan.npy", "--alpha", 120.3, "--method", "tptd")
     py = tptd.mesh_file(tmp_path / "scan.npy", 120.3, method="tptd", check=True)

@@ -41,7 +41,7 @@ class MeshWarning(UserWarning):
 def _options(
     alpha, beta, levels, region_names, spacing, origin, affine, method, quality, min_angle,
     max_angle, quality_time, check, analysis, threads, field=None, function=None,
-    resolution=None, voxel_size=None, memory_limit=None,
+    resolution=None, voxel_size=None, memory_limit=None, max_edge=None, grading=1.5,
 ) -> dict:
     def floats(v, n=None):
         return None if v is None else [float(x) for x in v]
@@ -67,6 +67,8 @@ def _options(
         "resolution": None if resolution is None else int(resolution),
         "voxel_size": None if voxel_size is None else float(voxel_size),
         "memory_limit": None if memory_limit is None else int(memory_limit),
+        "max_edge": None if max_edge is None else float(max_edge),
+        "grading": float(grading),
     }
 
 
@@ -130,6 +132,8 @@ def mesh(
     min_angle: float = 15.0,
     max_angle: float = 155.0,
     quality_time: Optional[float] = None,
+    max_edge: Optional[float] = None,
+    grading: float = 1.5,
     check: bool = False,
     analysis: bool = True,
     threads: Optional[int] = None,
@@ -155,7 +159,10 @@ def mesh(
     (2 to 16 increasing values) mesh the regions between them in one conforming mesh instead,
     named by ``region_names``. ``method``: ``ctd`` (default), ``tptd``, ``std``, ``six``,
     ``five``. ``quality=True`` runs the quality pass towards dihedral angles in
-    ``[min_angle, max_angle]`` (``quality_time`` seconds at most); ``check=True`` runs the
+    ``[min_angle, max_angle]`` (``quality_time`` seconds at most); ``max_edge`` grades the
+    interior: cells deep inside one region are merged into cubes of up to ``max_edge``
+    (physical units; 2, 4, 8, ... cells, at least ``(s - 1) / (grading - 1)`` cells from any
+    cell a level passes through), as ``tptd-mesh --max-edge --grading``; ``check=True`` runs the
     library's checker and raises ``ValueError`` if the mesh fails it; ``analysis=False``
     skips the Betti numbers and angles of the report (faster). ``threads``: worker
     threads (default: all cores). ``progress(stage, fraction)`` is called at the start (0.0)
@@ -195,7 +202,7 @@ def mesh(
     opts = _options(
         alpha, beta, levels, region_names, _placement(spacing, origin, affine), origin,
         affine, method, quality, min_angle, max_angle, quality_time, check, analysis, threads,
-        memory_limit=memory_limit,
+        memory_limit=memory_limit, max_edge=max_edge, grading=grading,
     )
     return _to_meshio(_tptd.mesh_volume(volume, opts, progress), boundary)
 
@@ -213,6 +220,8 @@ def mesh_file(
     min_angle: float = 15.0,
     max_angle: float = 155.0,
     quality_time: Optional[float] = None,
+    max_edge: Optional[float] = None,
+    grading: float = 1.5,
     check: bool = False,
     analysis: bool = True,
     threads: Optional[int] = None,
@@ -235,7 +244,7 @@ def mesh_file(
     opts = _options(
         alpha, beta, levels, region_names, spacing, (0.0, 0.0, 0.0), None, method, quality,
         min_angle, max_angle, quality_time, check, analysis, threads, field, function,
-        resolution, voxel_size, memory_limit,
+        resolution, voxel_size, memory_limit, max_edge, grading,
     )
     return _to_meshio(_tptd.mesh_path(os.fspath(path), opts, progress), boundary)
 

@@ -27,8 +27,8 @@ pub(crate) fn streams<'a>(job: &'a Job, curvilinear: bool) -> Option<&'a Path> {
 
 /// Whether a caller's sink can take the mesh slab by slab as it is made, in place of the
 /// mesh held in memory: nothing after meshing reads the whole mesh (no output, quality pass,
-/// graded interior,
-/// curvilinear mapping or check) and it is not the demo (compared after meshing).
+/// graded interior, curvilinear mapping or check) and it is not the demo (compared after
+/// meshing).
 pub(crate) fn hands_on(job: &Job, curvilinear: bool) -> bool {
     job.output.is_none()
         && job.req.quality.is_none()
