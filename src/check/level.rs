@@ -61,6 +61,9 @@ struct Search<'a> {
     hi: [f64; 3],
     eps: f64,
     bound: f64,
+    /// The bound and the rounding of positions (`eps`): a point whose level lies exactly at
+    /// the bound, its coordinates a few ulps or a solver's tolerance off, is within it.
+    reach: f64,
     tol: f64,
     dirs: Vec<P>,
     /// Offsets of a lattice filling the ball of radius `bound`, nearest first.
@@ -74,11 +77,13 @@ impl<'a> Search<'a> {
         let hi = grid.dims.map(|d| (d - 1) as f64);
         let (lo_v, hi_v) = grid.value_range();
         let scale = lo_v.abs().max(hi_v.abs()).max(f64::MIN_POSITIVE);
+        let eps = 1e-9 * hi.iter().fold(1.0, |a: f64, &b| a.max(b));
         Search {
             field,
             hi,
-            eps: 1e-9 * hi.iter().fold(1.0, |a: f64, &b| a.max(b)),
+            eps,
             bound,
+            reach: bound + eps,
             tol: 1e-12 * scale,
             dirs: lattice_directions(),
             ball: ball_lattice(bound),
@@ -95,7 +100,8 @@ impl Search<'_> {
         [0, 1, 2].map(|k| u[k].clamp(0.0, self.hi[k]))
     }
 
-    /// The distance from `u` (index space) to the level set `f = level`, if within the bound.
+    /// The distance from `u` (index space) to the level set `f = level`, if within the bound
+    /// (a distance beyond it by no more than the rounding `eps` counts as the bound).
     fn distance(&self, u: P, level: f64) -> Found {
         if !level.is_finite() {
             return Found::Beyond(f64::INFINITY);
@@ -108,38 +114,113 @@ impl Search<'_> {
             .search(u, level, self.bound)
             .or_else(|| self.corner_search(u, level, self.bound))
             .or_else(|| self.ball_search(u, level))
+            .or_else(|| self.axis_search(u, level, self.reach))
         {
-            Some(d) => Found::Within(d),
-            None => Found::Beyond(
-                self.search(u, level, 4.0 * self.bound)
-                    .into_iter()
-                    .chain(self.corner_search(u, level, f64::INFINITY))
-                    .min_by(f64::total_cmp)
-                    .unwrap_or(f64::INFINITY),
-            ),
+            Some(d) => Found::Within(d.min(self.bound)),
+            None => Found::Beyond(self.far(u, level)),
         }
     }
 
-    /// The distance from `u` to a point of `level` found within `bound`.
+    /// The least distance found from `u` (in the box) to `level` by the projection, the
+    /// walks and the axis lines within four times the bound, and the segments to the corners
+    /// of its cell (infinite if none).
+    fn far(&self, u: P, level: f64) -> f64 {
+        let far = 4.0 * self.bound;
+        let Some(side) = self.side(u, level) else {
+            return 0.0;
+        };
+        (self.projected(u, level).filter(|&d| d <= far))
+            .into_iter()
+            .chain(self.walks(u, level, side, far))
+            .chain(self.axis_search(u, level, far))
+            .chain(self.corner_search(u, level, f64::INFINITY))
+            .min_by(f64::total_cmp)
+            .unwrap_or(f64::INFINITY)
+    }
+
+    /// The side of `level` that `u` is on (`None`: on it).
+    fn side(&self, u: P, level: f64) -> Option<f64> {
+        let r0 = self.field.value(u) - level;
+        (r0 != 0.0).then(|| r0.signum())
+    }
+
+    /// The distance from `u` to a point of `level` found within `bound` (and the rounding
+    /// `eps` past it): Newton's projection, else the walks.
     fn search(&self, u: P, level: f64, bound: f64) -> Option<f64> {
-        let (f0, g) = self.field.value_gradient(u);
-        let r0 = f0 - level;
-        if r0 == 0.0 {
+        let Some(side) = self.side(u, level) else {
             return Some(0.0);
+        };
+        if let Some(d) = self.projected(u, level).filter(|&d| d <= bound + self.eps) {
+            return Some(d);
         }
+        self.walks(u, level, side, bound)
+    }
+
+    /// The distance from `u` to its projection on `level` by Newton's method, if it converges.
+    fn projected(&self, u: P, level: f64) -> Option<f64> {
         let dist = |p: P| ((0..3).map(|k| (p[k] - u[k]).powi(2)).sum::<f64>()).sqrt();
-        if let Some(p) = self.field.project(u, level, 0b111, self.tol) {
-            let d = dist(p);
-            if d <= bound {
-                return Some(d);
-            }
-        }
-        let side = r0.signum();
+        (self.field.project(u, level, 0b111, self.tol)).map(dist)
+    }
+
+    /// The least distance from `u`, on `side` of `level`, to a crossing of it found by the
+    /// walks down the gradient and along the lattice directions within `bound`.
+    fn walks(&self, u: P, level: f64, side: f64, bound: f64) -> Option<f64> {
+        let g = self.field.value_gradient(u).1;
         let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();
         let down = (gn > 0.0 && gn.is_finite()).then(|| g.map(|x| -side * x / gn));
         down.iter()
             .chain(&self.dirs)
             .filter_map(|&d| self.walk(u, d, level, side, bound))
+            .min_by(f64::total_cmp)
+    }
+
+    /// The distance from `u` to the first crossing of `level` on the six axis lines through
+    /// it within `bound` (and the rounding `eps` past it), exact up to the bisection: along
+    /// an axis the trilinear field is linear between the grid planes, so a crossing shows at
+    /// a plane or at the end even where the level set only touches the line (integer data
+    /// tied with a level puts it on grid faces and edges, where the walks' steps miss it).
+    fn axis_search(&self, u: P, level: f64, bound: f64) -> Option<f64> {
+        let side = self.side(u, level)?;
+        let reach = bound + self.eps;
+        let crossed = |p: P| (self.field.value(p) - level) * side <= 0.0;
+        (0..6)
+            .filter_map(|a| {
+                let (k, s) = (a / 2, if a % 2 == 0 { -1.0 } else { 1.0 });
+                let end = u[k] + s * reach;
+                let at = |t: f64| -> P {
+                    let mut p = u;
+                    p[k] = u[k] + s * t;
+                    p
+                };
+                // The planes strictly between u and the end, within the box, then the end
+                // (the boundary cells' polynomials extended past the box).
+                let planes = {
+                    let (lo, hi) = (u[k].min(end), u[k].max(end));
+                    let first = lo.floor() as i64 + 1;
+                    let last = (hi.ceil() as i64 - 1).min(self.hi[k] as i64);
+                    (first.max(0)..=last)
+                        .map(|m| m as f64)
+                        .filter(|&m| m != u[k])
+                };
+                let mut stops: Vec<(f64, P)> = planes
+                    .map(|m| {
+                        let mut p = u;
+                        p[k] = m;
+                        ((m - u[k]).abs(), p)
+                    })
+                    .collect();
+                stops.sort_by(|x, y| x.0.total_cmp(&y.0));
+                stops.push((reach, at(reach)));
+                let mut prev = 0.0;
+                for (t, p) in stops {
+                    if crossed(p) {
+                        let on_line = |t: f64| crossed(at(t));
+                        return Some(first_crossed(on_line, prev, t));
+                    }
+                    prev = t;
+                }
+                None
+            })
             .min_by(f64::total_cmp)
     }
 
@@ -187,8 +268,9 @@ impl Search<'_> {
         let crossed = |t: f64| (self.field.value(at(t)) - level) * side <= 0.0;
         let h = bound / WALK_STEPS as f64;
         let mut prev = 0.0;
-        for s in 1..=WALK_STEPS {
-            let t = h * s as f64;
+        // The steps, then one more at the rounding `eps` past the bound.
+        let steps = (1..=WALK_STEPS).map(|s| h * s as f64);
+        for t in steps.chain([bound + self.eps]) {
             if crossed(t) {
                 return Some(first_crossed(crossed, prev, t));
             }
@@ -475,6 +557,59 @@ mod tests {
         best
     }
 
+    /// A point whose level set is exactly the bound away, up to rounding, is within it, and
+    /// the far search reports that distance, not the corner's. Integer data tied with level 1
+    /// (the rounded bumps of `tests/regions.rs`): on the face z = 8 the values are 1, 1, 2, 1
+    /// at (x, y) = (1, 8), (1, 9), (2, 8), (2, 9), at z = 9 all 1, so around (1.5, 8.5, 8) the
+    /// field is 1 + (x − 1)(9 − y)(9 − z) and equals 1 on the planes x = 1 and y = 9, 0.5
+    /// voxel away, and beyond them drops below 1. The second point is the midpoint of a
+    /// boundary edge the quality pass left there (its corners 2.5e-10 voxel off the grid
+    /// vertices): 0.5 + 1.2e-10 from y = 9.
+    #[test]
+    fn a_level_exactly_at_the_bound_is_within_it() {
+        let dims = [13, 11, 12];
+        let mut values = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let [x, y, z] = [i, j, k].map(|a| a as f64);
+                    let b = |cx: f64, cy: f64, cz: f64, w: f64| {
+                        (-((x - cx).powi(2) + (y - cy).powi(2) + (z - cz).powi(2)) / (w * w)).exp()
+                    };
+                    values
+                        .push((9.0 * b(4.0, 5.0, 6.0, 3.5) + 7.0 * b(9.0, 5.5, 5.0, 3.0)).round());
+                }
+            }
+        }
+        let grid = ScalarGrid::new(dims, values).unwrap();
+        let face: Vec<f64> = [(1, 8, 8), (1, 9, 8), (2, 8, 8), (2, 9, 8)]
+            .iter()
+            .chain(&[(1, 8, 9), (1, 9, 9), (2, 8, 9), (2, 9, 9)])
+            .map(|&(i, j, k)| grid.value(i, j, k))
+            .collect();
+        assert_eq!(face, [1.0, 1.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0]);
+        let search = Search::new(&grid, 0.5);
+        let a = [1.9995002501241896, 8.999999999750624, 8.000000748502247];
+        let b = [1.000999000999001, 8.0, 8.0];
+        let midpoint = [0, 1, 2].map(|k| 0.5 * a[k] + 0.5 * b[k]);
+        for u in [midpoint, [1.5, 8.5, 8.0]] {
+            match search.distance(u, 1.0) {
+                Found::Within(d) => assert!((d - 0.5).abs() < 1e-6, "{u:?}: {d}"),
+                Found::Beyond(d) => panic!("{u:?}: beyond, {d} off"),
+                Found::Outside => panic!("{u:?}: outside"),
+            }
+            let far = search.far(u, 1.0);
+            assert!((far - 0.5).abs() < 1e-6, "{u:?}: far search {far}");
+        }
+        // A thousandth of a voxel farther from both planes is beyond the bound, and the far
+        // search says by how much.
+        let u = [1.501, 8.499, 8.0];
+        match search.distance(u, 1.0) {
+            Found::Beyond(d) => assert!((d - 0.501).abs() < 1e-6, "{u:?}: {d}"),
+            _ => panic!("{u:?}: not beyond"),
+        }
+    }
+
     /// Where the level set comes within the bound only through a thin pocket off the walks'
     /// directions, the search still finds it: no point the brute force puts well within the
     /// bound is reported beyond it. White noise has such pockets around its saddles.
@@ -491,6 +626,7 @@ mod tests {
                 hi,
                 eps: 1e-9,
                 bound,
+                reach: bound + 1e-9,
                 tol: 1e-12,
                 dirs: lattice_directions(),
                 ball: ball_lattice(bound),
