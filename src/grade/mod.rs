@@ -118,9 +118,13 @@ pub fn grade_interior(
         report.cubes = (1..=top)
             .map(|l| blocks.iter().filter(|b| b.level == l).count())
             .collect();
-        if let Some(s) = splice(mesh, &leaves, &blocks, &index) {
-            (report.volume_replaced, report.volume_replacing) = s.volumes;
-            (report.tets_replaced, report.tets_added) = (s.removed, s.added);
+        match splice(mesh, &leaves, &blocks, &index) {
+            Some(s) => {
+                (report.volume_replaced, report.volume_replacing) = s.volumes;
+                (report.tets_replaced, report.tets_added) = (s.removed, s.added);
+            }
+            // not a mesh of this grid's interior cells: left as it is
+            None => report.cubes.clear(),
         }
     }
     report.tets_after = mesh.tets.len();

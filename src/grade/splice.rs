@@ -6,6 +6,7 @@ use rustc_hash::FxHashMap;
 
 use super::blocks::block_face_triangles;
 use super::octree::{Block, Leaves};
+use crate::field::Field;
 use crate::geom::signed_volume;
 use crate::grid::ScalarGrid;
 use crate::mesh::TetMesh;
@@ -13,28 +14,30 @@ use crate::mesh::TetMesh;
 /// No block: the tet is kept.
 const KEPT: u32 = u32::MAX;
 
-/// Index-space positions of a mesh's points (the inverse of the grid's placement).
-pub struct IndexSpace {
-    inverse: nalgebra::Matrix3<f64>,
-    origin: nalgebra::Vector3<f64>,
+/// Index-space positions of a mesh's points (the inverse of the grid's placement, as the
+/// interpolant computes it).
+pub struct IndexSpace<'a> {
+    field: Field<'a>,
 }
 
 /// How far from a grid vertex (in cells) a point may lie and still be taken for it: the
 /// mesher places grid vertices exactly, up to the rounding of the placement.
 const ON_VERTEX: f64 = 1e-6;
 
-impl IndexSpace {
+impl<'a> IndexSpace<'a> {
     /// `None` when the grid's placement is singular.
-    pub fn new(grid: &ScalarGrid) -> Option<Self> {
-        Some(IndexSpace {
-            inverse: grid.linear_matrix().try_inverse()?,
-            origin: grid.origin_point().coords,
-        })
+    pub fn new(grid: &'a ScalarGrid) -> Option<Self> {
+        let field = Field::new(grid);
+        field
+            .inverse_matrix()
+            .iter()
+            .all(|x| x.is_finite())
+            .then_some(IndexSpace { field })
     }
 
     /// The index-space position of physical point `p`.
     pub fn of(&self, p: [f64; 3]) -> [f64; 3] {
-        (self.inverse * (nalgebra::Vector3::from(p) - self.origin)).into()
+        self.field.to_index(p)
     }
 
     /// The grid vertex at physical point `p`, if it is one.
@@ -50,7 +53,7 @@ impl IndexSpace {
 fn owners(
     mesh: &TetMesh,
     leaves: &Leaves,
-    index: &IndexSpace,
+    index: &IndexSpace<'_>,
     number: &FxHashMap<[usize; 3], u32>,
 ) -> Vec<u32> {
     mesh.tets
@@ -81,7 +84,7 @@ struct GridVertices {
 }
 
 impl GridVertices {
-    fn of(mesh: &TetMesh, index: &IndexSpace, dims: [usize; 3]) -> Self {
+    fn of(mesh: &TetMesh, index: &IndexSpace<'_>, dims: [usize; 3]) -> Self {
         let at: Vec<Option<usize>> = mesh
             .points
             .par_iter()
@@ -124,7 +127,7 @@ pub fn splice(
     mesh: &mut TetMesh,
     leaves: &Leaves,
     blocks: &[Block],
-    index: &IndexSpace,
+    index: &IndexSpace<'_>,
 ) -> Option<Spliced> {
     let number: FxHashMap<[usize; 3], u32> = blocks
         .iter()
@@ -181,7 +184,7 @@ fn block_cones(
     leaves: &Leaves,
     b: Block,
     tets: &[u32],
-    (vertex, index): (&GridVertices, &IndexSpace),
+    (vertex, index): (&GridVertices, &IndexSpace<'_>),
 ) -> Option<Vec<[u32; 4]>> {
     let h = b.side() / 2;
     let centre = *vertex.get(&b.origin.map(|x| x + h))?;
@@ -218,7 +221,7 @@ fn fine_faces(
     leaves: &Leaves,
     b: Block,
     t: [u32; 4],
-    index: &IndexSpace,
+    index: &IndexSpace<'_>,
     out: &mut Vec<[u32; 3]>,
 ) {
     let q = t.map(|v| index.of(mesh.points[v as usize]));
