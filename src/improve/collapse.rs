@@ -46,8 +46,8 @@ pub fn best_collapse(
 ) -> Option<Collapse> {
     let ratio = ctx.boundary_collapse_ratio;
     let (mut at_ab, mut at_ba) = (Evaluated::new(), Evaluated::new());
-    let ab = collapse_quality(lm, ctx, (a, b), || floor(a), ratio, &mut at_ab);
-    let ba = collapse_quality(lm, ctx, (b, a), || floor(b), ratio, &mut at_ba);
+    let ab = collapse_quality(lm, ctx, (a, b), || floor(a), (ratio, true), &mut at_ab);
+    let ba = collapse_quality(lm, ctx, (b, a), || floor(b), (ratio, true), &mut at_ba);
     let (from, to, evaluated) = match (ab, ba) {
         (Some(x), Some(y)) if y > x => (b, a, at_ba),
         (Some(_), _) => (a, b, at_ab),
@@ -74,7 +74,7 @@ pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> 
         ctx,
         (a, b),
         || 0.0,
-        f64::INFINITY,
+        (f64::INFINITY, false),
         &mut Evaluated::new(),
     )?;
     link_condition(lm, a, b, &lm.edge_tets(a, b)).then_some(new)
@@ -83,10 +83,20 @@ pub fn evaluate_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> Option<f64> 
 /// Whether the collapse of `a` into `b` is legal (the constraints, the link condition and
 /// [`QualityOptions::boundary_collapse_ratio`](super::QualityOptions)) and leaves every tet
 /// positive, whatever their quality: for operations that judge it after further moves
-/// ([`super::composite`]).
-pub fn legal_collapse(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> bool {
+/// ([`super::composite`]). With `budget`, a merge of a vertex between two regions keeps
+/// them within their volume budgets in the copy ([`embed::collapse_keeps_boundary`]); the
+/// last resorts that bring a vertex onto its level go without.
+pub fn legal_collapse(lm: &LocalMesh, ctx: &Ctx, (a, b): (u32, u32), budget: bool) -> bool {
     let ratio = ctx.boundary_collapse_ratio;
-    collapse_quality(lm, ctx, (a, b), || 0.0, ratio, &mut Evaluated::new()).is_some()
+    collapse_quality(
+        lm,
+        ctx,
+        (a, b),
+        || 0.0,
+        (ratio, budget),
+        &mut Evaluated::new(),
+    )
+    .is_some()
         && link_condition(lm, a, b, &lm.edge_tets(a, b))
 }
 
@@ -109,7 +119,7 @@ pub fn topological_merge(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> bool {
         && lm.con[a as usize].may_merge_into(&lm.con[b as usize])
         && !edge.is_empty()
         && link_condition(lm, a, b, &edge)
-        && embed::collapse_keeps_boundary(lm, ctx, a, b)
+        && embed::collapse_keeps_boundary(lm, ctx, (a, b), false)
 }
 
 /// For a collapse of `a` into `b` along an edge of the mesh that the constraints allow and
@@ -122,7 +132,7 @@ fn collapse_quality(
     ctx: &Ctx,
     (a, b): (u32, u32),
     floor: impl FnOnce() -> f64,
-    ratio: f64,
+    (ratio, budget): (f64, bool),
     evaluated: &mut Evaluated,
 ) -> Option<f64> {
     if !lm.is_free(a) || !lm.is_free(b) {
@@ -175,7 +185,7 @@ fn collapse_quality(
         return None;
     }
     // Last, the boundary faces `a` leaves to `b` must stay near their level sets.
-    if !embed::collapse_keeps_boundary(lm, ctx, a, b) {
+    if !embed::collapse_keeps_boundary(lm, ctx, (a, b), budget) {
         return None;
     }
     Some(new)
@@ -263,6 +273,7 @@ fn merge(lm: &mut LocalMesh, a: u32, b: u32, known: &[(u32, f64)], faces: Option
         }
     }
     lm.drift[b as usize] += std::mem::take(&mut lm.drift[a as usize]) + added;
+    lm.book_interface(a, added);
     lm.removed[a as usize] = true;
 }
 
@@ -733,14 +744,20 @@ mod tests {
                 }
                 while let Some(a) = positive_merge_into(lm, &ctx, b) {
                     let mut evaluated = Evaluated::new();
-                    let q =
-                        collapse_quality(lm, &ctx, (a, b), || 0.0, f64::INFINITY, &mut evaluated);
+                    let q = collapse_quality(
+                        lm,
+                        &ctx,
+                        (a, b),
+                        || 0.0,
+                        (f64::INFINITY, true),
+                        &mut evaluated,
+                    );
                     if lm.star[a as usize].len() + lm.star[b as usize].len() > HUB_TETS {
                         assert!(q.is_none(), "{a} into {b}");
                         refused += 1;
                         break;
                     }
-                    if q.is_none() && !embed::collapse_keeps_boundary(lm, &ctx, a, b) {
+                    if q.is_none() && !embed::collapse_keeps_boundary(lm, &ctx, (a, b), true) {
                         // The embedding guard refuses it (its faces would leave the level
                         // set: `b` is off its level).
                         break;

@@ -34,7 +34,7 @@ pub fn collapse_then_move(
     let before = worst(lm, ctx.target);
     for (a, b) in candidate_edges(lm, t) {
         for (from, to) in [(a, b), (b, a)] {
-            if !legal_collapse(lm, ctx, from, to) {
+            if !legal_collapse(lm, ctx, (from, to), true) {
                 continue;
             }
             let mut trial = lm.clone();

@@ -196,15 +196,20 @@ pub fn moves_leaving_level(
 
 /// Whether merging `a` into `b` keeps the boundary faces that `a` leaves to `b` near their
 /// level sets and clear of the boundary faces around them (always, for `a` off the
-/// boundary).
-pub fn collapse_keeps_boundary(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> bool {
+/// boundary), and its star's volume as [`collapse_keeps_volume`] asks (with `budget`).
+pub fn collapse_keeps_boundary(
+    lm: &LocalMesh,
+    ctx: &Ctx,
+    (a, b): (u32, u32),
+    budget: bool,
+) -> bool {
     if !lm.on_boundary(a) {
         return true;
     }
     let faces = boundary_faces_at(lm, a);
     let kept: VertexFaces = faces.into_iter().filter(|f| !f.tri.contains(&b)).collect();
     let ub = lm.u[b as usize];
-    collapse_keeps_volume(lm, a, b)
+    collapse_keeps_volume(lm, a, b, budget)
         && faces_near_level_with(lm, ctx, &kept, a, ub)
         && !crosses_nearby(lm, &kept, (a, b), ub)
 }
@@ -217,38 +222,71 @@ pub fn collapse_keeps_boundary(lm: &LocalMesh, ctx: &Ctx, a: u32, b: u32) -> boo
 pub const VOLUME_SHARE: f64 = 0.2;
 
 /// Whether moving level vertex `v` to index point `u` changes its star's volume by at most
-/// [`VOLUME_SHARE`] of it (always, for other vertices).
-pub fn move_keeps_volume(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3]) -> bool {
+/// [`VOLUME_SHARE`] of it (always, for other vertices), and with `budget` keeps the
+/// regions around a vertex between two regions within their budgets ([`star_keeps_volume`]).
+pub fn move_keeps_volume(lm: &LocalMesh, ctx: &Ctx, v: u32, u: [f64; 3], budget: bool) -> bool {
     if lm.con[v as usize].level.is_none() {
         return true;
     }
     let x = ctx.field.to_physical(u);
-    let (mut before, mut after) = (0.0, 0.0);
-    for &t in &lm.star[v as usize] {
-        before += lm.volume_of(t);
+    star_keeps_volume(lm, v, budget, |t| {
         let p = lm.corners_with(t, v, x);
-        after += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
-    }
-    (after - before).abs() <= VOLUME_SHARE * before.abs()
+        crate::geom::signed_volume(p[0], p[1], p[2], p[3])
+    })
 }
 
 /// Whether merging level vertex `a` into `b` changes the volume of `a`'s star by at most
-/// [`VOLUME_SHARE`] of it (always, for other vertices).
-pub fn collapse_keeps_volume(lm: &LocalMesh, a: u32, b: u32) -> bool {
+/// [`VOLUME_SHARE`] of it (always, for other vertices), and with `budget` keeps the
+/// regions around a vertex between two regions within their budgets ([`star_keeps_volume`]).
+pub fn collapse_keeps_volume(lm: &LocalMesh, a: u32, b: u32, budget: bool) -> bool {
     if lm.con[a as usize].level.is_none() {
         return true;
     }
     let xb = lm.x[b as usize];
-    let (mut before, mut after) = (0.0, 0.0);
-    for &t in &lm.star[a as usize] {
-        before += lm.volume_of(t);
-        if !lm.tets[t as usize].contains(&b) {
-            let p = lm.corners_with(t, a, xb);
-            after += crate::geom::signed_volume(p[0], p[1], p[2], p[3]);
+    star_keeps_volume(lm, a, budget, |t| {
+        if lm.tets[t as usize].contains(&b) {
+            return 0.0;
+        }
+        let p = lm.corners_with(t, a, xb);
+        crate::geom::signed_volume(p[0], p[1], p[2], p[3])
+    })
+}
+
+/// Whether the tets of `v`'s star, each of volume `after(t)` after a change, keep the
+/// star's volume within [`VOLUME_SHARE`] of it; with `budget`, for a vertex between two
+/// regions, also whether each region keeps within its budget in the copy
+/// ([`LocalMesh::within_budget`]). There the star's whole volume does not change (what one
+/// region gains the other loses), and a thin region between two interfaces would otherwise
+/// thicken merge by merge: the quality asks for fatter tets across it, and every boundary
+/// face can stay near its level set while the layer doubles.
+fn star_keeps_volume(lm: &LocalMesh, v: u32, budget: bool, after: impl Fn(u32) -> f64) -> bool {
+    let below = lm.counted_region(v).filter(|_| budget);
+    let (mut before, mut now) = (0.0, 0.0);
+    let (mut sides_before, mut sides_now) = ([0.0; 2], [0.0; 2]);
+    for &t in &lm.star[v as usize] {
+        let (b, a) = (lm.volume_of(t), after(t));
+        before += b;
+        now += a;
+        if let Some(r) = below {
+            let side = usize::from(lm.region[t as usize] != r);
+            sides_before[side] += b;
+            sides_now[side] += a;
         }
     }
-    (after - before).abs() <= VOLUME_SHARE * before.abs()
+    if (now - before).abs() > VOLUME_SHARE * before.abs() {
+        return false;
+    }
+    below.is_none_or(|r| {
+        let r = r as usize;
+        lm.within_budget(r, sides_now[0] - sides_before[0], REGION_BUDGET)
+            && lm.within_budget(r + 1, sides_now[1] - sides_before[1], REGION_BUDGET)
+    })
 }
+
+/// The share of a region's volume in a copy that the merges and moves of interface vertices
+/// may add to it or take from it, all together ([`LocalMesh::within_budget`]): what
+/// [`super::verify`] asks of one interval's copy as a whole.
+const REGION_BUDGET: f64 = super::verify::REGION_VOLUME_SHARE;
 
 /// Whether a face of `new` (faces at `from`, with `from` becoming `to` at index point `u`: a
 /// move when `from == to`, a collapse otherwise) crosses another of them, or another boundary

@@ -18,7 +18,7 @@ use super::collapse::{apply_collapse, legal_collapse, topological_merge};
 use super::constraint::{interface_bits, Constraint};
 use super::embed;
 use super::region::{LocalMesh, StarCorners};
-use super::smooth::{climb, move_vertex};
+use super::smooth::{climb, untangle_step};
 use super::Ctx;
 use crate::geom::{dot, signed_volume, sub};
 use crate::mesh::{TetMesh, LEVEL_BITS};
@@ -371,7 +371,7 @@ fn untangle_corners(lm: &mut LocalMesh, ctx: &Ctx, v: u32, mut undo: Vec<(u32, [
             break;
         }
         for w in tangled {
-            if let Some(from) = move_vertex(lm, ctx, w, UNTANGLE_STEPS) {
+            if let Some(from) = untangle_step(lm, ctx, w, UNTANGLE_STEPS) {
                 undo.push((w, from));
             }
         }
@@ -405,7 +405,7 @@ const ABSORB_TRIES: usize = 8;
 pub fn absorb_and_project(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
     let con = lm.con[v as usize];
     for w in nearest(lm, v, |w| lm.con[w as usize].may_merge_into(&con)) {
-        if !legal_collapse(lm, ctx, w, v) {
+        if !legal_collapse(lm, ctx, (w, v), false) {
             continue;
         }
         let mut trial = lm.clone();

@@ -23,7 +23,10 @@ const MOVES: usize = 16;
 /// Moves `v` by compass search where that raises the worst quality of its star and leaves no
 /// more of its tets below the target. Returns whether it moved.
 pub fn search_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
-    move_by(lm, ctx, v, |lm, star, qs| compass(lm, ctx, v, star, qs)).is_some()
+    move_by(lm, ctx, v, true, |lm, star, qs| {
+        compass(lm, ctx, v, star, qs)
+    })
+    .is_some()
 }
 
 /// The compass search of `v` (star `star`, qualities `qs`) from where it is: the point it

@@ -30,7 +30,25 @@ pub fn smooth_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32) -> bool {
 /// Up to `iterations` max–min steps of `v` from where it is (which raise the worst tet of its
 /// star, an inverted one first), if it may move. Returns its old position if it moved.
 pub fn move_vertex(lm: &mut LocalMesh, ctx: &Ctx, v: u32, iterations: usize) -> Option<[f64; 3]> {
-    move_by(lm, ctx, v, |lm, star, qs| {
+    climb_by(lm, ctx, v, iterations, true)
+}
+
+/// [`move_vertex`] for a vertex moved out of the way of a tangled tet: a vertex between two
+/// regions moves without the regions' volume budgets ([`embed::move_keeps_volume`]), as
+/// the last resorts that untangle need.
+pub fn untangle_step(lm: &mut LocalMesh, ctx: &Ctx, v: u32, iterations: usize) -> Option<[f64; 3]> {
+    climb_by(lm, ctx, v, iterations, false)
+}
+
+/// [`move_vertex`], with `budget` passed to [`embed::move_keeps_volume`].
+fn climb_by(
+    lm: &mut LocalMesh,
+    ctx: &Ctx,
+    v: u32,
+    iterations: usize,
+    budget: bool,
+) -> Option<[f64; 3]> {
+    move_by(lm, ctx, v, budget, |lm, star, qs| {
         let from = lm.u[v as usize];
         let (u, _) = climb(lm, ctx, v, star, from, qs, iterations)
             .or_else(|| centroid_step(lm, ctx, v, star, qs))?;
@@ -47,6 +65,7 @@ pub(crate) fn move_by(
     lm: &mut LocalMesh,
     ctx: &Ctx,
     v: u32,
+    budget: bool,
     search: impl FnOnce(&LocalMesh, &StarCorners, &mut StarVec<f64>) -> Option<[f64; 3]>,
 ) -> Option<[f64; 3]> {
     let c = lm.con[v as usize];
@@ -60,7 +79,9 @@ pub(crate) fn move_by(
         .collect();
     let from = lm.u[v as usize];
     let u = search(lm, &star, &mut qs)?;
-    if !embed::move_keeps_volume(lm, ctx, v, u) || !embed::move_keeps_boundary(lm, ctx, v, u) {
+    if !embed::move_keeps_volume(lm, ctx, v, u, budget)
+        || !embed::move_keeps_boundary(lm, ctx, v, u)
+    {
         return None;
     }
     if c.level.is_some() {
@@ -70,6 +91,7 @@ pub(crate) fn move_by(
             false => star.volumes(x0, x1),
         };
         lm.drift[v as usize] += v1 - v0;
+        lm.book_interface(v, v1 - v0);
     }
     lm.set_position_with(v, u, ctx, &qs);
     Some(from)

@@ -72,6 +72,10 @@ pub struct LocalMesh {
     low_bar: f64,
     /// Volume of the region's tets when it was copied out.
     pub volume: f64,
+    /// With several regions (empty for one interval), per region tag: the volume of the
+    /// copy's tets of that region when it was copied out, and the volume the merges and
+    /// moves of interface vertices have added to it since ([`LocalMesh::book_interface`]).
+    pub tag_volumes: Vec<[f64; 2]>,
     /// Per vertex: the signed volume that the collapses into it and its moves have added
     /// (physical units; projections onto the level sets are corrections and do not count); for
     /// a vertex on an interface, to the region below it ([`LocalMesh::counted_region`]).
@@ -167,6 +171,12 @@ impl LocalMesh {
             lm.seed_on_level(off, &ctx.field);
         }
         lm.volume = (0..lm.tets.len() as u32).map(|t| lm.volume_of(t)).sum();
+        if ctx.levels.len() > 2 {
+            lm.tag_volumes = vec![[0.0; 2]; ctx.levels.len() - 1];
+            for t in 0..lm.tets.len() as u32 {
+                lm.tag_volumes[lm.region[t as usize] as usize][0] += lm.volume_of(t);
+            }
+        }
         lm
     }
 
@@ -191,6 +201,7 @@ impl LocalMesh {
             face_count: vec![0; n],
             face_grid: FaceGrid::default(),
             volume: 0.0,
+            tag_volumes: Vec::new(),
             drift: vec![0.0; n],
             on_level: vec![false; n],
             collapse_hint: vec![Cell::new(NONE); n],
@@ -556,6 +567,24 @@ impl LocalMesh {
             .filter(|&&t| region.is_none_or(|r| self.region[t as usize] == r))
             .map(|&t| self.volume_of(t))
             .sum()
+    }
+
+    /// Books `added`, the volume a merge into or a move of interface vertex `v` added to the
+    /// region below it ([`LocalMesh::counted_region`]), on that region and its opposite on
+    /// the region above (nothing for other vertices).
+    pub fn book_interface(&mut self, v: u32, added: f64) {
+        if let Some(r) = self.counted_region(v) {
+            self.tag_volumes[r as usize][1] += added;
+            self.tag_volumes[r as usize + 1][1] -= added;
+        }
+    }
+
+    /// Whether adding `added` to region tag `r` of the copy keeps the volume its interface
+    /// vertices' merges and moves added within `share` of the region's volume in the copy, or
+    /// brings it nearer.
+    pub fn within_budget(&self, r: usize, added: f64, share: f64) -> bool {
+        let [start, booked] = self.tag_volumes[r];
+        (booked + added).abs() <= (share * start.abs()).max(booked.abs())
     }
 
     /// Whether `v` may be moved or merged.
