@@ -240,6 +240,7 @@ fn merge(lm: &mut LocalMesh, a: u32, b: u32, known: &[(u32, f64)], faces: Option
     // vertex's star.
     let level = lm.con[a as usize].level.is_some();
     let counted = lm.counted_region(a);
+    let budget = lm.budget_region(a);
     let mut added = if level { -lm.counted_volume(a) } else { 0.0 };
     let shared = lm.edge_tets(a, b);
     let faces = faces.unwrap_or_else(|| boundary_faces_at(lm, a));
@@ -273,7 +274,7 @@ fn merge(lm: &mut LocalMesh, a: u32, b: u32, known: &[(u32, f64)], faces: Option
         }
     }
     lm.drift[b as usize] += std::mem::take(&mut lm.drift[a as usize]) + added;
-    lm.book_interface(a, added);
+    lm.book_volume(budget, added);
     lm.removed[a as usize] = true;
 }
 

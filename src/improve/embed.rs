@@ -260,14 +260,14 @@ pub fn collapse_keeps_volume(lm: &LocalMesh, a: u32, b: u32, budget: bool) -> bo
 /// thicken merge by merge: the quality asks for fatter tets across it, and every boundary
 /// face can stay near its level set while the layer doubles.
 fn star_keeps_volume(lm: &LocalMesh, v: u32, budget: bool, after: impl Fn(u32) -> f64) -> bool {
-    let below = lm.counted_region(v).filter(|_| budget);
+    let below = lm.budget_region(v).filter(|_| budget);
     let (mut before, mut now) = (0.0, 0.0);
     let (mut sides_before, mut sides_now) = ([0.0; 2], [0.0; 2]);
     for &t in &lm.star[v as usize] {
         let (b, a) = (lm.volume_of(t), after(t));
         before += b;
         now += a;
-        if let Some(r) = below {
+        if let Some((r, _)) = below {
             let side = usize::from(lm.region[t as usize] != r);
             sides_before[side] += b;
             sides_now[side] += a;
@@ -276,10 +276,11 @@ fn star_keeps_volume(lm: &LocalMesh, v: u32, budget: bool, after: impl Fn(u32) -
     if (now - before).abs() > VOLUME_SHARE * before.abs() {
         return false;
     }
-    below.is_none_or(|r| {
+    below.is_none_or(|(r, interface)| {
         let r = r as usize;
         lm.within_budget(r, sides_now[0] - sides_before[0], REGION_BUDGET)
-            && lm.within_budget(r + 1, sides_now[1] - sides_before[1], REGION_BUDGET)
+            && (!interface
+                || lm.within_budget(r + 1, sides_now[1] - sides_before[1], REGION_BUDGET))
     })
 }
 

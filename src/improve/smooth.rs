@@ -91,7 +91,7 @@ pub(crate) fn move_by(
             false => star.volumes(x0, x1),
         };
         lm.drift[v as usize] += v1 - v0;
-        lm.book_interface(v, v1 - v0);
+        lm.book_volume(lm.budget_region(v), v1 - v0);
     }
     lm.set_position_with(v, u, ctx, &qs);
     Some(from)

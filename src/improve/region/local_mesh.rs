@@ -74,7 +74,7 @@ pub struct LocalMesh {
     pub volume: f64,
     /// With several regions (empty for one interval), per region tag: the volume of the
     /// copy's tets of that region when it was copied out, and the volume the merges and
-    /// moves of interface vertices have added to it since ([`LocalMesh::book_interface`]).
+    /// moves of level vertices have added to it since ([`LocalMesh::book_volume`]).
     pub tag_volumes: Vec<[f64; 2]>,
     /// Per vertex: the signed volume that the collapses into it and its moves have added
     /// (physical units; projections onto the level sets are corrections and do not count); for
@@ -569,13 +569,31 @@ impl LocalMesh {
             .sum()
     }
 
-    /// Books `added`, the volume a merge into or a move of interface vertex `v` added to the
-    /// region below it ([`LocalMesh::counted_region`]), on that region and its opposite on
-    /// the region above (nothing for other vertices).
-    pub fn book_interface(&mut self, v: u32, added: f64) {
+    /// With several regions, for a level vertex `v`: the region whose volume budget its
+    /// merges and moves draw on (below an interface, [`LocalMesh::counted_region`]; the
+    /// region its star lies in on the domain's boundary) and whether the region above an
+    /// interface draws the opposite. `None` for one interval and for vertices off the levels.
+    pub fn budget_region(&self, v: u32) -> Option<(u8, bool)> {
+        if self.tag_volumes.is_empty() {
+            return None;
+        }
         if let Some(r) = self.counted_region(v) {
+            return Some((r, true));
+        }
+        self.con[v as usize].level?;
+        let t = *self.star[v as usize].first()?;
+        Some((self.region[t as usize], false))
+    }
+
+    /// Books `added`, the volume a merge into or a move of a level vertex added to its
+    /// budget's region `to` ([`LocalMesh::budget_region`]), and its opposite on the region
+    /// above an interface.
+    pub fn book_volume(&mut self, to: Option<(u8, bool)>, added: f64) {
+        if let Some((r, interface)) = to {
             self.tag_volumes[r as usize][1] += added;
-            self.tag_volumes[r as usize + 1][1] -= added;
+            if interface {
+                self.tag_volumes[r as usize + 1][1] -= added;
+            }
         }
     }
 
