@@ -74,12 +74,24 @@ def cgal_worker(vol, prefix, alpha, beta, radius):
         fs.write(repr(seconds))
 
 
-def mean_edge(mesh):
-    """Mean length of the distinct edges of a .msh or TetGen .node/.ele mesh."""
+def measure(mesh):
+    """Of a .msh or TetGen .node/.ele mesh: the mean length of its distinct edges, its number
+    of components (tets joined through shared vertices) and the Euler characteristic of its
+    boundary surface (2 (b0 - b1 + b2) for a manifold: the topology also where the checker
+    gives no Betti numbers)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
     P, T = q.read_msh_tets(mesh) if mesh.endswith(".msh") else q.read_tetgen(mesh[:-5])
     E = np.concatenate([T[:, [a, b]] for a in range(4) for b in range(a + 1, 4)])
     E = np.unique(np.sort(E, axis=1), axis=0)
-    return float(np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1).mean())
+    used = np.unique(T)
+    g = coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(len(P), len(P)))
+    _, label = connected_components(g, directed=False)
+    _, F = q.boundary_surface(T)
+    fe = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1), axis=0)
+    return {"mean_edge": float(np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1).mean()),
+            "components": int(len(np.unique(label[used]))),
+            "boundary_euler": int(F.max() + 1 - len(fe) + len(F))}
 
 
 def run_tool(args, row, cmd, prefix, mesh):
@@ -87,7 +99,9 @@ def run_tool(args, row, cmd, prefix, mesh):
     for old in (prefix + ".seconds", mesh):
         if os.path.exists(old):
             os.remove(old)
-    row.update(command=" ".join(cmd), **q.run_child(cmd, prefix, args.peer_timeout))
+    # in the mesh's folder: fTetWild drops __tracked_surface.stl in its working directory
+    cwd = os.path.dirname(prefix)
+    row.update(command=" ".join(cmd), **q.run_child(cmd, prefix, args.peer_timeout, cwd=cwd))
     if row["status"] == "ok" and os.path.exists(prefix + ".seconds"):
         with open(prefix + ".seconds") as fs:
             row["wall"] = float(fs.read())
@@ -132,7 +146,7 @@ def run_domain(args, name):
     if meshes:
         dom["reference_betti"] = cp.inspect(args, d, vol, b, meshes)
         for row, mesh in meshes:
-            row["mean_edge"] = mean_edge(mesh)
+            row.update(measure(mesh))
     for r in dom["rows"]:
         r.pop("histogram", None)
         r.pop("level", None)
@@ -147,15 +161,19 @@ def table(dom):
     ref = dom.get("reference_betti")
     lines = [f"### {dom['name']}: {dom['note']}, `{' '.join(dom['bounds'])}`", "",
              f"Reference Betti numbers (trilinear interval): {ref}", "",
-             "| tool | status | tets | mean edge | min ° | max ° | valid | Betti | time (s) |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| tool | status | tets | mean edge | min ° | max ° | valid | Betti | components, χ(∂) | time (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in dom["rows"]:
         betti = r.get("betti")
         mark = "" if betti is None or betti == ref else " ✗"
         status = r["status"] if r["status"] == "ok" else f"{r['status']}: {r.get('detail', '')[:80]}"
+        valid = r.get("valid", "–")
+        if valid is False:
+            valid = "no: " + "; ".join(r.get("problems", []))[:90]
         lines.append(f"| {r['tool']} | {status} | {fmt(r.get('tets'), ',')} | {fmt(r.get('mean_edge'), '.2f')} | "
-                     f"{fmt(r.get('min'), '.2f')} | {fmt(r.get('max'), '.2f')} | {r.get('valid', '–')} | "
-                     f"{betti}{mark} | {r['wall']:.1f} |")
+                     f"{fmt(r.get('min'), '.2f')} | {fmt(r.get('max'), '.2f')} | {valid} | "
+                     f"{betti}{mark} | {fmt(r.get('components'), 'd')}, {fmt(r.get('boundary_euler'), 'd')} | "
+                     f"{r['wall']:.1f} |")
     return "\n".join(lines)
 
 
@@ -187,6 +205,7 @@ def parse_args():
     ap.add_argument("--peer-timeout", type=float, default=300.0, help="per run (s)")
     ap.add_argument("--out", default=OUT, help="meshes and logs (default benchmarks/out/grade_peers)")
     ap.add_argument("--results", default=RESULTS, help="the Markdown written")
+    ap.add_argument("--render-only", action="store_true", help="rewrite --results from --out's results.json")
     ap.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
     return ap.parse_args()
 
@@ -196,6 +215,11 @@ def main():
     if args.worker:
         kind, *rest = args.worker
         return {"cgal": cgal_worker}[kind](*rest)
+    if args.render_only:
+        with open(os.path.join(args.out, "results.json")) as fj:
+            payload = json.load(fj)
+        with open(args.results, "w") as fm:
+            return fm.write(render(payload) + "\n") and None
     command = "python3 benchmarks/grade_peers.py" + "".join(f" {a}" for a in sys.argv[1:])
     args.bin = os.path.abspath(args.bin or cmp.default_bin())
     os.makedirs(args.out, exist_ok=True)
