@@ -168,7 +168,7 @@ pub(crate) struct Cli {
 
     /// How fast --max-edge lets sizes grow away from the surfaces: a cube of side s cells
     /// lies at least (s - 1)/(G - 1) cells from any cell a level passes through (above 2,
-    /// the 2:1 balance between cubes rules: the mesh of 2)
+    /// the 2:1 balance between cubes keeps them that far already)
     #[arg(long, value_name = "G", default_value = "1.5", allow_hyphen_values = true, value_parser = positive, requires = "max_edge")]
     pub(crate) grading: f64,
 
