@@ -3,12 +3,12 @@
 against TetGen, fTetWild and CGAL Mesh_3 asked for the same size, every mesh judged by our
 checker. One command writes benchmarks/grade_peers_results.md:
 
-  python3 benchmarks/grade_peers.py                  # a few minutes on 2 shared cores
-  python3 benchmarks/grade_peers.py --size 48 --mni-crop 40 --max-edge 8 --out /tmp/g
+  python3 benchmarks/grade_peers.py                  # about 15 min on 2 shared cores
+  python3 benchmarks/grade_peers.py --size 48 --mni-crop 32 --max-edge 8 --out /tmp/g
 
 Domains: a ball (sphere distance, radius 0.35 N), a solid torus (R = 0.28 N, r = 0.11 N) at
 --size (default 64^3, levels off grid values as in tests/py/compare_peers.py) and a --mni-crop
-(default 48^3) central crop of the nilearn MNI152 white matter at {f >= 127.0135}.
+(default 40^3) central crop of the nilearn MNI152 white matter at {f >= 127.0135}.
 
 Tools, each a child process under --peer-timeout (a failure is a row, never an exception):
   tptd     `tptd-mesh VOL BOUNDS --quality --max-edge H -o ours.msh -j 1` (process wall)
@@ -199,8 +199,8 @@ def parse_args():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bin", default=None, help="tptd-mesh (default: $CARGO_TARGET_DIR or target/release)")
     ap.add_argument("--size", type=int, default=64, help="grid of the ball and the torus (default 64)")
-    ap.add_argument("--mni-crop", type=int, default=48, help="MNI white-matter crop (default 48)")
-    ap.add_argument("--max-edge", type=float, default=8.0, help="H, voxels (default 8)")
+    ap.add_argument("--mni-crop", type=int, default=40, help="MNI white-matter crop (default 40)")
+    ap.add_argument("--max-edge", type=float, default=4.0, help="H, voxels (default 4)")
     ap.add_argument("--domains", default="ball,torus,mni_wm", help="comma-separated subset")
     ap.add_argument("--peer-timeout", type=float, default=300.0, help="per run (s)")
     ap.add_argument("--out", default=OUT, help="meshes and logs (default benchmarks/out/grade_peers)")
