@@ -118,15 +118,17 @@ fn the_deep_interior_has_the_requested_mean_edge() {
     for (n, r, h, g, side) in cases {
         let (report, sizes) = graded_ball(n, r, h, g);
         assert_eq!(report.max_side_cells, side, "H {h}");
-        let (mean, count) = mean_deeper(&sizes, deep_depth(side, g));
+        let deep = deep_depth(side, g);
+        let (mean, count) = mean_deeper(&sizes, deep);
+        let growth = layer_growth(&profile(&sizes));
+        let cubes = &report.cubes;
+        eprintln!("H {h} G {g}: mean edge {mean:.4} over {count} tets deeper than {deep:.2}");
+        eprintln!("  growth {growth:.4} per layer; cubes {cubes:?}");
         assert!(count >= MIN_TETS, "H {h} G {g}: {count} deep tets");
         assert!(
             (mean - h).abs() <= 0.25 * h,
             "H {h} G {g}: mean edge {mean:.3} over {count} deep tets"
         );
-        let growth = layer_growth(&profile(&sizes));
-        let deep = deep_depth(side, g);
-        eprintln!("H {h} G {g}: mean edge {mean:.4} over {count} tets deeper than {deep:.2}; growth {growth:.4} per layer; cubes {:?}", report.cubes);
         assert!(growth <= g, "H {h} G {g}: growth {growth:.3} per layer");
     }
 }
