@@ -109,7 +109,7 @@ fn refusals_write_nothing() {
     write_npy(&dir.path().join("t.npy"), DIMS, torus);
     let before = listing(dir.path());
     for (args, says) in [
-        (&["--max-edge", "1.5"][..], "less than two cells"),
+        (&["--max-edge", "1.2"][..], "less than 1.5 cells"),
         (&["--grading", "2"][..], "--max-edge"),
         (&["--max-edge", "0"][..], "--max-edge"),
         (&["--max-edge", "4", "--grading", "1"][..], "--grading"),

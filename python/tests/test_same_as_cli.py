@@ -166,8 +166,8 @@ def test_graded_interior_as_the_cli(tmp_path, scan):
     assert py.info["betti"] == fine.info["betti"]
     assert len(py.cells_dict["tetra"]) < len(fine.cells_dict["tetra"])
     assert_valid(py, report)
-    with pytest.raises(ValueError, match="max_edge 1.5 is less than two cells"):
-        tptd.mesh(scan, 60.3, max_edge=1.5)
+    with pytest.raises(ValueError, match="max_edge 1.2 is less than 1.5 cells"):
+        tptd.mesh(scan, 60.3, max_edge=1.2)
     with pytest.raises(ValueError, match="grading"):
         tptd.mesh(scan, 60.3, grading=2)
 

@@ -160,9 +160,10 @@ def mesh(
     named by ``region_names``. ``method``: ``ctd`` (default), ``tptd``, ``std``, ``six``,
     ``five``. ``quality=True`` runs the quality pass towards dihedral angles in
     ``[min_angle, max_angle]`` (``quality_time`` seconds at most); ``max_edge`` grades the
-    interior: cells deep inside one region are merged into cubes of up to ``max_edge``
-    (physical units; 2, 4, 8, ... cells, at least ``(s - 1) / (grading - 1)`` cells from any
-    cell a level passes through), as ``tptd-mesh --max-edge --grading``; ``check=True`` runs the
+    interior: cells deep inside one region are merged into cubes whose tets' mean edge length
+    is ``max_edge`` (physical units) within a third (cubes of the power of two cells nearest
+    it, at least ``(s - 1) / (grading - 1)`` cells from any cell a level passes through), as
+    ``tptd-mesh --max-edge --grading``; ``check=True`` runs the
     library's checker and raises ``ValueError`` if the mesh fails it; ``analysis=False``
     skips the Betti numbers and angles of the report (faster). ``threads``: worker
     threads (default: all cores). ``progress(stage, fraction)`` is called at the start (0.0)

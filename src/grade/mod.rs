@@ -27,9 +27,10 @@ use splice::{splice, IndexSpace};
 /// Options of [`grade_interior`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct GradeOptions {
-    /// The longest cube side the interior may grow to, in the grid's physical units: cubes
-    /// are the largest power of two cells whose side (along the grid's widest spacing) is at
-    /// most this; their tets' edges run from 0.87 to 1.41 times the side.
+    /// The element size the interior grows to, in the grid's physical units: the mean edge
+    /// length deep inside. Cubes are the power of two cells nearest it ([`max_side`], along
+    /// the grid's widest spacing); their tets' edges run from 0.87 to 1.41 times the side,
+    /// 1.002 times it on average.
     pub max_edge: f64,
     /// How fast sizes may grow away from the surfaces: a cube of side `s` cells lies at
     /// least `(s − 1) / (grading − 1)` cells from every cell a level passes through (and from
@@ -80,13 +81,17 @@ pub struct GradeReport {
     pub seconds: f64,
 }
 
-/// The side (in cells, a power of two, at least 1) of the largest cube of `grid` whose
-/// edges are at most `max_edge` along its widest spacing.
+/// The side (in cells, a power of two from 1 to 64) of the cubes deep inside `grid` for
+/// `max_edge`: the power of two nearest `max_edge` in cells of the widest spacing, going up
+/// from 1.5 times a power of two. A cube's cone tets have edges of 0.87 to 1.41 times its
+/// side and a mean edge length of 1.002 times it, so the deep interior's mean edge length is
+/// within a third of `max_edge` (within 25 % unless `max_edge` is 1.25 to 1.6 times a power
+/// of two cells), and exactly the side at a power of two.
 pub fn max_side(grid: &ScalarGrid, max_edge: f64) -> usize {
     let widest = grid.spacing.iter().fold(0.0f64, |m, &s| m.max(s.abs()));
-    let cells = (max_edge / widest).floor();
+    let cells = max_edge / widest;
     let mut side = 1usize;
-    while side < (1 << TOP_LEVEL) && (2 * side) as f64 <= cells {
+    while side < (1 << TOP_LEVEL) && cells >= 1.5 * side as f64 {
         side *= 2;
     }
     side
@@ -133,5 +138,7 @@ pub fn grade_interior(
     report
 }
 
+#[cfg(test)]
+mod size_tests;
 #[cfg(test)]
 mod tests;

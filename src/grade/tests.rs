@@ -7,7 +7,7 @@ use crate::facts::MeshFacts;
 use crate::quality::dihedral_angles;
 use crate::{mesh_interval, MeshOptions, Method, TetMesh};
 
-fn field(n: usize, f: impl Fn([f64; 3]) -> f64) -> ScalarGrid {
+pub(super) fn field(n: usize, f: impl Fn([f64; 3]) -> f64) -> ScalarGrid {
     let mut v = Vec::with_capacity(n * n * n);
     for k in 0..n {
         for j in 0..n {
@@ -19,7 +19,7 @@ fn field(n: usize, f: impl Fn([f64; 3]) -> f64) -> ScalarGrid {
     ScalarGrid::new([n; 3], v).unwrap()
 }
 
-fn radius(c: f64) -> impl Fn([f64; 3]) -> f64 {
+pub(super) fn radius(c: f64) -> impl Fn([f64; 3]) -> f64 {
     move |p| p.iter().map(|x| (x - c) * (x - c)).sum::<f64>().sqrt()
 }
 
@@ -60,6 +60,15 @@ fn sorted_boundary(m: &TetMesh) -> Vec<[[u64; 3]; 3]> {
 /// Grades `grid`'s mesh of `levels` and checks everything the fine mesh guarantees; returns
 /// the report.
 fn graded_as_fine(grid: &ScalarGrid, levels: &[f64], opts: &GradeOptions) -> GradeReport {
+    graded_mesh_as_fine(grid, levels, opts).0
+}
+
+/// [`graded_as_fine`], returning the graded mesh too.
+pub(super) fn graded_mesh_as_fine(
+    grid: &ScalarGrid,
+    levels: &[f64],
+    opts: &GradeOptions,
+) -> (GradeReport, TetMesh) {
     let lv = Levels::new(levels).unwrap();
     let mut out = mesh(grid, levels, Method::Ctd);
     let fine = out.mesh.clone();
@@ -96,7 +105,7 @@ fn graded_as_fine(grid: &ScalarGrid, levels: &[f64], opts: &GradeOptions) -> Gra
             assert!((35.26 - 1e-6..=125.27).contains(&x), "{x}");
         }
     }
-    report
+    (report, out.mesh)
 }
 
 #[test]

@@ -203,8 +203,8 @@ fn grid_run(
     run_job(&job, input, &reporter, (t_total, t_args, 0.0), sink)
 }
 
-/// A graded interior needs cubes of two cells at least: `max_edge` of two of the grid's
-/// widest spacing, and a grading above 1.
+/// A graded interior needs cubes of two cells at least: `max_edge` of 1.5 times the grid's
+/// widest spacing (the nearest power of two is then 2), and a grading above 1.
 fn check_grade(grid: &ScalarGrid, job: &request::Job) -> Result<(), PipelineError> {
     let Some(g) = &job.req.grade else {
         return Ok(());
@@ -225,11 +225,11 @@ fn check_grade(grid: &ScalarGrid, job: &request::Job) -> Result<(), PipelineErro
         return Err(PipelineError::usage(
             &job.input_name,
             format_args!(
-                "{} {} is less than two cells (the grid's widest spacing is {widest}): no cube \
-                 fits; give at least {}",
+                "{} {} is less than 1.5 cells (the grid's widest spacing is {widest}): the \
+                 nearest cube is one cell; give at least {}",
                 names.of(Param::MaxEdge),
                 g.max_edge,
-                2.0 * widest
+                1.5 * widest
             ),
         ));
     }

@@ -69,8 +69,9 @@ pub struct MeshRequest {
     pub caps: bool,
     /// The quality pass after meshing, if any.
     pub quality: Option<QualityRequest>,
-    /// Graded interior: cubes of up to `max_edge` deep inside the domain instead of the fine
-    /// cells (holds the mesh in memory; not with a curvilinear grid).
+    /// Graded interior: cubes whose tets' mean edge length is about `max_edge` deep inside the
+    /// domain instead of the fine cells (holds the mesh in memory; not with a curvilinear
+    /// grid).
     pub grade: Option<GradeOptions>,
     /// Check the mesh before writing it (a failed check is an error and writes nothing).
     pub check: bool,

@@ -158,15 +158,17 @@ pub(crate) struct Cli {
     #[arg(long, value_name = "S", default_value = "0.03", allow_hyphen_values = true, value_parser = ratio, requires = "quality")]
     pub(crate) split_sag: f64,
 
-    /// Grade the interior: elements deep inside the domain grow to cubes of up to H (file
-    /// units; the largest power of two cells whose side is at most H), while every cell a
-    /// level passes through keeps its fine tets; the boundary, regions, topology and volume do
-    /// not change (holds the mesh in memory; not with a curvilinear grid)
+    /// Grade the interior: elements deep inside the domain grow to mean edge length H (file
+    /// units): cubes of the power of two cells nearest H (going up from 1.5 times one, so
+    /// within a third of H) coned from their centres, while every cell a level passes through
+    /// keeps its fine tets; the boundary, regions, topology and volume do not change (holds
+    /// the mesh in memory; not with a curvilinear grid)
     #[arg(long, value_name = "H", allow_hyphen_values = true, value_parser = positive)]
     pub(crate) max_edge: Option<f64>,
 
     /// How fast --max-edge lets sizes grow away from the surfaces: a cube of side s cells
-    /// lies at least (s - 1)/(G - 1) cells from any cell a level passes through
+    /// lies at least (s - 1)/(G - 1) cells from any cell a level passes through (above 2,
+    /// the 2:1 balance between cubes keeps them that far already)
     #[arg(long, value_name = "G", default_value = "1.5", allow_hyphen_values = true, value_parser = positive, requires = "max_edge")]
     pub(crate) grading: f64,
 
