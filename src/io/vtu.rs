@@ -57,7 +57,7 @@ const ZLIB_BLOCK: usize = 1 << 15;
 const ZLIB_LEVEL: u32 = 5;
 
 /// Bytes base64-encoded per parallel task (a multiple of 3, so pieces concatenate).
-const B64_PIECE: usize = 3 << 16;
+const B64_PIECE: usize = 3 << 14;
 
 /// Pieces encoded in parallel before they are written.
 const B64_BATCH: usize = 32;
