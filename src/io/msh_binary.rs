@@ -20,7 +20,7 @@ const PIECE: usize = 1 << 12;
 
 /// Items encoded (in pieces, in parallel) before their bytes are written: a bound on the
 /// memory of a list held in memory, which comes as one slice.
-const WINDOW: usize = 1 << 16;
+const WINDOW: usize = 1 << 18;
 
 /// Buffered output of binary `.msh`: little-endian numbers and the text between them.
 struct BinOut<'a> {
