@@ -316,11 +316,13 @@ fn compress(arrays: &Arrays, a: &Array) -> io::Result<Stored<'static>> {
 
 /// A base64 stream: bytes put in any pieces encode as one stream. They are gathered into
 /// batches of [`B64_BATCH`] bytes, each encoded in parallel pieces of [`B64_PIECE`] (large
-/// batches: the threads' work outweighs waking them).
+/// batches: the threads' work outweighs waking them) while the batch before is written.
 struct Base64Out<'a> {
     w: &'a mut dyn Write,
     pending: Vec<u8>,
+    /// The encoding of the last batch, not written yet.
     encoded: Vec<u8>,
+    next: Vec<u8>,
 }
 
 impl<'a> Base64Out<'a> {
@@ -329,6 +331,7 @@ impl<'a> Base64Out<'a> {
             w,
             pending: Vec::new(),
             encoded: Vec::new(),
+            next: Vec::new(),
         }
     }
 
@@ -345,19 +348,18 @@ impl<'a> Base64Out<'a> {
         Ok(())
     }
 
-    /// Encodes and writes the whole triples of the pending bytes (in parallel pieces).
+    /// Encodes the whole triples of the pending bytes (in parallel pieces, on the other
+    /// threads) while this one writes the last batch's encoding.
     fn encode_pending(&mut self) -> io::Result<()> {
         let whole = self.pending.len() / 3 * 3;
-        self.encoded.resize(whole / 3 * 4, 0);
-        let out = self.encoded.par_chunks_mut(B64_PIECE / 3 * 4);
-        out.zip(self.pending[..whole].par_chunks(B64_PIECE))
-            .for_each(|(o, piece)| {
-                // `o` has exactly the length of the piece's encoding (whole triples)
-                let _ = STANDARD.encode_slice(piece, o);
-            });
-        for c in self.encoded.chunks(1 << 20) {
-            self.w.write_all(c)?;
-        }
+        let (pending, next) = (&self.pending[..whole], &mut self.next);
+        let (w, encoded) = (&mut *self.w, &self.encoded);
+        let written = rayon::in_place_scope(|s| {
+            s.spawn(move |_| encode(pending, next));
+            write_in_pieces(w, encoded)
+        });
+        written?;
+        std::mem::swap(&mut self.encoded, &mut self.next);
         self.pending.drain(..whole);
         Ok(())
     }
@@ -365,8 +367,26 @@ impl<'a> Base64Out<'a> {
     /// Ends the stream (with `=` padding when needed).
     fn finish(mut self) -> io::Result<()> {
         self.encode_pending()?;
+        write_in_pieces(self.w, &self.encoded)?;
         self.w.write_all(STANDARD.encode(&self.pending).as_bytes())
     }
+}
+
+/// The base64 encoding of `bytes` (whole triples) into `out`, in parallel pieces.
+fn encode(bytes: &[u8], out: &mut Vec<u8>) {
+    out.resize(bytes.len() / 3 * 4, 0);
+    let pieces = out.par_chunks_mut(B64_PIECE / 3 * 4);
+    pieces
+        .zip(bytes.par_chunks(B64_PIECE))
+        .for_each(|(o, piece)| {
+            // `o` has exactly the length of the piece's encoding (whole triples)
+            let _ = STANDARD.encode_slice(piece, o);
+        });
+}
+
+/// Writes `bytes` a mebibyte at a time (the system copies huge writes much more slowly).
+fn write_in_pieces(w: &mut dyn Write, bytes: &[u8]) -> io::Result<()> {
+    bytes.chunks(1 << 20).try_for_each(|c| w.write_all(c))
 }
 
 /// The XML part of the file, up to and including the `_` that starts the appended data;
