@@ -358,7 +358,8 @@ impl MeshSink for NoSink {
     }
 }
 
-/// Hands each chunk to two sinks in turn.
+/// Hands each chunk to two sinks at once (in parallel: they are independent); the first
+/// sink's error comes first.
 pub struct Tee<'a>(
     pub &'a mut (dyn MeshSink + Send),
     pub &'a mut (dyn MeshSink + Send),
@@ -366,8 +367,8 @@ pub struct Tee<'a>(
 
 impl MeshSink for Tee<'_> {
     fn chunk(&mut self, c: &MeshChunk) -> io::Result<()> {
-        self.0.chunk(c)?;
-        self.1.chunk(c)
+        let (a, b) = rayon::join(|| self.0.chunk(c), || self.1.chunk(c));
+        a.and(b)
     }
 }
 

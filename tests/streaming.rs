@@ -186,3 +186,34 @@ fn streamed_region_facts_match_the_mesh_in_memory() {
         }
     }
 }
+
+/// A mesh large enough that the writers encode it in several parallel batches (base64
+/// batches of megabytes, binary `.msh` windows, spill slices): written by pools of one and
+/// of two threads, streamed and from memory, the formats encoded in parallel pieces give
+/// the same bytes.
+#[test]
+fn the_writers_bytes_do_not_depend_on_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = field([44, 42, 40], 6, false);
+    let opts = MeshOptions::new(-0.8, 1.1, Method::Ctd).threads(Some(2));
+    let mesh = mesh_interval(&grid, &opts).unwrap().mesh;
+    // connectivity of more than one base64 batch, tets of more than one binary window
+    assert!(mesh.tets.len() > 1 << 19, "{} tets", mesh.tets.len());
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+    };
+    let touched = ["m41b.msh", "b64.vtu", "raw.vtu"];
+    let outputs = common::output::mesh_outputs().into_iter();
+    for (name, w) in outputs.filter(|(n, _)| touched.contains(n)) {
+        let want = pool(1).install(|| in_memory(&mesh, dir.path(), name, &w));
+        let got = pool(2).install(|| in_memory(&mesh, dir.path(), name, &w));
+        assert!(got == want, "{name}: in memory, 2 threads");
+        for threads in [1, 2] {
+            let (got, _) = pool(threads).install(|| streamed(&grid, &opts, dir.path(), name, &w));
+            assert!(got == want, "{name}: streamed, {threads} threads");
+        }
+    }
+}

@@ -1,13 +1,12 @@
 //! Atomic file output: write to a temporary in the same directory, then rename.
 
-use std::fs::{self, File, OpenOptions};
-use std::io::{self, BufWriter, Write};
+use std::fs::{self, OpenOptions};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
-/// Capacity of the [`BufWriter`] between a writer closure and the temporary file.
-const FILE_BUFFER: usize = 1 << 20;
+use super::file_out::write_and_sync;
 
 /// Why [`write_atomically`] failed. Every variant displays as one line naming the target path.
 #[derive(Debug, thiserror::Error)]
@@ -254,14 +253,4 @@ fn canonical_target(path: &Path) -> Option<PathBuf> {
         _ => Path::new("."),
     };
     Some(fs::canonicalize(dir).ok()?.join(name))
-}
-
-fn write_and_sync<F>(file: File, write: F) -> io::Result<()>
-where
-    F: FnOnce(&mut dyn Write) -> io::Result<()>,
-{
-    let mut buf = BufWriter::with_capacity(FILE_BUFFER, file);
-    write(&mut buf)?;
-    let file = buf.into_inner().map_err(|e| e.into_error())?;
-    file.sync_all()
 }

@@ -9,6 +9,7 @@
 //! `formats.rs`. No reader or writer imports its dispatcher.
 
 pub mod atomic;
+mod file_out;
 mod formats;
 mod header;
 pub mod inp;

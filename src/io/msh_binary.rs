@@ -2,16 +2,25 @@
 //! [`super::msh`]) in Gmsh's binary encoding.
 
 use std::io::{self, Write};
+use std::ops::Range;
+
+use rayon::prelude::*;
 
 use super::msh::{
-    entity_list, node_data_head, physical_names, section_counts, volume_tets, Layout, TETRAHEDRON,
-    TRIANGLE,
+    entity_list, node_data_head, physical_names, section_counts, Layout, TETRAHEDRON, TRIANGLE,
 };
 use super::source::MeshSource;
 use super::write_common::{invalid, TextOut};
 
 /// Size at which [`BinOut`] hands its buffer to the underlying writer.
 const BIN_CHUNK: usize = 1 << 16;
+
+/// Items encoded in one parallel task.
+const PIECE: usize = 1 << 12;
+
+/// Items encoded (in pieces, in parallel) before their bytes are written: a bound on the
+/// memory of a list held in memory, which comes as one slice.
+const WINDOW: usize = 1 << 18;
 
 /// Buffered output of binary `.msh`: little-endian numbers and the text between them.
 struct BinOut<'a> {
@@ -78,6 +87,33 @@ impl<'a> BinOut<'a> {
         Ok(())
     }
 
+    /// Appends the encodings of items `0..n` (of a list the caller holds), each piece of
+    /// [`PIECE`] items encoded by `encode(its range, bytes)` in parallel, [`WINDOW`] items
+    /// at a time, in order.
+    fn par(
+        &mut self,
+        n: usize,
+        encode: impl Fn(Range<usize>, &mut Vec<u8>) + Sync,
+    ) -> io::Result<()> {
+        self.w.write_all(&self.buf)?;
+        self.buf.clear();
+        for start in (0..n).step_by(WINDOW) {
+            let end = n.min(start + WINDOW);
+            let pieces: Vec<Vec<u8>> = (start..end)
+                .step_by(PIECE)
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|a| {
+                    let mut b = Vec::new();
+                    encode(a..end.min(a + PIECE), &mut b);
+                    b
+                })
+                .collect();
+            pieces.iter().try_for_each(|p| self.w.write_all(p))?;
+        }
+        Ok(())
+    }
+
     fn finish(self) -> io::Result<()> {
         self.w.write_all(&self.buf)?;
         self.w.flush()
@@ -134,20 +170,21 @@ fn nodes_binary(src: &dyn MeshSource, layout: &Layout, out: &mut BinOut) -> io::
     out.s("$Nodes\n");
     out.sizes(section_counts(1, n_points));
     out.int(3).int(layout.node_entity()).int(0).size(n_points);
-    for i in 1..=n_points {
-        out.size(i).spill()?;
+    for first in (0..n_points).step_by(WINDOW) {
+        let n = WINDOW.min(n_points - first);
+        out.par(n, |r, b| r.for_each(|i| put_size(b, first + i + 1)))?;
     }
     src.points(&mut |ps| {
-        for p in ps {
-            out.float(p[0]).float(p[1]).float(p[2]).spill()?;
-        }
-        Ok(())
+        out.par(ps.len(), |r, b| {
+            ps[r].iter().flatten().for_each(|&x| put_float(b, x));
+        })
     })?;
     out.s("\n$EndNodes\n");
     Ok(())
 }
 
-/// `$Elements`: the blocks of [`elements_v41`]; each element is its tag and its node tags.
+/// `$Elements`: the blocks of [`super::msh::elements_v41`]; each element is its tag and its
+/// node tags.
 fn elements_binary(src: &dyn MeshSource, layout: &Layout, out: &mut BinOut) -> io::Result<()> {
     let n_tets = src.num_tets();
     out.s("$Elements\n");
@@ -155,25 +192,30 @@ fn elements_binary(src: &dyn MeshSource, layout: &Layout, out: &mut BinOut) -> i
         layout.blocks(),
         n_tets + src.num_triangles(),
     ));
-    let element = |out: &mut BinOut, tag: usize, nodes: &[u32]| {
-        out.size(tag);
-        for &v in nodes {
-            out.size(v as usize + 1);
-        }
-        out.spill()
-    };
     for v in &layout.volumes {
         out.int(3).int(v.entity).int(TETRAHEDRON).size(v.tets);
-        volume_tets(src, v, &mut |tag, t| element(out, tag, t))?;
+        let mut first = 0usize;
+        src.tets_in_regions(&mut |ts, rs| {
+            out.par(ts.len(), |r, b| {
+                for i in r {
+                    if v.region.is_none_or(|k| rs[i] == k) {
+                        put_element(b, first + i + 1, &ts[i]);
+                    }
+                }
+            })?;
+            first += ts.len();
+            Ok(())
+        })?;
     }
-    let mut tag = n_tets;
+    let mut first = n_tets;
     for &(label, count) in &layout.present {
         out.int(2).int(layout.tag(label)).int(TRIANGLE).size(count);
         src.triangles(label, &mut |ts| {
-            ts.iter().try_for_each(|t| {
-                tag += 1;
-                element(out, tag, t)
-            })
+            out.par(ts.len(), |r, b| {
+                r.for_each(|i| put_element(b, first + i + 1, &ts[i]));
+            })?;
+            first += ts.len();
+            Ok(())
         })?;
     }
     out.s("\n$EndElements\n");
@@ -183,14 +225,36 @@ fn elements_binary(src: &dyn MeshSource, layout: &Layout, out: &mut BinOut) -> i
 /// `$NodeData`: the text head of the ASCII file, then per node its `int` tag and value.
 fn node_data_binary(src: &dyn MeshSource, out: &mut BinOut) -> io::Result<()> {
     out.text(|t| node_data_head(src, t))?;
-    let mut tag = 0u32;
+    let mut first = 0usize;
     src.values(&mut |vs| {
-        for &v in vs {
-            tag += 1;
-            out.int(tag).float(v).spill()?;
-        }
+        out.par(vs.len(), |r, b| {
+            for i in r {
+                // at most i32::MAX nodes (checked before writing)
+                b.extend_from_slice(&((first + i + 1) as u32).to_le_bytes());
+                put_float(b, vs[i]);
+            }
+        })?;
+        first += vs.len();
         Ok(())
     })?;
     out.s("\n$EndNodeData\n");
     Ok(())
+}
+
+/// Appends a `size_t` (8 bytes).
+#[inline]
+fn put_size(b: &mut Vec<u8>, v: usize) {
+    b.extend_from_slice(&(v as u64).to_le_bytes());
+}
+
+#[inline]
+fn put_float(b: &mut Vec<u8>, v: f64) {
+    b.extend_from_slice(&v.to_le_bytes());
+}
+
+/// Appends an element: its tag and its node tags (`size_t` each).
+#[inline]
+fn put_element(b: &mut Vec<u8>, tag: usize, nodes: &[u32]) {
+    put_size(b, tag);
+    nodes.iter().for_each(|&v| put_size(b, v as usize + 1));
 }

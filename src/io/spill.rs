@@ -22,8 +22,9 @@ use super::write_common::invalid;
 use crate::mesh::{grow_box, MeshChunk, MeshSink, EMPTY_BOX, NUM_LABELS};
 use crate::mesh::{region_name, BoundaryLabel, INTERVAL_LEVELS, LABEL_LEVELS};
 
-/// Items read back per slice.
-const READ_SLICE: usize = 1 << 16;
+/// Items read back per slice (large enough that the writers' parallel encoding of a slice
+/// outweighs waking their threads).
+const READ_SLICE: usize = 1 << 18;
 
 /// One list of `T` in an anonymous temporary file.
 struct SpillFile<T> {

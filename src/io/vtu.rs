@@ -42,7 +42,7 @@ use flate2::write::ZlibEncoder;
 use flate2::Compression;
 use rayon::prelude::*;
 
-use super::source::{visit_iter, InMemory, MeshSource};
+use super::source::{InMemory, MeshSource};
 use super::spill::ByteStore;
 use super::write_common::{check_lengths, invalid};
 use crate::mesh::TetMesh;
@@ -57,10 +57,14 @@ const ZLIB_BLOCK: usize = 1 << 15;
 const ZLIB_LEVEL: u32 = 5;
 
 /// Bytes base64-encoded per parallel task (a multiple of 3, so pieces concatenate).
-const B64_PIECE: usize = 3 << 16;
+const B64_PIECE: usize = 3 << 14;
 
-/// Pieces encoded in parallel before they are written.
-const B64_BATCH: usize = 32;
+/// Offsets and types made at a time.
+const MADE_BATCH: usize = 1 << 20;
+
+/// Bytes gathered before they are encoded in parallel and written (a multiple of
+/// [`B64_PIECE`]).
+const B64_BATCH: usize = B64_PIECE << 7;
 
 /// How the appended arrays of a `.vtu` file are stored (see the module documentation).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -162,10 +166,13 @@ impl Arrays<'_> {
                 .src
                 .points(&mut |p| f(&le_f64(bytemuck::cast_slice(p)))),
             Array::Connectivity => self.src.tets(&mut |ts| f(&self.connectivity(ts))),
-            Array::Offsets => {
-                visit_iter((1..=t as u64).map(|k| 4 * k), &mut |o| f(&self.id_bytes(o)))
+            Array::Offsets => self.offsets(t, f),
+            Array::Types => {
+                let block = vec![VTK_TETRA; t.min(MADE_BATCH)];
+                (0..t)
+                    .step_by(MADE_BATCH)
+                    .try_for_each(|k| f(&block[..(t - k).min(MADE_BATCH)]))
             }
-            Array::Types => visit_iter(std::iter::repeat_n(VTK_TETRA, t), f),
             Array::Regions => self.src.regions(&mut |rs| {
                 let bytes: Vec<u8> = rs
                     .iter()
@@ -176,13 +183,24 @@ impl Arrays<'_> {
         }
     }
 
-    /// `ids` as Int64 or Int32 little-endian bytes (every id fits unless the layout is wide).
-    fn id_bytes(&self, ids: &[u64]) -> Vec<u8> {
-        if self.wide {
-            ids.iter().flat_map(|&x| (x as i64).to_le_bytes()).collect()
-        } else {
-            ids.iter().flat_map(|&x| (x as i32).to_le_bytes()).collect()
+    /// Visits the bytes of the offsets `4, 8, …, 4 t` (Int64 or Int32: every offset fits
+    /// unless the layout is wide), made in parallel, [`MADE_BATCH`] at a time.
+    fn offsets(&self, t: usize, f: &mut dyn FnMut(&[u8]) -> io::Result<()>) -> io::Result<()> {
+        let wide = self.wide;
+        let size = if wide { 8 } else { 4 };
+        let mut bytes = Vec::new();
+        for k0 in (0..t).step_by(MADE_BATCH) {
+            bytes.resize(size * (t - k0).min(MADE_BATCH), 0);
+            bytes.par_chunks_mut(size).enumerate().for_each(|(i, b)| {
+                let o = 4 * (k0 + i + 1) as u64;
+                match wide {
+                    true => b.copy_from_slice(&(o as i64).to_le_bytes()),
+                    false => b.copy_from_slice(&(o as i32).to_le_bytes()),
+                }
+            });
+            f(&bytes)?;
         }
+        Ok(())
     }
 
     /// The connectivity bytes of `ts`: borrowed where memory already holds them.
@@ -296,51 +314,79 @@ fn compress(arrays: &Arrays, a: &Array) -> io::Result<Stored<'static>> {
     Ok(Stored::Blocks(header, blocks))
 }
 
-/// A base64 stream: bytes put in any pieces encode as one stream (a carry of up to two
-/// bytes joins the pieces); large pieces are encoded in parallel.
+/// A base64 stream: bytes put in any pieces encode as one stream. They are gathered into
+/// batches of [`B64_BATCH`] bytes, each encoded in parallel pieces of [`B64_PIECE`] (large
+/// batches: the threads' work outweighs waking them) while the batch before is written.
 struct Base64Out<'a> {
     w: &'a mut dyn Write,
-    carry: Vec<u8>,
+    pending: Vec<u8>,
+    /// The encoding of the last batch, not written yet.
+    encoded: Vec<u8>,
+    next: Vec<u8>,
 }
 
 impl<'a> Base64Out<'a> {
     fn new(w: &'a mut dyn Write) -> Self {
         Base64Out {
             w,
-            carry: Vec::with_capacity(3),
+            pending: Vec::new(),
+            encoded: Vec::new(),
+            next: Vec::new(),
         }
     }
 
     /// Appends `data` to the stream.
     fn put(&mut self, mut data: &[u8]) -> io::Result<()> {
-        if !self.carry.is_empty() {
-            let take = (3 - self.carry.len()).min(data.len());
-            self.carry.extend_from_slice(&data[..take]);
+        while !data.is_empty() {
+            let take = (B64_BATCH - self.pending.len()).min(data.len());
+            self.pending.extend_from_slice(&data[..take]);
             data = &data[take..];
-            if self.carry.len() < 3 {
-                return Ok(());
-            }
-            self.w.write_all(STANDARD.encode(&self.carry).as_bytes())?;
-            self.carry.clear();
-        }
-        let whole = data.len() / 3 * 3;
-        for batch in data[..whole].chunks(B64_PIECE * B64_BATCH) {
-            let encoded: Vec<String> = batch
-                .par_chunks(B64_PIECE)
-                .map(|piece| STANDARD.encode(piece))
-                .collect();
-            for e in &encoded {
-                self.w.write_all(e.as_bytes())?;
+            if self.pending.len() == B64_BATCH {
+                self.encode_pending()?;
             }
         }
-        self.carry.extend_from_slice(&data[whole..]);
+        Ok(())
+    }
+
+    /// Encodes the whole triples of the pending bytes (in parallel pieces, on the other
+    /// threads) while this one writes the last batch's encoding.
+    fn encode_pending(&mut self) -> io::Result<()> {
+        let whole = self.pending.len() / 3 * 3;
+        let (pending, next) = (&self.pending[..whole], &mut self.next);
+        let (w, encoded) = (&mut *self.w, &self.encoded);
+        let written = rayon::in_place_scope(|s| {
+            s.spawn(move |_| encode(pending, next));
+            write_in_pieces(w, encoded)
+        });
+        written?;
+        std::mem::swap(&mut self.encoded, &mut self.next);
+        self.pending.drain(..whole);
         Ok(())
     }
 
     /// Ends the stream (with `=` padding when needed).
-    fn finish(self) -> io::Result<()> {
-        self.w.write_all(STANDARD.encode(&self.carry).as_bytes())
+    fn finish(mut self) -> io::Result<()> {
+        self.encode_pending()?;
+        write_in_pieces(self.w, &self.encoded)?;
+        self.w.write_all(STANDARD.encode(&self.pending).as_bytes())
     }
+}
+
+/// The base64 encoding of `bytes` (whole triples) into `out`, in parallel pieces.
+fn encode(bytes: &[u8], out: &mut Vec<u8>) {
+    out.resize(bytes.len() / 3 * 4, 0);
+    let pieces = out.par_chunks_mut(B64_PIECE / 3 * 4);
+    pieces
+        .zip(bytes.par_chunks(B64_PIECE))
+        .for_each(|(o, piece)| {
+            // `o` has exactly the length of the piece's encoding (whole triples)
+            let _ = STANDARD.encode_slice(piece, o);
+        });
+}
+
+/// Writes `bytes` a mebibyte at a time (the system copies huge writes much more slowly).
+fn write_in_pieces(w: &mut dyn Write, bytes: &[u8]) -> io::Result<()> {
+    bytes.chunks(1 << 20).try_for_each(|c| w.write_all(c))
 }
 
 /// The XML part of the file, up to and including the `_` that starts the appended data;

@@ -249,7 +249,9 @@ fn run_job(
     let (grid, curvilinear) = (&input.grid, input.curvilinear.as_ref());
     let t = Instant::now();
     let stream_to = memory::streams(job, curvilinear.is_some());
-    bounds::warn_input(grid, job, curvilinear.is_some(), reporter);
+    run::in_pool(job.opts.threads, || {
+        bounds::warn_input(grid, job, curvilinear.is_some(), reporter);
+    });
     check_grade(grid, job)?;
     memory::check_memory(grid, job, stream_to.is_some())?;
     let t_checks = t_args + secs(t);

@@ -62,6 +62,15 @@ pub(crate) fn secs(t: Instant) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
+/// Runs `f` in a pool of `threads` worker threads (`None`: in the current pool, all cores),
+/// so that `--threads` holds for every stage, not only for meshing.
+pub(crate) fn in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
+    match threads.and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok()) {
+        Some(pool) => pool.install(f),
+        None => f(),
+    }
+}
+
 /// Meshes slab by slab into spill files next to `output`, gathering the facts on the way,
 /// then writes `output` from the spill files: memory stays the grid plus a few slabs.
 pub(crate) fn stream_to_disk(
@@ -75,7 +84,9 @@ pub(crate) fn stream_to_disk(
     let (facts, stats, t_mesh) = mesh_streamed(job, grid, reporter, &mut spill, Some(output))?;
     let t = Instant::now();
     let stage = reporter.stage(&format!("writing {}", output.display()), StageKind::Step);
-    let file = write_spilled_pending(output, &mut spill, &job.req.write);
+    let file = in_pool(job.opts.threads, || {
+        write_spilled_pending(output, &mut spill, &job.req.write)
+    });
     stage.finish();
     let t_write = secs(t);
     let t = Instant::now();
@@ -330,7 +341,9 @@ fn write_output(
         caps: job.req.caps,
         beta: job.opts.beta,
     };
-    let (analysis, file) = write_pending(output, &out.mesh, &job.req.write, &surface)?;
+    let (analysis, file) = in_pool(job.opts.threads, || {
+        write_pending(output, &out.mesh, &job.req.write, &surface)
+    })?;
     stage.finish();
     Ok((analysis, Some(file)))
 }
